@@ -1,0 +1,99 @@
+/// @file scene.hpp
+/// @brief A scene: a robot, its actuation, the external loads, the effects to simulate, and the
+/// model to solve it with. A scene names what it simulates; models assemble and evaluate only
+/// that (see SceneEffects).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "tdcr/core/robot.hpp"
+#include "tdcr/core/solver_options.hpp"
+
+namespace tdcr {
+
+/// @brief How the tendons are actuated.
+struct Actuation {
+  enum class Kind {
+    Tensions,      ///< Tendon tensions (N), >= 0, pulling each tendon's end towards the base.
+    Displacements  ///< Tendon displacements (m) at the base, positive when the tendon is pulled.
+  };
+  /// @brief Reference of a displacement for tendons that run through several segments.
+  enum class DisplacementConvention {
+    AtBase,      ///< What the actuator at the base sees: every segment the tendon runs through
+                 ///< contributes (Jones & Walker 2006). Default.
+    PerSegment   ///< Only the tendon's own segment (the paper's code convention).
+  };
+  Kind kind = Kind::Tensions;
+  std::vector<double> values;  ///< One value per tendon, in global tendon order.
+  DisplacementConvention convention = DisplacementConvention::AtBase;
+};
+
+/// @brief External loads. Tip force and moment act at the backbone centre of the tip disk and
+/// are given in the base frame. Gravity is a vector in the base frame (m/s^2).
+struct Loads {
+  Vec3 tip_force = Vec3::Zero();   ///< N, base frame.
+  Vec3 tip_moment = Vec3::Zero();  ///< N m, base frame.
+  Vec3 gravity = Vec3::Zero();     ///< m/s^2, base frame; zero means no gravity.
+};
+
+/// @brief Disk reaction model at disks a tendon only passes through.
+enum class DiskNormalForce {
+  Removed,  ///< Frictionless disks: the tendon force component along the disk normal is
+            ///< removed (paper Eq. 58). Default, as the paper's case study.
+  Kept      ///< The full force of Eq. 32 acts (the literature's usual form).
+};
+
+/// @brief Tendon path assumption for the CC model.
+enum class TendonPath {
+  FullyConstrained,     ///< Tendons parallel to the backbone (Eq. 14-18).
+  PartiallyConstrained  ///< Straight chords between disks (Eq. 20-23).
+};
+
+/// @brief Characteristic parameters of the 3R pseudo-rigid-body model (paper Table 1).
+struct PrbParameters {
+  /// Link length factors gamma_0..3. Default: Table 1 divided by their sum 0.999 so that the
+  /// links add up to the subsegment length (as the paper's code does).
+  double gamma[4] = {0.125 / 0.999, 0.35 / 0.999, 0.388 / 0.999, 0.136 / 0.999};
+  /// Spring stiffness factors K_Theta_1..3: k_q = K_Theta_q EI / l (Eq. 49).
+  double k_theta[3] = {3.25, 2.84, 2.95};
+};
+
+/// @brief What the scene asks to simulate. Defaults are the paper's code.
+struct Effects {
+  bool shear_extension = true;  ///< Cosserat rod with shear and extension (VC, VCref); else
+                                ///< inextensible, unshearable Kirchhoff rod.
+  DiskNormalForce disk_normal_force = DiskNormalForce::Removed;  ///< Eq. 58 (VCref, CCsub, PRB).
+  TendonPath tendon_path = TendonPath::FullyConstrained;         ///< CC only.
+  PrbParameters prb;                                             ///< PRB only.
+};
+
+/// @brief Which physical effects a scene turns on, decided once before a solve so that inner
+/// loops carry no branch for effects that are off.
+struct SceneEffects {
+  bool tip_wrench = false;       ///< Nonzero tip force or moment.
+  bool gravity = false;          ///< Nonzero gravity and nonzero backbone or disk mass.
+  bool backbone_weight = false;  ///< Gravity and nonzero backbone mass per length.
+  bool disk_weight = false;      ///< Gravity and nonzero disk mass.
+  bool shear_extension = true;
+  bool disk_normal_force_removed = true;
+};
+
+/// @brief A complete problem: robot, actuation, loads, effects, model and solver settings.
+struct Scene {
+  Robot robot;
+  Actuation actuation;
+  Loads loads;
+  Effects effects;
+  std::string model = "vc";  ///< "cc", "ccsub", "prb", "vc", "vcref" (or "auto").
+  SolverOptions solver;
+
+  /// @brief Throws InputError naming the field and value for any unusable entry: the robot's
+  /// (Robot::validate), NaN or negative tensions, an actuation list of the wrong length,
+  /// non-finite loads, an invalid solver option.
+  void validate() const;
+  /// @brief The effects this scene enables (see SceneEffects).
+  SceneEffects active_effects() const;
+};
+
+}  // namespace tdcr

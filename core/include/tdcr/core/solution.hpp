@@ -1,0 +1,74 @@
+/// @file solution.hpp
+/// @brief The result of a solve: shape, diagnostics and a Ceres-like summary. A failed solve is
+/// never reported as converged.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "tdcr/core/types.hpp"
+
+namespace tdcr {
+
+/// @brief Why a solve ended.
+enum class TerminationType {
+  Converged,           ///< Residual below tolerance; the answer is an equilibrium.
+  NoConvergence,       ///< The nonlinear solver stopped without reaching the tolerance.
+  MaxIterations,       ///< Iteration limit reached.
+  LineSearchFailed,    ///< Line search could not reduce the residual.
+  LinearSolverFailed,  ///< Singular or failed Jacobian factorisation.
+  IntegrationFailed,   ///< The ODE integrator failed (too much work, step too small).
+  NonFiniteResidual,   ///< NaN or Inf in the residual.
+  NotSolved            ///< No solve was attempted (default state).
+};
+
+/// @brief Text name of a termination type ("converged", "max_iterations", ...).
+std::string to_string(TerminationType t);
+
+/// @brief Diagnostics of a solve, in the spirit of ceres::Solver::Summary.
+struct SolverSummary {
+  TerminationType termination = TerminationType::NotSolved;
+  std::string message;           ///< Human-readable reason (KINSOL's flag and text, etc.).
+  int solver_flag = 0;           ///< Raw return flag of the nonlinear solver (KINSOL).
+  int iterations = 0;            ///< Nonlinear iterations (summed over continuation steps).
+  int residual_evaluations = 0;  ///< Residual evaluations (excluding Jacobian ones).
+  int jacobian_evaluations = 0;  ///< Jacobian evaluations.
+  double residual_norm = 0.0;    ///< Final scaled residual max-norm (dimensionless).
+  double physical_residual = 0.0;///< Final unscaled residual 2-norm (mixed N, N m, m).
+  int unknowns = 0;              ///< Size of the nonlinear system.
+  int continuation_steps = 0;    ///< Load steps used by continuation (0: direct solve).
+  std::string linear_solver;     ///< "dense", "klu", or "none" (closed form).
+  std::string integrator;        ///< "rk4", "cvode", or "none".
+  double solve_time_s = 0.0;     ///< Wall time of the solve (s).
+
+  bool converged() const { return termination == TerminationType::Converged; }
+  /// @brief One line: "converged: 7 iterations, |F| = 3.1e-13, 1.2 ms (dense, rk4)".
+  std::string brief_report() const;
+};
+
+/// @brief A sample of the backbone: arc length, frame, internal force and moment.
+struct BackboneSample {
+  double s = 0.0;                ///< Arc length (m).
+  Frame frame;                   ///< Material frame at s.
+  Vec3 n = Vec3::Zero();         ///< Internal force (N), base frame.
+  Vec3 m = Vec3::Zero();         ///< Internal moment (N m), base frame.
+};
+
+/// @brief The answer of a model for one scene.
+struct Solution {
+  std::string model;                      ///< Model name ("cc", "vc", ...).
+  SolverSummary summary;                  ///< Status and diagnostics.
+  std::vector<Frame> disk_frames;         ///< Base disk (index 0), every disk, tip last.
+  std::vector<double> tendon_displacements;  ///< Per tendon (m), positive when pulled, at base.
+  std::vector<double> tensions;           ///< Tendon tensions used or implied (N), if known.
+  std::vector<BackboneSample> backbone;   ///< Dense backbone samples (VC, VCref), may be empty.
+  Eigen::VectorXd unknowns;               ///< The model's solved unknowns (for warm starts).
+
+  bool converged() const { return summary.converged(); }
+  /// @brief Tip frame (last disk frame). Requires a non-empty disk_frames.
+  const Frame& tip() const { return disk_frames.back(); }
+};
+
+}  // namespace tdcr

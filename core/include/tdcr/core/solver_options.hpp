@@ -1,0 +1,51 @@
+/// @file solver_options.hpp
+/// @brief Options for the numerical solution of a static model (Ceres-style: a plain struct
+/// that can validate itself).
+#pragma once
+
+#include <string>
+
+namespace tdcr {
+
+/// @brief Integrator for the Cosserat-rod ODEs (VC, VCref).
+enum class IntegratorKind {
+  FixedStepRK4,  ///< Classical RK4 with a fixed number of steps: fast path, allocation free.
+  Cvode          ///< SUNDIALS CVODE, Adams, error controlled: the reference integrator.
+};
+
+/// @brief Linear solver used inside KINSOL's Newton iteration.
+enum class LinearSolverKind {
+  Automatic,  ///< Dense below TDCR_DENSE_SIZE_LIMIT unknowns, KLU sparse above (see docs).
+  Dense,      ///< SUNDIALS dense LU.
+  SparseKLU   ///< SUNDIALS KLU on a compressed-sparse-column Jacobian.
+};
+
+/// @brief Numerical settings of a static solve.
+struct SolverOptions {
+  /// Newton stops when the scaled residual max-norm is below this (KINSOL fnormtol).
+  double function_tolerance = 1e-10;
+  /// KINSOL scaled step tolerance.
+  double step_tolerance = 1e-14;
+  int max_iterations = 200;  ///< Newton iterations per solve.
+  IntegratorKind integrator = IntegratorKind::FixedStepRK4;
+  /// RK4 steps per disk interval (one subsegment, length L_i / n_i), for VC and VCref alike.
+  int rk4_steps = 8;
+  double cvode_rtol = 1e-8;   ///< CVODE relative tolerance.
+  double cvode_atol = 1e-10;  ///< CVODE absolute tolerance.
+  LinearSolverKind linear_solver = LinearSolverKind::Automatic;
+  /// If a direct solve fails, ramp the actuation and loads in adaptive steps (each warm-started
+  /// from the last). Off by default so that failures are visible; the CLI turns it on.
+  bool continuation = false;
+  int max_continuation_steps = 64;  ///< Bound on continuation work.
+
+  /// @brief Throws InputError (field `solver.<name>`) on a non-positive tolerance, iteration or
+  /// step count.
+  void validate() const;
+};
+
+/// @brief Name of an integrator as used in scene files ("rk4", "cvode").
+std::string to_string(IntegratorKind k);
+/// @brief Name of a linear solver as used in scene files ("auto", "dense", "klu").
+std::string to_string(LinearSolverKind k);
+
+}  // namespace tdcr

@@ -1,0 +1,65 @@
+#include "tdcr/core/scene.hpp"
+
+#include <cmath>
+#include <string>
+
+#include "tdcr/core/error.hpp"
+
+namespace tdcr {
+
+namespace {
+void require_finite_vec(const std::string& field, const Vec3& v) {
+  for (int i = 0; i < 3; ++i)
+    if (!std::isfinite(v[i]))
+      throw InputError(field + "[" + std::to_string(i) + "]", format_value(v[i]), "must be a finite number");
+}
+}  // namespace
+
+void Scene::validate() const {
+  robot.validate();
+  const int m = robot.tendon_count();
+  const bool tensions = actuation.kind == Actuation::Kind::Tensions;
+  const std::string key = tensions ? "actuation.tensions" : "actuation.displacements";
+  if (static_cast<int>(actuation.values.size()) != m)
+    throw InputError(key, std::to_string(actuation.values.size()) + " values",
+                     "must list one value per tendon (" + std::to_string(m) + " tendons)");
+  for (std::size_t k = 0; k < actuation.values.size(); ++k) {
+    const double v = actuation.values[k];
+    const std::string f = key + "[" + std::to_string(k) + "]";
+    if (!std::isfinite(v)) throw InputError(f, format_value(v), "must be a finite number");
+    if (tensions && v < 0.0)
+      throw InputError(f, format_value(v), "a tension must not be negative (tendons can only pull)");
+  }
+  require_finite_vec("loads.tip_force", loads.tip_force);
+  require_finite_vec("loads.tip_moment", loads.tip_moment);
+  require_finite_vec("loads.gravity", loads.gravity);
+  for (int i = 0; i < 4; ++i)
+    if (!(std::isfinite(effects.prb.gamma[i]) && effects.prb.gamma[i] > 0.0))
+      throw InputError("effects.prb.gamma[" + std::to_string(i) + "]", format_value(effects.prb.gamma[i]),
+                       "must be positive");
+  for (int i = 0; i < 3; ++i)
+    if (!(std::isfinite(effects.prb.k_theta[i]) && effects.prb.k_theta[i] > 0.0))
+      throw InputError("effects.prb.k_theta[" + std::to_string(i) + "]", format_value(effects.prb.k_theta[i]),
+                       "must be positive");
+  static const char* kModels[] = {"cc", "ccsub", "prb", "vc", "vcref", "auto"};
+  bool known = false;
+  for (const char* k : kModels) known = known || model == k;
+  if (!known) throw InputError("model", model, "unknown model (cc, ccsub, prb, vc, vcref, auto)");
+  solver.validate();
+}
+
+SceneEffects Scene::active_effects() const {
+  SceneEffects e;
+  e.tip_wrench = loads.tip_force.squaredNorm() > 0.0 || loads.tip_moment.squaredNorm() > 0.0;
+  const bool g = loads.gravity.squaredNorm() > 0.0;
+  e.backbone_weight = g && robot.backbone.linear_mass() > 0.0;
+  bool disks = false;
+  for (const auto& s : robot.segments) disks = disks || s.disk_mass > 0.0;
+  e.disk_weight = g && disks;
+  e.gravity = e.backbone_weight || e.disk_weight;
+  e.shear_extension = effects.shear_extension;
+  e.disk_normal_force_removed = effects.disk_normal_force == DiskNormalForce::Removed;
+  return e;
+}
+
+}  // namespace tdcr

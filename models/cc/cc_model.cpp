@@ -1,0 +1,199 @@
+#include "tdcr/models/cc.hpp"
+
+#include <chrono>
+#include <cmath>
+
+#include <Eigen/Dense>
+
+#include "common/model_factories.hpp"
+#include "tdcr/core/error.hpp"
+#include "tdcr/core/lie.hpp"
+
+namespace tdcr {
+
+namespace {
+
+class CcWorkspace final : public ModelWorkspace {};
+
+// Shortening of tendon r over a segment of length l with curvature (kx, ky) = kappa (cos, sin),
+// split into n subsegments. Fully constrained (Eq. 15): l kappa d with d = r . (cos, sin).
+// Partially constrained (Eq. 20): the n chords of the tendon arc of radius 1/kappa - d over the
+// angle theta = kappa l have total length (l - theta d) sinc(theta / 2n); sinc keeps kappa -> 0
+// regular and theta d = l (k . r) needs no division by kappa.
+double segment_shortening(const Vec3& r, double l, const Eigen::Vector2d& k, TendonPath path, int n) {
+  const double theta_d = l * (k.x() * r.x() + k.y() * r.y());
+  if (path == TendonPath::FullyConstrained) return theta_d;
+  const double h = k.norm() * l / (2.0 * n);
+  const double sinc = std::abs(h) < 1e-6 ? 1.0 - h * h / 6.0 : std::sin(h) / h;
+  return l - (l - theta_d) * sinc;
+}
+
+}  // namespace
+
+double CcArc::bending_plane() const {
+  // u = kappa (-sin phi, cos phi, 0): the arc bends towards (cos phi, sin phi).
+  return std::atan2(-u.x(), u.y());
+}
+
+CcModel::CcModel(const Scene& scene) : scene_(scene) {
+  scene_.validate();
+  const SceneEffects e = scene_.active_effects();
+  // CC is kinematic or load-free: external loads would be silently ignored, so refuse them.
+  if (e.tip_wrench)
+    throw InputError("loads.tip_force", "nonzero",
+                     "the CC model cannot account for a tip wrench; use ccsub, prb, vc or vcref");
+  if (e.gravity)
+    throw InputError("loads.gravity", "nonzero", "the CC model cannot account for gravity; use ccsub, prb, vc or vcref");
+  for (std::size_t i = 0; i < scene_.robot.segments.size(); ++i) {
+    const auto& seg = scene_.robot.segments[i];
+    if (scene_.actuation.kind == Actuation::Kind::Displacements && seg.tendons.size() < 2)
+      throw InputError("robot.segments[" + std::to_string(i) + "].tendons", std::to_string(seg.tendons.size()),
+                       "the CC model needs at least 2 tendons per segment for displacement input");
+  }
+  routing_ = TendonRouting::from(scene_.robot);
+}
+
+std::unique_ptr<ModelWorkspace> CcModel::make_workspace() const { return std::make_unique<CcWorkspace>(); }
+
+std::vector<CcArc> CcModel::arcs(double* misfit) const {
+  const Robot& robot = scene_.robot;
+  const int nseg = static_cast<int>(robot.segments.size());
+  std::vector<CcArc> out(nseg);
+  double sq = 0.0;
+  if (scene_.actuation.kind == Actuation::Kind::Tensions) {
+    const BackboneStiffness k = robot.backbone.effective_stiffness();
+    for (int s = 0; s < nseg; ++s) {
+      Vec3 m = Vec3::Zero();
+      double T = 0.0;
+      for (const RoutedTendon& t : routing_.tendons) {
+        if (t.segment < s) continue;  // ended before segment s
+        const double Tk = scene_.actuation.values[t.index];
+        m += Tk * Vec3::UnitZ().cross(t.r);
+        T += Tk;
+      }
+      out[s].u = m / k.EI;
+      if (scene_.effects.shear_extension) out[s].v = Vec3(0.0, 0.0, 1.0 - T / k.EA);
+    }
+    if (misfit) *misfit = 0.0;
+    return out;
+  }
+
+  const TendonPath path = scene_.effects.tendon_path;
+  const bool at_base = scene_.actuation.convention == Actuation::DisplacementConvention::AtBase;
+  std::vector<Eigen::Vector2d> kappa(nseg, Eigen::Vector2d::Zero());
+  for (int s = 0; s < nseg; ++s) {
+    const Segment& seg = robot.segments[s];
+    const int m = static_cast<int>(seg.tendons.size());
+    Eigen::MatrixXd A(m, 2);
+    Eigen::VectorXd b(m);
+    std::vector<Vec3> r(m);
+    for (int i = 0, k = 0; k < static_cast<int>(routing_.tendons.size()); ++k) {
+      const RoutedTendon& t = routing_.tendons[k];
+      if (t.segment != s) continue;
+      double d = scene_.actuation.values[k];
+      if (at_base)  // remove the share of the proximal segments the tendon runs through
+        for (int q = 0; q < s; ++q)
+          d -= segment_shortening(t.r, robot.segments[q].length, kappa[q], path, robot.segments[q].disks);
+      r[i] = t.r;
+      A(i, 0) = seg.length * t.r.x();
+      A(i, 1) = seg.length * t.r.y();
+      b(i) = d;
+      ++i;
+    }
+    // Fully constrained: linear least squares, minimum norm when the tendons are collinear.
+    Eigen::Vector2d k = A.completeOrthogonalDecomposition().solve(b);
+    if (path == TendonPath::PartiallyConstrained) {
+      // Gauss-Newton from the fully constrained answer, on r_i(k) = shortening_i(k) - b_i, with
+      // a forward-difference Jacobian (2 unknowns).
+      for (int it = 0; it < 50; ++it) {
+        Eigen::VectorXd f(m);
+        Eigen::MatrixXd J(m, 2);
+        for (int i = 0; i < m; ++i) f(i) = segment_shortening(r[i], seg.length, k, path, seg.disks) - b(i);
+        for (int c = 0; c < 2; ++c) {
+          Eigen::Vector2d kp = k;
+          const double h = 1e-7 * std::max(1.0, std::abs(k(c)));
+          kp(c) += h;
+          for (int i = 0; i < m; ++i)
+            J(i, c) = (segment_shortening(r[i], seg.length, kp, path, seg.disks) - b(i) - f(i)) / h;
+        }
+        const Eigen::Vector2d dk = J.completeOrthogonalDecomposition().solve(-f);
+        k += dk;
+        if (dk.norm() <= 1e-14 * std::max(1.0, k.norm())) break;
+      }
+    }
+    kappa[s] = k;
+    for (int i = 0; i < m; ++i) {
+      const double e = segment_shortening(r[i], seg.length, k, path, seg.disks) - b(i);
+      sq += e * e;
+    }
+    // u = kappa (-sin phi, cos phi, 0) for a bend towards (cos phi, sin phi).
+    out[s].u = Vec3(-k.y(), k.x(), 0.0);
+  }
+  if (misfit) *misfit = std::sqrt(sq);
+  return out;
+}
+
+Solution CcModel::solve(ModelWorkspace&, const Solution*) const {
+  const auto t0 = std::chrono::steady_clock::now();
+  Solution sol;
+  sol.model = "cc";
+  double misfit = 0.0;
+  const std::vector<CcArc> a = arcs(&misfit);
+  const Robot& robot = scene_.robot;
+
+  sol.disk_frames.reserve(routing_.disk_count());
+  sol.disk_frames.push_back(Frame{});
+  Frame base;  // frame at the start of the current segment
+  for (std::size_t s = 0; s < robot.segments.size(); ++s) {
+    const Segment& seg = robot.segments[s];
+    const double s0 = routing_.segment_start_s[s];
+    for (int j = routing_.segment_end_disk[s] - seg.disks + 1; j <= routing_.segment_end_disk[s]; ++j) {
+      const double ds = routing_.disk_s[j] - s0;
+      sol.disk_frames.push_back(base * lie::exp_se3(a[s].u * ds, a[s].v * ds));
+    }
+    base = sol.disk_frames.back();
+  }
+
+  // Tendon displacements of the solved shape (what the base actuators see).
+  sol.tendon_displacements.assign(routing_.tendons.size(), 0.0);
+  for (const RoutedTendon& t : routing_.tendons) {
+    double d = 0.0;
+    for (int s = 0; s <= t.segment; ++s) {
+      const Segment& seg = robot.segments[s];
+      const Eigen::Vector2d k(a[s].u.y(), -a[s].u.x());
+      // Axial strain shortens every tendon with the backbone.
+      d += segment_shortening(t.r, seg.length, k, scene_.effects.tendon_path, seg.disks) +
+           seg.length * (1.0 - a[s].v.z());
+    }
+    if (scene_.actuation.convention == Actuation::DisplacementConvention::PerSegment) {
+      const Segment& seg = robot.segments[t.segment];
+      const Eigen::Vector2d k(a[t.segment].u.y(), -a[t.segment].u.x());
+      d = segment_shortening(t.r, seg.length, k, scene_.effects.tendon_path, seg.disks) +
+          seg.length * (1.0 - a[t.segment].v.z());
+    }
+    sol.tendon_displacements[t.index] = d;
+  }
+  if (scene_.actuation.kind == Actuation::Kind::Tensions) sol.tensions = scene_.actuation.values;
+
+  Eigen::VectorXd unknowns(3 * a.size());
+  for (std::size_t s = 0; s < a.size(); ++s) unknowns.segment<3>(3 * s) = a[s].u;
+  sol.unknowns = unknowns;
+
+  SolverSummary& sum = sol.summary;
+  sum.termination = TerminationType::Converged;
+  sum.message = misfit > 0.0 ? "closed form; least-squares displacement misfit " + format_value(misfit) + " m"
+                             : "closed form";
+  sum.physical_residual = misfit;
+  sum.residual_norm = 0.0;
+  sum.unknowns = static_cast<int>(unknowns.size());
+  sum.linear_solver = "none";
+  sum.integrator = "none";
+  sum.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return sol;
+}
+
+namespace detail {
+std::unique_ptr<StaticModel> make_cc_model(const Scene& scene) { return std::make_unique<CcModel>(scene); }
+}  // namespace detail
+
+}  // namespace tdcr

@@ -1,0 +1,50 @@
+#include "tdcr/models/tendon_physics.hpp"
+
+namespace tdcr::tendon {
+
+DiskWrench disk_wrench(int j, const Frame* frames, const TendonRouting& routing, const double* tensions,
+                       bool remove_normal) {
+  DiskWrench w;
+  const Frame& fj = frames[j];
+  const Vec3 z = fj.R.col(2);
+  for (const RoutedTendon& t : routing.tendons) {
+    if (j > t.end_disk) continue;
+    const double T = tensions[t.index];
+    if (T == 0.0) continue;
+    const Vec3 P = hole_position(fj, t);
+    // Eq. 30 / first term of Eq. 32: pull towards the hole in the previous disk.
+    Vec3 F = T * (hole_position(frames[j - 1], t) - P).normalized();
+    if (j < t.end_disk) {
+      // Eq. 32: pass-through, also pulled towards the next disk.
+      F += T * (hole_position(frames[j + 1], t) - P).normalized();
+      if (remove_normal) F -= F.dot(z) * z;  // Eq. 58: frictionless disk.
+    }
+    w.force += F;
+    w.moment += (P - fj.p).cross(F);  // Eq. 31 / 33
+  }
+  return w;
+}
+
+double chord_length(const Frame* frames, const TendonRouting& routing, int k, int first) {
+  const RoutedTendon& t = routing.tendons[k];
+  double L = 0.0;
+  for (int j = first + 1; j <= t.end_disk; ++j)
+    L += (hole_position(frames[j], t) - hole_position(frames[j - 1], t)).norm();
+  return L;
+}
+
+std::vector<double> chord_displacements(const std::vector<Frame>& frames, const TendonRouting& routing,
+                                        Actuation::DisplacementConvention convention) {
+  std::vector<double> d(routing.tendons.size(), 0.0);
+  for (std::size_t k = 0; k < routing.tendons.size(); ++k) {
+    const RoutedTendon& t = routing.tendons[k];
+    int first = 0;
+    if (convention == Actuation::DisplacementConvention::PerSegment && t.segment > 0)
+      first = routing.segment_end_disk[t.segment - 1];
+    const double straight = routing.disk_s[t.end_disk] - routing.disk_s[first];
+    d[k] = straight - chord_length(frames.data(), routing, static_cast<int>(k), first);
+  }
+  return d;
+}
+
+}  // namespace tdcr::tendon

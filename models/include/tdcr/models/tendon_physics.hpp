@@ -1,0 +1,47 @@
+/// @file tendon_physics.hpp
+/// @brief Tendon physics shared by the models, written once: tendon hole positions, the
+/// discrete disk forces of a partially constrained tendon path (paper Eq. 30-33) with the
+/// frictionless-disk condition (Eq. 58), and tendon path lengths and displacements.
+///
+/// All vectors are in the base frame. `frames[j]` is the frame of disk j (0 = base disk).
+#pragma once
+
+#include <vector>
+
+#include "tdcr/core/robot.hpp"
+#include "tdcr/core/scene.hpp"
+#include "tdcr/core/types.hpp"
+
+namespace tdcr::tendon {
+
+/// @brief Force and moment (about the disk centre O_j) applied to a disk, base frame.
+struct DiskWrench {
+  Vec3 force = Vec3::Zero();   ///< N.
+  Vec3 moment = Vec3::Zero();  ///< N m, about the disk's backbone point.
+};
+
+/// @brief Hole position P_{k,j} = p_j + R_j r_k of tendon k in disk frame `f` (base frame, m).
+inline Vec3 hole_position(const Frame& f, const RoutedTendon& t) { return f.p + f.R * t.r; }
+
+/// @brief Sum over tendons of the wrench the tendons apply to disk j >= 1 (paper Eq. 30-33).
+///
+/// A tendon ending at disk j pulls towards its hole in disk j-1 (Eq. 30-31). A tendon passing
+/// through disk j pulls towards its holes in disks j-1 and j+1 (Eq. 32-33); with
+/// `remove_normal` (frictionless disks, Eq. 58) the component along the disk normal z_j is
+/// removed from that pass-through force. Terminating tendons always act with their full force.
+/// Allocation-free; `frames` must hold at least j+2 frames if any tendon passes disk j.
+DiskWrench disk_wrench(int j, const Frame* frames, const TendonRouting& routing, const double* tensions,
+                       bool remove_normal);
+
+/// @brief Length of tendon k along the partially constrained path: the sum of the chords
+/// between its holes in consecutive disks, from disk `first` to its terminating disk.
+double chord_length(const Frame* frames, const TendonRouting& routing, int k, int first = 0);
+
+/// @brief Tendon displacements (m, positive when pulled) of every tendon from the chord lengths
+/// between disks: with AtBase, straight length (the arc length to its end disk) minus the path
+/// length from the base; with PerSegment, only over the tendon's own segment (the paper code's
+/// convention for feeding CC).
+std::vector<double> chord_displacements(const std::vector<Frame>& frames, const TendonRouting& routing,
+                                        Actuation::DisplacementConvention convention);
+
+}  // namespace tdcr::tendon
