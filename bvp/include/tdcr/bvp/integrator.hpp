@@ -1,0 +1,104 @@
+/// @file integrator.hpp
+/// @brief Initial value problems y' = f(s, y) behind one interface: a fixed-step classical RK4
+/// (the fast, allocation-free path) and SUNDIALS CVODE (Adams, error controlled: the reference).
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "tdcr/core/solver_options.hpp"
+
+namespace tdcr::bvp {
+
+/// @brief A first-order ODE system dy/ds = f(s, y) of fixed dimension.
+///
+/// Raw pointers so that implementations can Eigen::Map them onto fixed-size types
+/// (e.g. Eigen::Map<const Eigen::Matrix<double, 18, 1>>) with no allocation or copy.
+class OdeSystem {
+ public:
+  virtual ~OdeSystem() = default;
+  /// @brief Number of states (length of y and dyds).
+  virtual int dimension() const = 0;
+  /// @brief Evaluate dyds = f(s, y). s is the independent variable (arc length, m, in tdcr).
+  /// Must not allocate: it is the innermost loop of every shooting model. Writing NaN or Inf
+  /// makes the integration fail (RK4) or retry with a smaller step (CVODE).
+  virtual void rhs(double s, const double* y, double* dyds) const = 0;
+};
+
+/// @brief Integrates an OdeSystem from s0 to s1 in place.
+class Integrator {
+ public:
+  virtual ~Integrator();
+  /// @brief Integrate y from s0 to s1 (s1 < s0 integrates backwards).
+  /// @param y In: state at s0, out: state at s1 (length system.dimension()).
+  /// @return false on failure (non-finite state, too much work, step too small). y is then
+  /// unspecified.
+  virtual bool integrate(const OdeSystem& system, double s0, double s1, double* y) = 0;
+  /// @brief Short name for reports: "rk4" or "cvode".
+  virtual std::string name() const = 0;
+  /// @brief Right-hand side evaluations since construction (a cost measure for benchmarks).
+  virtual int rhs_evaluations() const { return rhs_evaluations_; }
+  /// @brief Text of the last failure ("" if none), e.g. CVODE's error message.
+  virtual std::string last_error() const { return last_error_; }
+
+ protected:
+  int rhs_evaluations_ = 0;  ///< Maintained by derived classes.
+  std::string last_error_;   ///< Set by derived classes when integrate() fails.
+};
+
+/// @brief Classical 4th-order Runge-Kutta with a fixed number of equal steps per integrate().
+///
+/// Global error O(h^4): halving the step divides it by ~16. Stage buffers are sized on the
+/// first call for a given dimension and reused, so integrate() allocates nothing once warm.
+/// No error control: choose the step count from a convergence study (SolverOptions::rk4_steps).
+class Rk4Integrator : public Integrator {
+ public:
+  /// @param steps Steps per integrate() call (>= 1; throws InputError otherwise).
+  explicit Rk4Integrator(int steps);
+  bool integrate(const OdeSystem& system, double s0, double s1, double* y) override;
+  std::string name() const override { return "rk4"; }
+  /// @brief Steps per integrate() call.
+  int steps() const { return steps_; }
+
+ private:
+  void ensure_size(int n);
+  int steps_;
+  int dim_ = -1;
+  std::vector<double> k1_, k2_, k3_, k4_, tmp_;
+};
+
+/// @brief SUNDIALS CVODE with Adams-Moulton (orders 1-12) and a fixed-point corrector: the
+/// Cosserat rod ODEs are not stiff, so no Jacobian or linear solver is needed.
+///
+/// The CVODE memory is created on the first call and re-initialised (CVodeReInit) on later
+/// calls; it is rebuilt only when the dimension changes. Errors are captured in last_error(),
+/// never printed. Movable, not copyable.
+class CvodeIntegrator : public Integrator {
+ public:
+  /// @param rtol Relative tolerance (> 0).
+  /// @param atol Absolute tolerance (> 0), in the units of y.
+  /// @param max_steps Internal step limit per integrate() call.
+  explicit CvodeIntegrator(double rtol = 1e-8, double atol = 1e-10, long max_steps = 100000);
+  ~CvodeIntegrator() override;
+  CvodeIntegrator(CvodeIntegrator&&) noexcept;
+  CvodeIntegrator& operator=(CvodeIntegrator&&) noexcept;
+  CvodeIntegrator(const CvodeIntegrator&) = delete;
+  CvodeIntegrator& operator=(const CvodeIntegrator&) = delete;
+
+  bool integrate(const OdeSystem& system, double s0, double s1, double* y) override;
+  std::string name() const override { return "cvode"; }
+  int rhs_evaluations() const override;
+  /// @brief Internal CVODE steps since construction.
+  long steps_taken() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// @brief The integrator selected by options.integrator: Rk4Integrator(options.rk4_steps) or
+/// CvodeIntegrator(options.cvode_rtol, options.cvode_atol).
+std::unique_ptr<Integrator> make_integrator(const SolverOptions& options);
+
+}  // namespace tdcr::bvp

@@ -1,0 +1,102 @@
+/// @file newton_solver.hpp
+/// @brief Globalised Newton's method (SUNDIALS KINSOL with line search) on a ResidualSystem,
+/// with a dense or sparse (KLU) linear solver, behind a reusable workspace.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include <Eigen/Core>
+
+#include "tdcr/bvp/residual_system.hpp"
+#include "tdcr/core/solution.hpp"
+#include "tdcr/core/solver_options.hpp"
+
+namespace tdcr::bvp {
+
+/// @brief Settings of one Newton solve (a subset of SolverOptions plus KINSOL details).
+struct NewtonOptions {
+  /// Stop when max_i |s_i F_i| <= this, s = ResidualSystem::residual_scale (KINSOL fnormtol).
+  double function_tolerance = 1e-10;
+  /// KINSOL scsteptol: stop when the scaled Newton step is below this. Such a stop is reported
+  /// as converged only if the residual tolerance also holds.
+  double step_tolerance = 1e-14;
+  /// Maximum Newton iterations per solve.
+  int max_iterations = 200;
+  /// Maximum scaled length of a Newton step (KINSOL mxnewtstep); 0 = automatic:
+  /// 1000 * max(|D_u x0|_2, sqrt(n)). KINSOL's own default, 1000 |D_u x0|_2, is zero for a zero
+  /// initial guess and would stall the very first step.
+  double max_newton_step = 0.0;
+  /// Newton iterations between Jacobian evaluations; 1 = exact Newton (KINSOL's default of 10
+  /// trades robustness for Jacobian cost, a bad deal when Jacobians are cheap FD or analytic).
+  int max_setup_calls = 1;
+  /// Backtracking line search (KIN_LINESEARCH); false = full Newton steps (KIN_NONE).
+  bool line_search = true;
+  /// Linear solver inside Newton.
+  LinearSolverKind linear_solver = LinearSolverKind::Automatic;
+  /// Automatic choice: dense LU up to this many unknowns, KLU above if the system declares a
+  /// sparsity pattern (KLU's overhead does not pay off on small systems).
+  int dense_size_limit = 200;
+
+  /// @brief The Newton-relevant fields of a model's SolverOptions (tolerances, iteration limit,
+  /// linear solver); the rest keeps its defaults.
+  static NewtonOptions from(const SolverOptions& options);
+  /// @brief Throws InputError (field `newton.<name>`) on a non-positive tolerance, iteration
+  /// limit, setup interval or size limit, or a negative max_newton_step.
+  void validate() const;
+};
+
+/// @brief Outcome of NewtonSolver::solve(). A failed solve is never reported as converged.
+struct NewtonResult {
+  TerminationType termination = TerminationType::NotSolved;  ///< Why the solve ended.
+  int flag = 0;                 ///< KINSOL's return flag (e.g. -6 = KIN_MAXITER_REACHED).
+  /// "<KINSOL flag name>: <iterations> iterations, |F|=<residual_norm>", followed by KINSOL's
+  /// own error text if it produced one.
+  std::string message;
+  int iterations = 0;            ///< Newton iterations.
+  int residual_evaluations = 0;  ///< Residual evaluations by KINSOL and the final check.
+  int jacobian_evaluations = 0;  ///< Jacobian evaluations (analytic or finite differences).
+  int fd_residual_evaluations = 0;  ///< Residual evaluations spent in FD Jacobians.
+  double residual_norm = 0.0;   ///< max_i |s_i F_i(x)| at the returned x (dimensionless).
+  double physical_residual = 0.0;  ///< |F(x)|_2 at the returned x, unscaled (system units).
+  std::string linear_solver;    ///< "dense" or "klu".
+
+  /// @brief True if the residual at the returned x satisfies the tolerance.
+  bool converged() const { return termination == TerminationType::Converged; }
+};
+
+/// @brief Newton solver workspace: owns the SUNDIALS context, vectors, Jacobian matrix, linear
+/// solver and KINSOL memory, and keeps them across solves.
+///
+/// They are rebuilt only when the system size, its sparsity pattern or the linear solver kind
+/// changes; otherwise a solve reuses everything (vectors, matrix, KLU and KINSOL memory), so
+/// warm-started repeated solves (continuation, trajectories, benchmarks) pay no setup cost.
+/// Not thread-safe: use one NewtonSolver per thread. Movable, not copyable.
+class NewtonSolver {
+ public:
+  NewtonSolver();
+  ~NewtonSolver();
+  NewtonSolver(NewtonSolver&&) noexcept;
+  NewtonSolver& operator=(NewtonSolver&&) noexcept;
+  NewtonSolver(const NewtonSolver&) = delete;
+  NewtonSolver& operator=(const NewtonSolver&) = delete;
+
+  /// @brief Solve system(x) = 0.
+  /// @param x In: initial guess (size system.size()). Out: the last iterate, whatever the
+  /// outcome (check the result before using it).
+  /// @param options Validated here (throws InputError on bad values).
+  /// Exceptions thrown by the system's callbacks propagate after KINSOL has been unwound
+  /// cleanly. Never writes to stdout or stderr.
+  NewtonResult solve(ResidualSystem& system, Eigen::VectorXd& x,
+                     const NewtonOptions& options = NewtonOptions());
+
+  /// @brief Number of times the SUNDIALS objects were (re)built; lets tests and benchmarks
+  /// verify that repeated solves reuse the workspace.
+  int rebuilds() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace tdcr::bvp

@@ -1,0 +1,484 @@
+/// @file newton_solver.cpp
+/// @brief KINSOL driver: workspace lifetime, callbacks, and the translation of KINSOL's return
+/// flags into TerminationType.
+#include "tdcr/bvp/newton_solver.hpp"
+
+#include <kinsol/kinsol.h>
+#include <nvector/nvector_serial.h>
+#include <sundials/sundials_context.h>
+#include <sunlinsol/sunlinsol_dense.h>
+#include <sunlinsol/sunlinsol_klu.h>
+#include <sunmatrix/sunmatrix_dense.h>
+#include <sunmatrix/sunmatrix_sparse.h>
+
+#include <cmath>
+#include <cstdio>
+#include <exception>
+#include <limits>
+#include <stdexcept>
+#include <utility>
+
+#include "tdcr/core/error.hpp"
+
+namespace tdcr::bvp {
+
+namespace {
+
+std::string number(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+
+/// KINSOL's flag names, without KINGetReturnFlagName (which returns malloc'd memory).
+const char* kinsol_flag_name(int flag) {
+  switch (flag) {
+    case KIN_SUCCESS: return "KIN_SUCCESS";
+    case KIN_INITIAL_GUESS_OK: return "KIN_INITIAL_GUESS_OK";
+    case KIN_STEP_LT_STPTOL: return "KIN_STEP_LT_STPTOL";
+    case KIN_WARNING: return "KIN_WARNING";
+    case KIN_MEM_NULL: return "KIN_MEM_NULL";
+    case KIN_ILL_INPUT: return "KIN_ILL_INPUT";
+    case KIN_NO_MALLOC: return "KIN_NO_MALLOC";
+    case KIN_MEM_FAIL: return "KIN_MEM_FAIL";
+    case KIN_LINESEARCH_NONCONV: return "KIN_LINESEARCH_NONCONV";
+    case KIN_MAXITER_REACHED: return "KIN_MAXITER_REACHED";
+    case KIN_MXNEWT_5X_EXCEEDED: return "KIN_MXNEWT_5X_EXCEEDED";
+    case KIN_LINESEARCH_BCFAIL: return "KIN_LINESEARCH_BCFAIL";
+    case KIN_LINSOLV_NO_RECOVERY: return "KIN_LINSOLV_NO_RECOVERY";
+    case KIN_LINIT_FAIL: return "KIN_LINIT_FAIL";
+    case KIN_LSETUP_FAIL: return "KIN_LSETUP_FAIL";
+    case KIN_LSOLVE_FAIL: return "KIN_LSOLVE_FAIL";
+    case KIN_SYSFUNC_FAIL: return "KIN_SYSFUNC_FAIL";
+    case KIN_FIRST_SYSFUNC_ERR: return "KIN_FIRST_SYSFUNC_ERR";
+    case KIN_REPTD_SYSFUNC_ERR: return "KIN_REPTD_SYSFUNC_ERR";
+    case KIN_VECTOROP_ERR: return "KIN_VECTOROP_ERR";
+    case KIN_CONTEXT_ERR: return "KIN_CONTEXT_ERR";
+    default: return "KIN_UNKNOWN_FLAG";
+  }
+}
+
+/// Why the most recent evaluation inside a callback failed.
+enum class EvalFailure { None, NotEvaluated, NonFinite };
+
+TerminationType termination_of(EvalFailure e) {
+  // residual() returning false is, in tdcr, an integrator that gave up (shooting models); a
+  // finite-but-wrong F is impossible to detect here, so those are the only two kinds.
+  switch (e) {
+    case EvalFailure::NotEvaluated: return TerminationType::IntegrationFailed;
+    case EvalFailure::NonFinite: return TerminationType::NonFiniteResidual;
+    default: return TerminationType::NoConvergence;
+  }
+}
+
+const char* describe(EvalFailure e) {
+  switch (e) {
+    case EvalFailure::NotEvaluated: return "residual could not be evaluated";
+    case EvalFailure::NonFinite: return "residual is not finite";
+    default: return "";
+  }
+}
+
+}  // namespace
+
+struct NewtonSolver::Impl {
+  // SUNDIALS objects, destroyed in reverse order of creation.
+  SUNContext ctx = nullptr;
+  N_Vector u = nullptr, uscale = nullptr, fscale = nullptr;
+  SUNMatrix J = nullptr;
+  SUNLinearSolver LS = nullptr;
+  void* kin = nullptr;
+
+  // What the objects were built for.
+  int n = -1;
+  bool sparse = false;
+  SparsityPattern pattern;     // copy of the system's pattern (empty if dense system)
+  bool has_pattern = false;
+  int rebuilds = 0;
+
+  // Per-solve state, reached from the C callbacks through user_data.
+  ResidualSystem* system = nullptr;
+  FiniteDifferenceWorkspace fd;
+  std::vector<double> values;  // sparse Jacobian values when the linear solver is dense
+  Eigen::VectorXd f_final;
+  int nfe = 0, nje = 0;
+  EvalFailure last_failure = EvalFailure::None;
+  EvalFailure jac_failure = EvalFailure::None;
+  std::string kinsol_message;
+  std::exception_ptr exception;
+
+  Impl() {
+    if (SUNContext_Create(nullptr, &ctx) != 0 || !ctx)
+      throw std::runtime_error("NewtonSolver: SUNContext_Create failed");
+  }
+  ~Impl() {
+    destroy();
+    if (ctx) SUNContext_Free(&ctx);
+  }
+
+  void destroy() {
+    if (kin) KINFree(&kin);
+    if (LS) SUNLinSolFree(LS);
+    if (J) SUNMatDestroy(J);
+    if (fscale) N_VDestroy(fscale);
+    if (uscale) N_VDestroy(uscale);
+    if (u) N_VDestroy(u);
+    kin = nullptr;
+    LS = nullptr;
+    J = nullptr;
+    u = uscale = fscale = nullptr;
+    n = -1;
+  }
+
+  void build(int size, bool use_klu, const SparsityPattern* p) {
+    destroy();
+    ++rebuilds;
+    u = N_VNew_Serial(size, ctx);
+    uscale = N_VNew_Serial(size, ctx);
+    fscale = N_VNew_Serial(size, ctx);
+    if (!u || !uscale || !fscale) throw std::runtime_error("NewtonSolver: N_VNew_Serial failed");
+    if (use_klu) {
+      J = SUNSparseMatrix(size, size, p->nnz(), CSC_MAT, ctx);
+      if (J) LS = SUNLinSol_KLU(u, J, ctx);
+    } else {
+      J = SUNDenseMatrix(size, size, ctx);
+      if (J) LS = SUNLinSol_Dense(u, J, ctx);
+    }
+    if (!J || !LS) throw std::runtime_error("NewtonSolver: cannot create the linear solver");
+    kin = KINCreate(ctx);
+    if (!kin) throw std::runtime_error("NewtonSolver: KINCreate failed");
+    int ret = KINSetErrHandlerFn(kin, &Impl::on_error, this);
+    if (ret == KIN_SUCCESS) ret = KINSetInfoHandlerFn(kin, &Impl::on_info, this);
+    if (ret == KIN_SUCCESS) ret = KINSetPrintLevel(kin, 0);
+    if (ret == KIN_SUCCESS) ret = KINInit(kin, &Impl::residual_fn, u);
+    if (ret == KIN_SUCCESS) ret = KINSetUserData(kin, this);
+    if (ret == KIN_SUCCESS) ret = KINSetLinearSolver(kin, LS, J);
+    if (ret == KIN_SUCCESS) ret = KINSetJacFn(kin, &Impl::jacobian_fn);
+    if (ret != KIN_SUCCESS)
+      throw std::runtime_error(std::string("NewtonSolver: KINSOL setup failed: ") +
+                               kinsol_flag_name(ret) + " " + kinsol_message);
+    n = size;
+    sparse = use_klu;
+  }
+
+  // ---- C callbacks. They never let an exception cross KINSOL's C frames. ----
+
+  static void on_error(int code, const char* module, const char* function, char* msg,
+                       void* user) {
+    auto* self = static_cast<Impl*>(user);
+    std::string text = std::string(module ? module : "KINSOL") + "/" +
+                       (function ? function : "?") + ": " + (msg ? msg : "");
+    (void)code;
+    // Keep the latest message only: KINSOL reports the final, most specific error last.
+    self->kinsol_message = std::move(text);
+  }
+
+  static void on_info(const char*, const char*, char*, void*) {}
+
+  static int residual_fn(N_Vector uu, N_Vector fval, void* user) {
+    auto* self = static_cast<Impl*>(user);
+    try {
+      Eigen::Map<const Eigen::VectorXd> x(N_VGetArrayPointer(uu), self->n);
+      Eigen::Map<Eigen::VectorXd> f(N_VGetArrayPointer(fval), self->n);
+      ++self->nfe;
+      if (!self->system->residual(x, f)) {
+        self->last_failure = EvalFailure::NotEvaluated;
+        return 1;  // recoverable: KINSOL shortens the step
+      }
+      if (!f.allFinite()) {
+        self->last_failure = EvalFailure::NonFinite;
+        return 1;
+      }
+      return 0;
+    } catch (...) {
+      self->exception = std::current_exception();
+      return -1;
+    }
+  }
+
+  static int jacobian_fn(N_Vector uu, N_Vector fu, SUNMatrix Jm, void* user, N_Vector,
+                         N_Vector) {
+    auto* self = static_cast<Impl*>(user);
+    try {
+      ++self->nje;
+      const EvalFailure r = self->fill_jacobian(uu, fu, Jm);
+      if (r != EvalFailure::None) {
+        self->jac_failure = r;
+        return 1;
+      }
+      return 0;
+    } catch (...) {
+      self->exception = std::current_exception();
+      return -1;
+    }
+  }
+
+  EvalFailure fill_jacobian(N_Vector uu, N_Vector fu, SUNMatrix Jm) {
+    Eigen::Map<const Eigen::VectorXd> x(N_VGetArrayPointer(uu), n);
+    Eigen::Map<const Eigen::VectorXd> f(N_VGetArrayPointer(fu), n);
+    ResidualSystem& sys = *system;
+    const bool analytic = sys.has_jacobian();
+    bool ok = false;
+    if (sparse) {
+      // KINSOL zeroes the matrix before this call, and SUNMatZero on a sparse matrix wipes the
+      // index arrays too: restore the structure every time.
+      sunindextype* colptr = SM_INDEXPTRS_S(Jm);
+      sunindextype* rowval = SM_INDEXVALS_S(Jm);
+      for (int j = 0; j <= n; ++j) colptr[j] = pattern.col_ptr[j];
+      const int nnz = pattern.nnz();
+      for (int k = 0; k < nnz; ++k) rowval[k] = pattern.row_idx[k];
+      double* vals = SM_DATA_S(Jm);
+      ok = analytic ? sys.sparse_jacobian(x, f, vals)
+                    : finite_difference_sparse_jacobian(sys, x, f, pattern, vals, &fd);
+      if (ok)
+        for (int k = 0; k < nnz; ++k)
+          if (!std::isfinite(vals[k])) return EvalFailure::NonFinite;
+    } else {
+      // SUNDIALS' dense matrix is column-major and contiguous, like Eigen's default.
+      Eigen::Map<Eigen::MatrixXd> Jd(SM_DATA_D(Jm), n, n);
+      if (has_pattern) {
+        // Structured system on a dense solver: still use grouped differences, then scatter.
+        ok = analytic ? sys.sparse_jacobian(x, f, values.data())
+                      : finite_difference_sparse_jacobian(sys, x, f, pattern, values.data(), &fd);
+        if (ok) {
+          Jd.setZero();
+          for (int j = 0; j < n; ++j)
+            for (int k = pattern.col_ptr[j]; k < pattern.col_ptr[j + 1]; ++k)
+              Jd(pattern.row_idx[k], j) = values[k];
+        }
+      } else {
+        ok = analytic ? sys.jacobian(x, f, Jd) : finite_difference_jacobian(sys, x, f, Jd, &fd);
+      }
+      if (ok && !Jd.allFinite()) return EvalFailure::NonFinite;
+    }
+    // A finite-difference failure is a failed residual evaluation; treat an analytic one alike.
+    if (!ok) return EvalFailure::NotEvaluated;
+    return EvalFailure::None;
+  }
+};
+
+NewtonOptions NewtonOptions::from(const SolverOptions& options) {
+  NewtonOptions o;
+  o.function_tolerance = options.function_tolerance;
+  o.step_tolerance = options.step_tolerance;
+  o.max_iterations = options.max_iterations;
+  o.linear_solver = options.linear_solver;
+  return o;
+}
+
+void NewtonOptions::validate() const {
+  auto positive = [](double v, const char* field) {
+    if (!(v > 0.0) || !std::isfinite(v))
+      throw InputError(std::string("newton.") + field, number(v), "must be positive and finite");
+  };
+  positive(function_tolerance, "function_tolerance");
+  positive(step_tolerance, "step_tolerance");
+  if (max_iterations < 1)
+    throw InputError("newton.max_iterations", std::to_string(max_iterations), "must be >= 1");
+  if (!(max_newton_step >= 0.0) || !std::isfinite(max_newton_step))
+    throw InputError("newton.max_newton_step", number(max_newton_step),
+                     "must be >= 0 (0 = automatic)");
+  if (max_setup_calls < 1)
+    throw InputError("newton.max_setup_calls", std::to_string(max_setup_calls), "must be >= 1");
+  if (dense_size_limit < 0)
+    throw InputError("newton.dense_size_limit", std::to_string(dense_size_limit),
+                     "must be >= 0");
+}
+
+NewtonSolver::NewtonSolver() : impl_(std::make_unique<Impl>()) {}
+NewtonSolver::~NewtonSolver() = default;
+NewtonSolver::NewtonSolver(NewtonSolver&&) noexcept = default;
+NewtonSolver& NewtonSolver::operator=(NewtonSolver&&) noexcept = default;
+
+int NewtonSolver::rebuilds() const { return impl_->rebuilds; }
+
+NewtonResult NewtonSolver::solve(ResidualSystem& system, Eigen::VectorXd& x,
+                                 const NewtonOptions& options) {
+  options.validate();
+  Impl& s = *impl_;
+  const int n = system.size();
+  if (n < 0) throw std::invalid_argument("NewtonSolver::solve: negative system size");
+  if (x.size() != n)
+    throw std::invalid_argument("NewtonSolver::solve: initial guess has size " +
+                                std::to_string(x.size()) + ", system has " + std::to_string(n));
+  const SparsityPattern* p = system.sparsity();
+  if (p && (!p->valid() || p->rows != n || p->cols != n))
+    throw std::invalid_argument("NewtonSolver::solve: sparsity pattern is not a valid " +
+                                std::to_string(n) + "x" + std::to_string(n) + " pattern");
+
+  NewtonResult result;
+  if (n == 0) {
+    result.termination = TerminationType::Converged;
+    result.message = "KIN_SUCCESS: empty system";
+    result.linear_solver = "none";
+    return result;
+  }
+
+  // Linear solver choice. KLU without a declared pattern uses a dense pattern: correct, just
+  // not sparse.
+  bool use_klu = false;
+  switch (options.linear_solver) {
+    case LinearSolverKind::Dense: use_klu = false; break;
+    case LinearSolverKind::SparseKLU: use_klu = true; break;
+    case LinearSolverKind::Automatic: use_klu = p && n > options.dense_size_limit; break;
+  }
+  const SparsityPattern dense_pattern = (use_klu && !p) ? SparsityPattern::dense(n)
+                                                         : SparsityPattern();
+  const SparsityPattern* eff = p ? p : (use_klu ? &dense_pattern : nullptr);
+
+  // Rebuild only on a change of size, solver kind or (for KLU) structure.
+  const bool pattern_changed =
+      (eff != nullptr) != s.has_pattern || (eff && *eff != s.pattern);
+  if (s.n != n || s.sparse != use_klu || (use_klu && pattern_changed)) {
+    s.has_pattern = eff != nullptr;
+    s.pattern = eff ? *eff : SparsityPattern();
+    s.build(n, use_klu, eff);
+    s.fd = FiniteDifferenceWorkspace();
+    if (eff) s.fd.prepare(s.pattern);
+  } else if (pattern_changed) {
+    s.has_pattern = eff != nullptr;
+    s.pattern = eff ? *eff : SparsityPattern();
+    s.fd = FiniteDifferenceWorkspace();
+    if (eff) s.fd.prepare(s.pattern);
+  }
+  s.fd.prepare(n);
+  if (s.has_pattern && !use_klu) s.values.assign(static_cast<size_t>(s.pattern.nnz()), 0.0);
+  if (s.f_final.size() != n) s.f_final.resize(n);
+
+  // Scaling.
+  Eigen::Map<Eigen::VectorXd> us(N_VGetArrayPointer(s.uscale), n);
+  Eigen::Map<Eigen::VectorXd> fs(N_VGetArrayPointer(s.fscale), n);
+  system.unknown_scale(us);
+  system.residual_scale(fs);
+  if (!(us.array() > 0.0).all() || !us.allFinite())
+    throw std::invalid_argument("NewtonSolver::solve: unknown_scale must be positive and finite");
+  if (!(fs.array() > 0.0).all() || !fs.allFinite())
+    throw std::invalid_argument("NewtonSolver::solve: residual_scale must be positive and finite");
+
+  Eigen::Map<Eigen::VectorXd> u(N_VGetArrayPointer(s.u), n);
+  u = x;
+
+  double mxnewt = options.max_newton_step;
+  if (mxnewt == 0.0)
+    mxnewt = 1000.0 * std::max(us.cwiseProduct(x).norm(), std::sqrt(static_cast<double>(n)));
+
+  // Per-solve state.
+  s.system = &system;
+  s.nfe = s.nje = 0;
+  const int fd_before = s.fd.evaluations;
+  s.last_failure = s.jac_failure = EvalFailure::None;
+  s.kinsol_message.clear();
+  s.exception = nullptr;
+
+  int ret = KINSetFuncNormTol(s.kin, options.function_tolerance);
+  if (ret == KIN_SUCCESS) ret = KINSetScaledStepTol(s.kin, options.step_tolerance);
+  if (ret == KIN_SUCCESS) ret = KINSetNumMaxIters(s.kin, options.max_iterations);
+  if (ret == KIN_SUCCESS) ret = KINSetMaxSetupCalls(s.kin, options.max_setup_calls);
+  if (ret == KIN_SUCCESS) ret = KINSetMaxNewtonStep(s.kin, mxnewt);
+  int flag = ret;
+  if (ret == KIN_SUCCESS)
+    flag = KINSol(s.kin, s.u, options.line_search ? KIN_LINESEARCH : KIN_NONE, s.uscale,
+                  s.fscale);
+  s.system = nullptr;
+
+  if (s.exception) {
+    std::exception_ptr e = s.exception;
+    s.exception = nullptr;
+    // KINSOL's memory may be mid-iteration; rebuild it on the next solve to be safe.
+    s.destroy();
+    std::rethrow_exception(e);
+  }
+
+  long nni = 0;
+  KINGetNumNonlinSolvIters(s.kin, &nni);
+  result.flag = flag;
+  result.iterations = static_cast<int>(nni);
+  result.jacobian_evaluations = s.nje;
+  result.fd_residual_evaluations = s.fd.evaluations - fd_before;
+  result.linear_solver = use_klu ? "klu" : "dense";
+  x = u;
+
+  // Judge the returned point ourselves: KINSOL's flag alone is not a proof of convergence
+  // (KIN_STEP_LT_STPTOL means "stuck" as often as "converged").
+  EvalFailure final_failure = EvalFailure::None;
+  ++s.nfe;
+  const bool eval_ok = system.residual(x, s.f_final);
+  if (!eval_ok)
+    final_failure = EvalFailure::NotEvaluated;
+  else if (!s.f_final.allFinite())
+    final_failure = EvalFailure::NonFinite;
+  result.residual_evaluations = s.nfe;
+  if (final_failure == EvalFailure::None) {
+    result.residual_norm = s.f_final.cwiseProduct(fs).cwiseAbs().maxCoeff();
+    result.physical_residual = s.f_final.norm();
+  } else {
+    result.residual_norm = std::numeric_limits<double>::infinity();
+    result.physical_residual = std::numeric_limits<double>::infinity();
+  }
+  const bool small = final_failure == EvalFailure::None &&
+                     result.residual_norm <= options.function_tolerance;
+
+  std::string why;
+  if (final_failure != EvalFailure::None) {
+    result.termination = termination_of(final_failure);
+    why = std::string(describe(final_failure)) + " at the returned point";
+  } else if ((flag == KIN_SUCCESS || flag == KIN_INITIAL_GUESS_OK || flag == KIN_STEP_LT_STPTOL) &&
+             small) {
+    result.termination = TerminationType::Converged;
+  } else {
+    switch (flag) {
+      case KIN_SUCCESS:
+      case KIN_INITIAL_GUESS_OK:
+        result.termination = TerminationType::NoConvergence;
+        why = "residual above tolerance at the returned point";
+        break;
+      case KIN_STEP_LT_STPTOL:
+        result.termination = TerminationType::NoConvergence;
+        why = "step below step_tolerance but residual above function_tolerance";
+        break;
+      case KIN_LINESEARCH_NONCONV:
+      case KIN_LINESEARCH_BCFAIL:
+        result.termination = TerminationType::LineSearchFailed;
+        break;
+      case KIN_MAXITER_REACHED:
+        result.termination = TerminationType::MaxIterations;
+        break;
+      case KIN_MXNEWT_5X_EXCEEDED:
+        result.termination = TerminationType::NoConvergence;
+        why = "five consecutive steps of maximum length: diverging or no root";
+        break;
+      case KIN_LINSOLV_NO_RECOVERY:
+      case KIN_LINIT_FAIL:
+      case KIN_LSETUP_FAIL:
+      case KIN_LSOLVE_FAIL:
+        if (s.jac_failure != EvalFailure::None) {
+          result.termination = termination_of(s.jac_failure);
+          why = std::string("Jacobian: ") + describe(s.jac_failure);
+        } else {
+          result.termination = TerminationType::LinearSolverFailed;
+          why = "singular or failed Jacobian factorisation";
+        }
+        break;
+      case KIN_SYSFUNC_FAIL:
+      case KIN_FIRST_SYSFUNC_ERR:
+      case KIN_REPTD_SYSFUNC_ERR:
+        result.termination = termination_of(s.last_failure);
+        why = describe(s.last_failure);
+        break;
+      default:
+        result.termination = TerminationType::NoConvergence;
+        break;
+    }
+  }
+
+  char head[160];
+  std::snprintf(head, sizeof head, "%s: %d iterations, |F|=%.3g", kinsol_flag_name(flag),
+                result.iterations, result.residual_norm);
+  result.message = head;
+  if (!why.empty()) result.message += "; " + why;
+  if (!s.kinsol_message.empty() && result.termination != TerminationType::Converged)
+    result.message += " (" + s.kinsol_message + ")";
+  return result;
+}
+
+}  // namespace tdcr::bvp
