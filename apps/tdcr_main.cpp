@@ -1,0 +1,259 @@
+// tdcr: the command-line program. Solves a scene file with one of the models and prints the
+// result as text or as JSON (the contract of tdcr::solution_to_json).
+//
+// Exit status: 0 converged, 1 solved but not converged (the result is still printed, status
+// "failed"), 2 bad input or usage, 3 internal error.
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <exception>
+#include <iostream>
+#include <iterator>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "tdcr/core/error.hpp"
+#include "tdcr/core/scene_io.hpp"
+#include "tdcr/models/static_model.hpp"
+
+#ifndef TDCR_VERSION
+#define TDCR_VERSION "0.1.0"
+#endif
+
+namespace {
+
+constexpr int kExitConverged = 0;
+constexpr int kExitNotConverged = 1;
+constexpr int kExitBadInput = 2;
+constexpr int kExitInternal = 3;
+constexpr long kMaxRepeat = 1000000;
+
+const char* const kUsage =
+    "usage: tdcr solve SCENE.json [--model NAME] [--json] [--repeat N]\n"
+    "                             [--integrator rk4|cvode] [--continuation]\n"
+    "       tdcr --help | --version\n"
+    "\n"
+    "Solve the static shape of a tendon-driven continuum robot described by a scene file\n"
+    "(see examples/ and docs/). SCENE.json may be '-' to read the scene from standard input.\n"
+    "\n"
+    "options of solve:\n"
+    "  --model NAME          cc, ccsub, prb, vc or vcref; overrides the scene's \"model\"\n"
+    "  --json                print the result as JSON (model, status, reason, iterations,\n"
+    "                        residual_norm, tip, disks, tendon_displacements, timing, summary)\n"
+    "  --repeat N            solve N times (N >= 1) from the same initial guess and report the\n"
+    "                        median and minimum solve time\n"
+    "  --integrator NAME     rk4 or cvode; overrides the scene's solver.integrator\n"
+    "  --continuation        if a direct solve fails, ramp actuation and loads (continuation)\n"
+    "\n"
+    "exit status: 0 converged, 1 not converged (result printed with status \"failed\"),\n"
+    "             2 bad input or usage, 3 internal error\n";
+
+/// A usage error: wrong command line (exit 2).
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+struct SolveArgs {
+  std::string scene_path;
+  std::optional<std::string> model;
+  std::optional<std::string> integrator;
+  bool json = false;
+  bool continuation = false;
+  int repeat = 1;
+};
+
+int parse_repeat(const std::string& text) {
+  errno = 0;
+  char* end = nullptr;
+  const long n = std::strtol(text.c_str(), &end, 10);
+  if (text.empty() || *end != '\0' || errno == ERANGE || n < 1 || n > kMaxRepeat)
+    throw UsageError("--repeat: expected a whole number from 1 to " + std::to_string(kMaxRepeat) +
+                     " (got '" + text + "')");
+  return static_cast<int>(n);
+}
+
+/// Splits "--name=value" into name and value; a plain "--name" has no inline value.
+std::pair<std::string, std::optional<std::string>> split_option(const std::string& arg) {
+  const auto eq = arg.find('=');
+  if (arg.rfind("--", 0) != 0 || eq == std::string::npos) return {arg, std::nullopt};
+  return {arg.substr(0, eq), arg.substr(eq + 1)};
+}
+
+SolveArgs parse_solve_args(const std::vector<std::string>& args) {
+  SolveArgs out;
+  bool have_scene = false;
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    const auto [name, inline_value] = split_option(args[i]);
+    auto value = [&, name = name, inline_value = inline_value]() -> std::string {
+      if (inline_value) return *inline_value;
+      if (i + 1 >= args.size()) throw UsageError(name + ": missing argument");
+      return args[++i];
+    };
+    auto no_value = [&, name = name, inline_value = inline_value]() {
+      if (inline_value) throw UsageError(name + " takes no argument (got '" + *inline_value + "')");
+    };
+    if (name == "--model") {
+      out.model = value();
+    } else if (name == "--integrator") {
+      out.integrator = value();
+    } else if (name == "--repeat") {
+      out.repeat = parse_repeat(value());
+    } else if (name == "--json") {
+      no_value();
+      out.json = true;
+    } else if (name == "--continuation") {
+      no_value();
+      out.continuation = true;
+    } else if (name.size() > 1 && name[0] == '-') {
+      throw UsageError("unknown option '" + args[i] + "'");
+    } else if (have_scene) {
+      throw UsageError("unexpected argument '" + args[i] + "' (one scene file per run)");
+    } else {
+      out.scene_path = args[i];
+      have_scene = true;
+    }
+  }
+  if (!have_scene) throw UsageError("solve: missing scene file");
+  return out;
+}
+
+tdcr::Scene load(const std::string& path) {
+  if (path != "-") return tdcr::load_scene(path);
+  const std::string text{std::istreambuf_iterator<char>(std::cin), std::istreambuf_iterator<char>()};
+  return tdcr::parse_scene(text, "<stdin>");
+}
+
+void apply_overrides(const SolveArgs& args, tdcr::Scene& scene) {
+  if (args.model) scene.model = *args.model;
+  if (args.integrator) {
+    if (*args.integrator == "rk4")
+      scene.solver.integrator = tdcr::IntegratorKind::FixedStepRK4;
+    else if (*args.integrator == "cvode")
+      scene.solver.integrator = tdcr::IntegratorKind::Cvode;
+    else
+      throw tdcr::InputError("--integrator", *args.integrator, "must be rk4 or cvode");
+  }
+  if (args.continuation) scene.solver.continuation = true;
+}
+
+tdcr::ModelKind model_kind(const std::string& name) {
+  std::string lower = name;
+  std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return std::tolower(c); });
+  try {
+    return tdcr::parse_model_kind(lower);
+  } catch (const tdcr::InputError&) {
+    if (lower == "auto") throw tdcr::InputError("model", "auto", "model auto is not available yet");
+    throw;
+  }
+}
+
+struct Timed {
+  tdcr::Solution solution;
+  double median_us = 0.0;
+  double min_us = 0.0;
+};
+
+/// Solves `repeat` times from the same initial guess (no warm start), reusing one workspace.
+Timed solve_timed(const tdcr::StaticModel& model, int repeat) {
+  auto workspace = model.make_workspace();
+  std::vector<double> us;
+  us.reserve(static_cast<std::size_t>(repeat));
+  Timed out;
+  for (int r = 0; r < repeat; ++r) {
+    const auto t0 = std::chrono::steady_clock::now();
+    out.solution = model.solve(*workspace, nullptr);
+    const auto t1 = std::chrono::steady_clock::now();
+    us.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
+  }
+  std::sort(us.begin(), us.end());
+  const std::size_t n = us.size();
+  out.median_us = n % 2 ? us[n / 2] : 0.5 * (us[n / 2 - 1] + us[n / 2]);
+  out.min_us = us.front();
+  return out;
+}
+
+void print_human(const Timed& t, int repeat) {
+  const tdcr::Solution& s = t.solution;
+  std::printf("model:  %s\n", s.model.c_str());
+  std::printf("status: %s\n", s.summary.brief_report().c_str());
+  if (s.disk_frames.empty()) {
+    std::printf("tip:    not available\n");
+  } else {
+    const tdcr::Vec3 p = s.tip().p * 1e3;
+    const double c = std::clamp(s.tip().R(2, 2), -1.0, 1.0);
+    std::printf("tip position (mm):                   [%.6g, %.6g, %.6g]\n", p[0], p[1], p[2]);
+    std::printf("tip angle from base z axis (deg):    %.6g\n", std::acos(c) * 180.0 / M_PI);
+  }
+  std::printf("solve time (us):                     median %.4g, min %.4g over %d run%s\n", t.median_us,
+              t.min_us, repeat, repeat == 1 ? "" : "s");
+}
+
+int run_solve(const std::vector<std::string>& argv) {
+  const SolveArgs args = parse_solve_args(argv);
+  tdcr::Scene scene = load(args.scene_path);
+  apply_overrides(args, scene);
+  const tdcr::ModelKind kind = model_kind(scene.model);
+  scene.model = tdcr::to_string(kind);
+  const std::unique_ptr<tdcr::StaticModel> model = tdcr::make_model(kind, scene);
+  const Timed t = solve_timed(*model, args.repeat);
+  if (args.json) {
+    tdcr::SolutionJsonOptions o;
+    o.repeat = args.repeat;
+    o.median_us = t.median_us;
+    o.min_us = t.min_us;
+    std::printf("%s\n", tdcr::solution_to_json(t.solution, o).c_str());
+  } else {
+    print_human(t, args.repeat);
+  }
+  std::fflush(stdout);
+  return t.solution.converged() ? kExitConverged : kExitNotConverged;
+}
+
+int run(const std::vector<std::string>& args) {
+  if (args.empty()) throw UsageError("missing command");
+  const std::string& cmd = args[0];
+  if (cmd == "--help" || cmd == "-h" || cmd == "help") {
+    std::printf("%s", kUsage);
+    return 0;
+  }
+  if (cmd == "--version") {
+    std::printf("tdcr %s\n", TDCR_VERSION);
+    return 0;
+  }
+  if (cmd == "solve") {
+    const std::vector<std::string> rest(args.begin() + 1, args.end());
+    if (std::find(rest.begin(), rest.end(), "--help") != rest.end()) {
+      std::printf("%s", kUsage);
+      return 0;
+    }
+    return run_solve(rest);
+  }
+  if (!cmd.empty() && cmd[0] == '-') throw UsageError("unknown option '" + cmd + "'");
+  throw UsageError("unknown command '" + cmd + "'");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(std::vector<std::string>(argv + 1, argv + argc));
+  } catch (const UsageError& e) {
+    std::fprintf(stderr, "error: %s\n(see tdcr --help)\n", e.what());
+    return kExitBadInput;
+  } catch (const tdcr::InputError& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return kExitBadInput;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "internal error: %s\n", e.what());
+    return kExitInternal;
+  } catch (...) {
+    std::fprintf(stderr, "internal error: unknown exception\n");
+    return kExitInternal;
+  }
+}
