@@ -73,8 +73,8 @@ int parse_repeat(const std::string& text) {
   char* end = nullptr;
   const long n = std::strtol(text.c_str(), &end, 10);
   if (text.empty() || *end != '\0' || errno == ERANGE || n < 1 || n > kMaxRepeat)
-    throw UsageError("--repeat: expected a whole number from 1 to " + std::to_string(kMaxRepeat) +
-                     " (got '" + text + "')");
+    throw UsageError("--repeat: expected a whole number from 1 to " + std::to_string(kMaxRepeat) + " (got '" +
+                     text + "')");
   return static_cast<int>(n);
 }
 

@@ -11,13 +11,12 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "tdcr/core/error.hpp"
 
@@ -140,8 +139,7 @@ Vec3 read_vec3(const json& j, const std::string& path) {
 
 /// A string naming one of `choices` (scene-file names paired with their values).
 template <class T>
-T read_choice(const json& j, const std::string& path,
-              const std::vector<std::pair<const char*, T>>& choices) {
+T read_choice(const json& j, const std::string& path, const std::vector<std::pair<const char*, T>>& choices) {
   std::string names;
   for (const auto& c : choices) names += (names.empty() ? "" : ", ") + std::string("\"") + c.first + "\"";
   if (!j.is_string()) type_error(path, j, "one of " + names);
@@ -364,10 +362,10 @@ Effects parse_effects(const json& j, const std::string& path) {
 }
 
 SolverOptions parse_solver(const json& j, const std::string& path) {
-  const Object o(j, path,
-                 {"integrator", "rk4_steps", "cvode_rtol", "cvode_atol", "function_tolerance",
-                  "step_tolerance", "max_iterations", "linear_solver", "continuation",
-                  "max_continuation_steps"});
+  const Object o(
+      j, path,
+      {"integrator", "rk4_steps", "cvode_rtol", "cvode_atol", "function_tolerance", "step_tolerance",
+       "max_iterations", "linear_solver", "continuation", "max_continuation_steps"});
   SolverOptions s;
   o.get("integrator", s.integrator, kIntegrators);
   o.get("rk4_steps", s.rk4_steps);
@@ -482,63 +480,117 @@ json parse_json_text(const std::string& text, const std::string& source) {
     const auto a = m.find('\''), b = m.rfind('\'');
     if (a != std::string::npos && b > a) value = m.substr(a + 1, b - a - 1);
     const std::string path = tracker.pending_path();
-    throw InputError(path.empty() ? source : path, value, "must be a finite number (" + plain_message(e) + ")");
+    throw InputError(path.empty() ? source : path, value,
+                     "must be a finite number (" + plain_message(e) + ")");
   }
 }
 
 // ---------------------------------------------------------------------------------------------
-// Output
+// Output: ordered JSON (keys in contract order), printed with small arrays and objects on one line.
 
-json number(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+using ojson = nlohmann::ordered_json;
 
-json vec_json(const Vec3& v) { return json::array({number(v[0]), number(v[1]), number(v[2])}); }
+bool is_small(const ojson& j) {
+  if (j.is_primitive()) return true;
+  if (j.is_array())
+    return std::all_of(j.begin(), j.end(),
+                       [](const ojson& e) { return e.is_primitive() || (e.is_array() && is_small(e)); });
+  return j.size() <= 4 && std::all_of(j.begin(), j.end(), [](const ojson& e) { return e.is_primitive(); });
+}
 
-json numbers_json(const std::vector<double>& v) {
-  json a = json::array();
+void write_inline(const ojson& j, std::string& out) {
+  if (j.is_primitive()) {
+    out += j.dump();
+    return;
+  }
+  const bool object = j.is_object();
+  out += object ? "{" : "[";
+  bool first = true;
+  for (auto it = j.begin(); it != j.end(); ++it, first = false) {
+    if (!first) out += ", ";
+    if (object) out += ojson(it.key()).dump() + ": ";
+    write_inline(*it, out);
+  }
+  out += object ? "}" : "]";
+}
+
+void write_pretty(const ojson& j, int level, std::string& out) {
+  if (is_small(j) || j.empty()) {
+    write_inline(j, out);
+    return;
+  }
+  const bool object = j.is_object();
+  const std::string pad(2 * static_cast<std::size_t>(level + 1), ' ');
+  out += object ? "{\n" : "[\n";
+  bool first = true;
+  for (auto it = j.begin(); it != j.end(); ++it, first = false) {
+    if (!first) out += ",\n";
+    out += pad;
+    if (object) out += ojson(it.key()).dump() + ": ";
+    write_pretty(*it, level + 1, out);
+  }
+  out += "\n" + std::string(2 * static_cast<std::size_t>(level), ' ') + (object ? "}" : "]");
+}
+
+std::string pretty(const ojson& j) {
+  std::string out;
+  write_pretty(j, 0, out);
+  return out + "\n";
+}
+
+ojson number(double v) { return std::isfinite(v) ? ojson(v) : ojson(nullptr); }
+
+ojson vec_json(const Vec3& v) { return ojson::array({number(v[0]), number(v[1]), number(v[2])}); }
+
+ojson numbers_json(const std::vector<double>& v) {
+  ojson a = ojson::array();
   for (double x : v) a.push_back(number(x));
   return a;
 }
 
 /// Rotation as a list of rows: rotation[i][j] = R(i, j).
-json rotation_json(const Mat3& R) {
-  json rows = json::array();
+ojson rotation_json(const Mat3& R) {
+  ojson rows = ojson::array();
   for (int i = 0; i < 3; ++i) rows.push_back(vec_json(R.row(i).transpose()));
   return rows;
 }
 
-json frame_json(const Frame& f) { return json{{"position", vec_json(f.p)}, {"rotation", rotation_json(f.R)}}; }
-
-json summary_json(const SolverSummary& s) {
-  return json{{"termination", to_string(s.termination)},
-              {"message", s.message},
-              {"solver_flag", s.solver_flag},
-              {"iterations", s.iterations},
-              {"residual_evaluations", s.residual_evaluations},
-              {"jacobian_evaluations", s.jacobian_evaluations},
-              {"residual_norm", number(s.residual_norm)},
-              {"physical_residual", number(s.physical_residual)},
-              {"unknowns", s.unknowns},
-              {"continuation_steps", s.continuation_steps},
-              {"linear_solver", s.linear_solver},
-              {"integrator", s.integrator},
-              {"solve_time_s", number(s.solve_time_s)}};
+ojson frame_json(const Frame& f) {
+  return ojson{{"position", vec_json(f.p)}, {"rotation", rotation_json(f.R)}};
 }
 
-json backbone_json(const std::vector<BackboneSample>& samples) {
-  json a = json::array();
+ojson summary_json(const SolverSummary& s) {
+  return ojson{{"termination", to_string(s.termination)},
+               {"message", s.message},
+               {"solver_flag", s.solver_flag},
+               {"iterations", s.iterations},
+               {"residual_evaluations", s.residual_evaluations},
+               {"jacobian_evaluations", s.jacobian_evaluations},
+               {"residual_norm", number(s.residual_norm)},
+               {"physical_residual", number(s.physical_residual)},
+               {"unknowns", s.unknowns},
+               {"continuation_steps", s.continuation_steps},
+               {"linear_solver", s.linear_solver},
+               {"integrator", s.integrator},
+               {"solve_time_s", number(s.solve_time_s)}};
+}
+
+ojson backbone_json(const std::vector<BackboneSample>& samples) {
+  ojson a = ojson::array();
   for (const auto& b : samples)
-    a.push_back(json{{"s", number(b.s)},
-                     {"position", vec_json(b.frame.p)},
-                     {"rotation", rotation_json(b.frame.R)},
-                     {"n", vec_json(b.n)},
-                     {"m", vec_json(b.m)}});
+    a.push_back(ojson{{"s", number(b.s)},
+                      {"position", vec_json(b.frame.p)},
+                      {"rotation", rotation_json(b.frame.R)},
+                      {"n", vec_json(b.n)},
+                      {"m", vec_json(b.m)}});
   return a;
 }
 
-json backbone_to_json(const Backbone& b) {
-  json j = json::object();
+ojson backbone_to_json(const Backbone& b) {
+  ojson j = ojson::object();
   if (b.stiffness) {
-    j["stiffness"] = {{"EI", b.stiffness->EI}, {"GJ", b.stiffness->GJ}, {"EA", b.stiffness->EA}, {"GA", b.stiffness->GA}};
+    j["stiffness"] = {
+        {"EI", b.stiffness->EI}, {"GJ", b.stiffness->GJ}, {"EA", b.stiffness->EA}, {"GA", b.stiffness->GA}};
   } else {
     j["youngs_modulus"] = b.youngs_modulus;
     if (b.shear_modulus)
@@ -555,40 +607,42 @@ json backbone_to_json(const Backbone& b) {
   return j;
 }
 
-json robot_to_json(const Robot& r) {
-  json segments = json::array();
+ojson robot_to_json(const Robot& r) {
+  ojson segments = ojson::array();
   for (const auto& s : r.segments) {
-    json tendons = json::array();
+    ojson tendons = ojson::array();
     for (const auto& t : s.tendons) tendons.push_back({{"x", t.x}, {"y", t.y}});
-    segments.push_back({{"length", s.length}, {"disks", s.disks}, {"tendons", tendons}, {"disk_mass", s.disk_mass}});
+    segments.push_back(
+        {{"length", s.length}, {"disks", s.disks}, {"tendons", tendons}, {"disk_mass", s.disk_mass}});
   }
-  return json{{"backbone", backbone_to_json(r.backbone)}, {"segments", segments}};
+  return ojson{{"backbone", backbone_to_json(r.backbone)}, {"segments", segments}};
 }
 
-json actuation_to_json(const Actuation& a) {
-  if (a.kind == Actuation::Kind::Tensions) return json{{"tensions", a.values}};
-  return json{{"displacements", a.values}, {"displacement_convention", name_of(a.convention, kConventions)}};
+ojson actuation_to_json(const Actuation& a) {
+  if (a.kind == Actuation::Kind::Tensions) return ojson{{"tensions", a.values}};
+  return ojson{{"displacements", a.values}, {"displacement_convention", name_of(a.convention, kConventions)}};
 }
 
-json effects_to_json(const Effects& e) {
-  return json{{"shear_extension", e.shear_extension},
-              {"disk_normal_force", name_of(e.disk_normal_force, kDiskNormalForce)},
-              {"tendon_path", name_of(e.tendon_path, kTendonPath)},
-              {"prb", {{"gamma", std::vector<double>(e.prb.gamma, e.prb.gamma + 4)},
-                       {"k_theta", std::vector<double>(e.prb.k_theta, e.prb.k_theta + 3)}}}};
+ojson effects_to_json(const Effects& e) {
+  return ojson{{"shear_extension", e.shear_extension},
+               {"disk_normal_force", name_of(e.disk_normal_force, kDiskNormalForce)},
+               {"tendon_path", name_of(e.tendon_path, kTendonPath)},
+               {"prb",
+                {{"gamma", std::vector<double>(e.prb.gamma, e.prb.gamma + 4)},
+                 {"k_theta", std::vector<double>(e.prb.k_theta, e.prb.k_theta + 3)}}}};
 }
 
-json solver_to_json(const SolverOptions& s) {
-  return json{{"integrator", name_of(s.integrator, kIntegrators)},
-              {"rk4_steps", s.rk4_steps},
-              {"cvode_rtol", s.cvode_rtol},
-              {"cvode_atol", s.cvode_atol},
-              {"function_tolerance", s.function_tolerance},
-              {"step_tolerance", s.step_tolerance},
-              {"max_iterations", s.max_iterations},
-              {"linear_solver", name_of(s.linear_solver, kLinearSolvers)},
-              {"continuation", s.continuation},
-              {"max_continuation_steps", s.max_continuation_steps}};
+ojson solver_to_json(const SolverOptions& s) {
+  return ojson{{"integrator", name_of(s.integrator, kIntegrators)},
+               {"rk4_steps", s.rk4_steps},
+               {"cvode_rtol", s.cvode_rtol},
+               {"cvode_atol", s.cvode_atol},
+               {"function_tolerance", s.function_tolerance},
+               {"step_tolerance", s.step_tolerance},
+               {"max_iterations", s.max_iterations},
+               {"linear_solver", name_of(s.linear_solver, kLinearSolvers)},
+               {"continuation", s.continuation},
+               {"max_continuation_steps", s.max_continuation_steps}};
 }
 
 std::vector<double> as_vector(const Vec3& v) { return {v[0], v[1], v[2]}; }
@@ -615,15 +669,16 @@ Scene load_scene(const std::string& path) {
 std::string scene_to_json(const Scene& scene) {
   // Non-finite values (only possible in an unvalidated Scene) are written as null, which
   // parse_scene rejects with the field's path: never invalid JSON.
-  const json j{{"robot", robot_to_json(scene.robot)},
-               {"actuation", actuation_to_json(scene.actuation)},
-               {"loads", {{"tip_force", as_vector(scene.loads.tip_force)},
-                          {"tip_moment", as_vector(scene.loads.tip_moment)},
-                          {"gravity", as_vector(scene.loads.gravity)}}},
-               {"effects", effects_to_json(scene.effects)},
-               {"model", scene.model},
-               {"solver", solver_to_json(scene.solver)}};
-  return j.dump(2);
+  const ojson j{{"robot", robot_to_json(scene.robot)},
+                {"actuation", actuation_to_json(scene.actuation)},
+                {"loads",
+                 {{"tip_force", as_vector(scene.loads.tip_force)},
+                  {"tip_moment", as_vector(scene.loads.tip_moment)},
+                  {"gravity", as_vector(scene.loads.gravity)}}},
+                {"effects", effects_to_json(scene.effects)},
+                {"model", scene.model},
+                {"solver", solver_to_json(scene.solver)}};
+  return pretty(j);
 }
 
 std::string solution_to_json(const Solution& solution, const SolutionJsonOptions& options) {
@@ -631,26 +686,25 @@ std::string solution_to_json(const Solution& solution, const SolutionJsonOptions
   std::string reason = to_string(s.termination);
   if (!s.message.empty()) reason += ": " + s.message;
 
-  json tip = {{"position", nullptr}, {"rotation", nullptr}};
+  ojson tip = {{"position", nullptr}, {"rotation", nullptr}};
   if (!solution.disk_frames.empty()) tip = frame_json(solution.tip());
 
-  json j = {{"model", solution.model},
-            {"status", s.converged() ? "converged" : "failed"},
-            {"reason", reason},
-            {"iterations", s.iterations},
-            {"residual_norm", number(s.residual_norm)},
-            {"tip", tip}};
+  ojson j = {
+      {"model", solution.model},    {"status", s.converged() ? "converged" : "failed"}, {"reason", reason},
+      {"iterations", s.iterations}, {"residual_norm", number(s.residual_norm)},         {"tip", tip}};
   if (options.include_disks) {
-    json disks = json::array();
+    ojson disks = ojson::array();
     for (const Frame& f : solution.disk_frames) disks.push_back(frame_json(f));
     j["disks"] = disks;
   }
   j["tendon_displacements"] = numbers_json(solution.tendon_displacements);
   j["tensions"] = numbers_json(solution.tensions);
   if (options.include_backbone) j["backbone"] = backbone_json(solution.backbone);
-  j["timing"] = {{"repeat", options.repeat}, {"median_us", number(options.median_us)}, {"min_us", number(options.min_us)}};
+  j["timing"] = {{"repeat", options.repeat},
+                 {"median_us", number(options.median_us)},
+                 {"min_us", number(options.min_us)}};
   j["summary"] = summary_json(s);
-  return j.dump(2);
+  return pretty(j);
 }
 
 }  // namespace tdcr
