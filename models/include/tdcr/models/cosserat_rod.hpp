@@ -1,0 +1,74 @@
+/// @file cosserat_rod.hpp
+/// @brief The Cosserat rod shared by VC and VCref (paper Eq. 2-3, 34-39): state layout,
+/// constitutive law and the right-hand side of a rod free of distributed tendon loads.
+///
+/// State (18 doubles, all in the base frame): p (3), R (9, column-major), n (3), m (3), where n
+/// and m are the rod's own internal force and moment at s (paper Eq. 34-35). Strains come from the
+/// constitutive law: u = Kbt^-1 R^T m, v = Kse^-1 R^T n + e_z (Cosserat rod with shear and
+/// extension) or v = e_z (inextensible, unshearable Kirchhoff rod). Then (Eq. 2-3, 38-39)
+///   p' = R v,  R' = R [u]x,  n' = -f_e,  m' = -p' x n - l_e,
+/// with f_e = rho A g the backbone weight when gravity is on. Internal wrenches as states make
+/// jumps at disks (Eq. 40-41) plain additions, and the same state serves both rod variants.
+#pragma once
+
+#include <Eigen/Core>
+
+#include "tdcr/bvp/integrator.hpp"
+#include "tdcr/core/robot.hpp"
+#include "tdcr/core/scene.hpp"
+#include "tdcr/core/types.hpp"
+
+namespace tdcr::cosserat {
+
+constexpr int kStateSize = 18;                          ///< p, R, n, m.
+using State = Eigen::Matrix<double, kStateSize, 1>;     ///< Fixed-size rod state.
+
+/// @brief Views of the state's parts (no copies).
+inline Eigen::Map<Vec3> position(double* y) { return Eigen::Map<Vec3>(y); }
+inline Eigen::Map<const Vec3> position(const double* y) { return Eigen::Map<const Vec3>(y); }
+inline Eigen::Map<Mat3> rotation(double* y) { return Eigen::Map<Mat3>(y + 3); }
+inline Eigen::Map<const Mat3> rotation(const double* y) { return Eigen::Map<const Mat3>(y + 3); }
+inline Eigen::Map<Vec3> force(double* y) { return Eigen::Map<Vec3>(y + 12); }
+inline Eigen::Map<const Vec3> force(const double* y) { return Eigen::Map<const Vec3>(y + 12); }
+inline Eigen::Map<Vec3> moment(double* y) { return Eigen::Map<Vec3>(y + 15); }
+inline Eigen::Map<const Vec3> moment(const double* y) { return Eigen::Map<const Vec3>(y + 15); }
+
+/// @brief Pack a frame and an internal wrench into a state.
+State make_state(const Frame& f, const Vec3& n, const Vec3& m);
+/// @brief The frame of a state.
+Frame frame_of(const double* y);
+
+/// @brief Constitutive data of a rod cross section, decided once per scene.
+struct Section {
+  Vec3 inv_kbt = Vec3::Zero();  ///< 1/EI, 1/EI, 1/GJ.
+  Vec3 inv_kse = Vec3::Zero();  ///< 1/GA, 1/GA, 1/EA (unused without shear/extension).
+  bool shear_extension = true;  ///< Cosserat (true) or Kirchhoff (false) rod.
+  Vec3 weight = Vec3::Zero();   ///< Distributed backbone weight rho A g (N/m, base frame).
+  bool gravity = false;         ///< weight != 0: the term is skipped entirely when off.
+
+  /// @brief From a validated scene (stiffness, shear/extension effect, backbone weight).
+  static Section from(const Scene& scene);
+  /// @brief Curvature u = Kbt^-1 R^T m (body frame, rad/m).
+  Vec3 curvature(const Mat3& R, const Vec3& m) const { return inv_kbt.cwiseProduct(R.transpose() * m); }
+  /// @brief Strain v = Kse^-1 R^T n + e_z (body frame); e_z for a Kirchhoff rod.
+  Vec3 strain(const Mat3& R, const Vec3& n) const {
+    if (!shear_extension) return Vec3::UnitZ();
+    Vec3 v = inv_kse.cwiseProduct(R.transpose() * n);
+    v.z() += 1.0;
+    return v;
+  }
+};
+
+/// @brief Right-hand side of a rod with no distributed tendon load (a VCref subsegment, or any
+/// rod portion with no tendon). Allocation-free, fixed-size.
+class FreeRod final : public bvp::OdeSystem {
+ public:
+  explicit FreeRod(const Section& section) : section_(section) {}
+  int dimension() const override { return kStateSize; }
+  void rhs(double s, const double* y, double* dyds) const override;
+
+ private:
+  Section section_;
+};
+
+}  // namespace tdcr::cosserat
