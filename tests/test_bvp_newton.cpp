@@ -1,0 +1,370 @@
+// NewtonSolver (KINSOL): convergence, dense vs KLU, failures and their reporting, reuse.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "tdcr/bvp/newton_solver.hpp"
+#include "tdcr/core/error.hpp"
+
+using tdcr::LinearSolverKind;
+using tdcr::TerminationType;
+using tdcr::bvp::NewtonOptions;
+using tdcr::bvp::NewtonSolver;
+using tdcr::bvp::SparsityPattern;
+
+namespace {
+
+// F = [10 (x1 - x0^2), 1 - x0]: the Rosenbrock function as a root-finding problem; unique
+// root (1, 1). From (0, 0) full Newton steps reach it exactly in two iterations.
+class Rosenbrock : public tdcr::bvp::ResidualSystem {
+ public:
+  int size() const override { return 2; }
+  bool residual(const Eigen::Ref<const Eigen::VectorXd>& x,
+                Eigen::Ref<Eigen::VectorXd> f) override {
+    f[0] = 10.0 * (x[1] - x[0] * x[0]);
+    f[1] = 1.0 - x[0];
+    return true;
+  }
+};
+
+// A 3x3 system with the root (1, 2, 3) and an analytic Jacobian.
+class Dense3 : public tdcr::bvp::ResidualSystem {
+ public:
+  int size() const override { return 3; }
+  bool residual(const Eigen::Ref<const Eigen::VectorXd>& x,
+                Eigen::Ref<Eigen::VectorXd> f) override {
+    f[0] = 3.0 * x[0] + x[1] * x[2] - 9.0;
+    f[1] = x[0] * x[0] + 2.0 * x[1] - x[2] - 2.0;
+    f[2] = std::exp(x[0] - 1.0) + x[1] + x[2] * x[2] - 12.0;
+    return true;
+  }
+  bool has_jacobian() const override { return true; }
+  bool jacobian(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>&,
+                Eigen::Ref<Eigen::MatrixXd> J) override {
+    J << 3.0, x[2], x[1],  //
+        2.0 * x[0], 2.0, -1.0,  //
+        std::exp(x[0] - 1.0), 1.0, 2.0 * x[2];
+    return true;
+  }
+};
+
+SparsityPattern tridiagonal(int n) {
+  std::vector<std::pair<int, int>> e;
+  for (int i = 0; i < n; ++i) {
+    e.emplace_back(i, i);
+    if (i > 0) e.emplace_back(i, i - 1);
+    if (i + 1 < n) e.emplace_back(i, i + 1);
+  }
+  return SparsityPattern::from_triplets(n, n, e);
+}
+
+// Bratu: u'' + lambda e^u = 0 on (0, 1), u(0) = u(1) = 0; central differences, scaled by h^2.
+class Bratu : public tdcr::bvp::ResidualSystem {
+ public:
+  Bratu(int n, double lambda, bool analytic)
+      : n_(n), h_(1.0 / (n + 1)), analytic_(analytic), p_(tridiagonal(n)), lambda(lambda) {}
+  int size() const override { return n_; }
+  bool residual(const Eigen::Ref<const Eigen::VectorXd>& u,
+                Eigen::Ref<Eigen::VectorXd> f) override {
+    for (int i = 0; i < n_; ++i) {
+      const double left = i > 0 ? u[i - 1] : 0.0, right = i + 1 < n_ ? u[i + 1] : 0.0;
+      f[i] = left - 2.0 * u[i] + right + h_ * h_ * lambda * std::exp(u[i]);
+    }
+    return true;
+  }
+  const SparsityPattern* sparsity() const override { return &p_; }
+  bool has_jacobian() const override { return analytic_; }
+  bool sparse_jacobian(const Eigen::Ref<const Eigen::VectorXd>& u,
+                       const Eigen::Ref<const Eigen::VectorXd>&, double* v) override {
+    for (int j = 0; j < n_; ++j)
+      for (int k = p_.col_ptr[j]; k < p_.col_ptr[j + 1]; ++k)
+        v[k] = (p_.row_idx[k] == j) ? -2.0 + h_ * h_ * lambda * std::exp(u[j]) : 1.0;
+    return true;
+  }
+  // h^2-scaled residuals are O(h^2); scale them back to O(1) so fnormtol means what it says.
+  void residual_scale(Eigen::Ref<Eigen::VectorXd> s) const override {
+    s.setConstant(1.0 / (h_ * h_));
+  }
+  double h() const { return h_; }
+
+ private:
+  int n_;
+  double h_;
+  bool analytic_;
+  SparsityPattern p_;
+
+ public:
+  double lambda;
+};
+
+// Exact Bratu solution u(x) = -2 ln(cosh((x - 1/2) t / 2) / cosh(t / 4)), where t solves
+// t = sqrt(2 lambda) cosh(t / 4) (lower branch).
+double bratu_exact(double x, double lambda) {
+  double t = 1.0;
+  for (int k = 0; k < 100; ++k) {
+    const double g = t - std::sqrt(2.0 * lambda) * std::cosh(t / 4.0);
+    const double dg = 1.0 - std::sqrt(2.0 * lambda) * std::sinh(t / 4.0) / 4.0;
+    t -= g / dg;
+  }
+  return -2.0 * std::log(std::cosh((x - 0.5) * t / 2.0) / std::cosh(t / 4.0));
+}
+
+// F(x) = x^2 + 1 has no real root: min |F| = 1 at x = 0.
+class NoRoot : public tdcr::bvp::ResidualSystem {
+ public:
+  int size() const override { return 1; }
+  bool residual(const Eigen::Ref<const Eigen::VectorXd>& x,
+                Eigen::Ref<Eigen::VectorXd> f) override {
+    f[0] = x[0] * x[0] + 1.0;
+    return true;
+  }
+};
+
+// F(x) = atan(x - 1) (root 1), but F cannot be evaluated for x > limit (or gives NaN there).
+class Fragile : public tdcr::bvp::ResidualSystem {
+ public:
+  Fragile(double limit, bool nan) : limit_(limit), nan_(nan) {}
+  int size() const override { return 1; }
+  bool residual(const Eigen::Ref<const Eigen::VectorXd>& x,
+                Eigen::Ref<Eigen::VectorXd> f) override {
+    if (x[0] > limit_) {
+      if (!nan_) return false;
+      f[0] = std::numeric_limits<double>::quiet_NaN();
+      return true;
+    }
+    f[0] = std::atan(x[0] - 1.0);
+    return true;
+  }
+
+ private:
+  double limit_;
+  bool nan_;
+};
+
+class Throwing : public tdcr::bvp::ResidualSystem {
+ public:
+  int size() const override { return 2; }
+  bool residual(const Eigen::Ref<const Eigen::VectorXd>&, Eigen::Ref<Eigen::VectorXd>) override {
+    throw std::runtime_error("model bug");
+  }
+};
+
+}  // namespace
+
+TEST(BvpNewton, RosenbrockFromZeroInTwoFullNewtonSteps) {
+  Rosenbrock sys;
+  NewtonSolver solver;
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(2);
+  NewtonOptions o;
+  o.line_search = false;
+  const auto r = solver.solve(sys, x, o);
+  ASSERT_TRUE(r.converged()) << r.message;
+  EXPECT_EQ(r.flag, 0);
+  EXPECT_EQ(r.iterations, 2);
+  EXPECT_NEAR(x[0], 1.0, 1e-14);
+  EXPECT_NEAR(x[1], 1.0, 1e-14);
+  EXPECT_LE(r.residual_norm, 1e-10);
+  EXPECT_EQ(r.linear_solver, "dense");
+  EXPECT_NE(r.message.find("KIN_SUCCESS"), std::string::npos) << r.message;
+}
+
+TEST(BvpNewton, RosenbrockFromZeroWithLineSearch) {
+  Rosenbrock sys;
+  NewtonSolver solver;
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(2);
+  const auto r = solver.solve(sys, x);
+  ASSERT_TRUE(r.converged()) << r.message;
+  EXPECT_NEAR(x[0], 1.0, 1e-12);
+  EXPECT_NEAR(x[1], 1.0, 1e-12);
+  EXPECT_GT(r.jacobian_evaluations, 0);
+  EXPECT_EQ(r.fd_residual_evaluations, 2 * r.jacobian_evaluations);  // dense FD: n per Jacobian
+}
+
+TEST(BvpNewton, Dense3x3AnalyticJacobianFromZero) {
+  Dense3 sys;
+  NewtonSolver solver;
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(3);
+  const auto r = solver.solve(sys, x);
+  ASSERT_TRUE(r.converged()) << r.message;
+  EXPECT_EQ(r.fd_residual_evaluations, 0);
+  Eigen::VectorXd f(3);
+  sys.residual(x, f);
+  EXPECT_LE(f.cwiseAbs().maxCoeff(), 1e-10);
+  EXPECT_EQ(r.physical_residual, f.norm());
+  EXPECT_EQ(r.residual_norm, f.cwiseAbs().maxCoeff());
+}
+
+TEST(BvpNewton, BratuKluAndDenseAgreeAndMatchTheory) {
+  const int n = 500;
+  const double lambda = 1.0;
+  NewtonSolver solver;
+  NewtonOptions o;
+
+  Bratu analytic(n, lambda, true);
+  Eigen::VectorXd u_klu = Eigen::VectorXd::Zero(n);
+  o.linear_solver = LinearSolverKind::Automatic;  // n = 500 > 200 with a pattern: KLU
+  const auto rk = solver.solve(analytic, u_klu, o);
+  ASSERT_TRUE(rk.converged()) << rk.message;
+  EXPECT_EQ(rk.linear_solver, "klu");
+
+  Eigen::VectorXd u_dense = Eigen::VectorXd::Zero(n);
+  o.linear_solver = LinearSolverKind::Dense;
+  const auto rd = solver.solve(analytic, u_dense, o);
+  ASSERT_TRUE(rd.converged()) << rd.message;
+  EXPECT_EQ(rd.linear_solver, "dense");
+  EXPECT_LE((u_klu - u_dense).cwiseAbs().maxCoeff(), 1e-10);
+
+  // Grouped finite differences on KLU: 3 residual evaluations per Jacobian, whatever n.
+  Bratu numeric(n, lambda, false);
+  Eigen::VectorXd u_fd = Eigen::VectorXd::Zero(n);
+  o.linear_solver = LinearSolverKind::SparseKLU;
+  const auto rf = solver.solve(numeric, u_fd, o);
+  ASSERT_TRUE(rf.converged()) << rf.message;
+  EXPECT_EQ(rf.fd_residual_evaluations, 3 * rf.jacobian_evaluations);
+  EXPECT_LE((u_klu - u_fd).cwiseAbs().maxCoeff(), 1e-10);
+
+  // Second-order discretisation: |u_h - u| = O(h^2) (h^2 = 4e-6, |u''''| is small).
+  double err = 0.0;
+  for (int i = 0; i < n; ++i)
+    err = std::max(err, std::abs(u_klu[i] - bratu_exact((i + 1) * analytic.h(), lambda)));
+  EXPECT_LT(err, analytic.h() * analytic.h());
+}
+
+TEST(BvpNewton, NoRootReportsFailureWithFlagIterationsAndResidual) {
+  NoRoot sys;
+  NewtonSolver solver;
+  Eigen::VectorXd x(1);
+  x << 0.5;
+  const auto r = solver.solve(sys, x);
+  EXPECT_FALSE(r.converged());
+  EXPECT_NE(r.termination, TerminationType::NotSolved);
+  EXPECT_LT(r.flag, 0);
+  EXPECT_GT(r.iterations, 0);
+  EXPECT_GE(r.residual_norm, 1.0);  // |x^2 + 1| >= 1 everywhere
+  EXPECT_EQ(r.message.rfind("KIN_", 0), 0u) << r.message;
+  EXPECT_NE(r.message.find("iterations"), std::string::npos) << r.message;
+}
+
+TEST(BvpNewton, MaxIterationsIsReportedAsSuch) {
+  NoRoot sys;
+  NewtonSolver solver;
+  Eigen::VectorXd x(1);
+  x << 0.5;
+  NewtonOptions o;
+  o.line_search = false;
+  o.max_iterations = 7;
+  const auto r = solver.solve(sys, x, o);
+  EXPECT_EQ(r.termination, TerminationType::MaxIterations) << r.message;
+  EXPECT_EQ(r.flag, -6);
+  EXPECT_EQ(r.iterations, 7);
+  EXPECT_EQ(r.message.rfind("KIN_MAXITER_REACHED: 7 iterations, |F|=", 0), 0u) << r.message;
+  EXPECT_GE(r.residual_norm, 1.0);
+}
+
+TEST(BvpNewton, ResidualFailureAtInitialGuess) {
+  Fragile sys(0.0, false);
+  NewtonSolver solver;
+  Eigen::VectorXd x(1);
+  x << 2.0;
+  const auto r = solver.solve(sys, x);
+  EXPECT_EQ(r.termination, TerminationType::IntegrationFailed) << r.message;
+  EXPECT_NE(r.message.find("KIN_FIRST_SYSFUNC_ERR"), std::string::npos) << r.message;
+  EXPECT_TRUE(std::isinf(r.residual_norm));
+}
+
+TEST(BvpNewton, NaNResidualAtInitialGuess) {
+  Fragile sys(0.0, true);
+  NewtonSolver solver;
+  Eigen::VectorXd x(1);
+  x << 2.0;
+  const auto r = solver.solve(sys, x);
+  EXPECT_EQ(r.termination, TerminationType::NonFiniteResidual) << r.message;
+  EXPECT_NE(r.message.find("KIN_FIRST_SYSFUNC_ERR"), std::string::npos) << r.message;
+}
+
+TEST(BvpNewton, RecoverableFailureDuringIterationShortensTheStep) {
+  // From x = -1 the full Newton step on atan(x - 1) lands at x = 6.5, beyond the limit 3 where
+  // F cannot be evaluated; KINSOL must treat that as recoverable and still reach the root.
+  for (bool nan : {false, true}) {
+    Fragile sys(3.0, nan);
+    NewtonSolver solver;
+    Eigen::VectorXd x(1);
+    x << -1.0;
+    const auto r = solver.solve(sys, x);
+    EXPECT_TRUE(r.converged()) << "nan=" << nan << ": " << r.message;
+    EXPECT_NEAR(x[0], 1.0, 1e-10);
+  }
+}
+
+TEST(BvpNewton, ExceptionInResidualPropagatesAndSolverStaysUsable) {
+  Throwing bad;
+  NewtonSolver solver;
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(2);
+  EXPECT_THROW(solver.solve(bad, x), std::runtime_error);
+  Rosenbrock good;
+  x.setZero();
+  EXPECT_TRUE(solver.solve(good, x).converged());
+}
+
+TEST(BvpNewton, ReusedSolverWarmStartIsCheapAndDoesNotRebuild) {
+  const int n = 300;
+  Bratu sys(n, 1.0, true);
+  NewtonSolver solver;
+  Eigen::VectorXd u = Eigen::VectorXd::Zero(n);
+  const auto r1 = solver.solve(sys, u);
+  ASSERT_TRUE(r1.converged()) << r1.message;
+  EXPECT_EQ(solver.rebuilds(), 1);
+  const Eigen::VectorXd u1 = u;
+
+  // Same structure, slightly different parameter, warm start: same workspace, fewer iterations.
+  sys.lambda = 1.05;
+  const auto r2 = solver.solve(sys, u);
+  ASSERT_TRUE(r2.converged()) << r2.message;
+  EXPECT_EQ(solver.rebuilds(), 1);
+  EXPECT_LT(r2.iterations, r1.iterations);
+  EXPECT_GT(u.maxCoeff(), u1.maxCoeff());  // more load, larger deflection
+
+  // Solving the first problem again from scratch reproduces the first answer exactly.
+  sys.lambda = 1.0;
+  u.setZero();
+  const auto r3 = solver.solve(sys, u);
+  ASSERT_TRUE(r3.converged());
+  EXPECT_EQ(r3.iterations, r1.iterations);
+  EXPECT_LE((u - u1).cwiseAbs().maxCoeff(), 1e-14);
+  EXPECT_EQ(solver.rebuilds(), 1);
+
+  // A different size forces a rebuild.
+  Rosenbrock small;
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(2);
+  EXPECT_TRUE(solver.solve(small, x).converged());
+  EXPECT_EQ(solver.rebuilds(), 2);
+}
+
+TEST(BvpNewton, OptionsFromSolverOptionsAndValidation) {
+  tdcr::SolverOptions so;
+  so.function_tolerance = 1e-8;
+  so.step_tolerance = 1e-12;
+  so.max_iterations = 17;
+  so.linear_solver = LinearSolverKind::SparseKLU;
+  const auto o = NewtonOptions::from(so);
+  EXPECT_EQ(o.function_tolerance, 1e-8);
+  EXPECT_EQ(o.step_tolerance, 1e-12);
+  EXPECT_EQ(o.max_iterations, 17);
+  EXPECT_EQ(o.linear_solver, LinearSolverKind::SparseKLU);
+  EXPECT_NO_THROW(o.validate());
+
+  NewtonOptions bad;
+  bad.function_tolerance = 0.0;
+  EXPECT_THROW(bad.validate(), tdcr::InputError);
+  bad = NewtonOptions();
+  bad.max_iterations = 0;
+  EXPECT_THROW(bad.validate(), tdcr::InputError);
+  Rosenbrock sys;
+  NewtonSolver solver;
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(2);
+  EXPECT_THROW(solver.solve(sys, x, bad), tdcr::InputError);
+  Eigen::VectorXd wrong = Eigen::VectorXd::Zero(3);
+  EXPECT_THROW(solver.solve(sys, wrong), std::invalid_argument);
+}
