@@ -1,8 +1,11 @@
 // NewtonSolver (KINSOL): convergence, dense vs KLU, failures and their reporting, reuse.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
+#include <new>
 #include <stdexcept>
 
 #include "tdcr/bvp/newton_solver.hpp"
@@ -13,6 +16,17 @@ using tdcr::TerminationType;
 using tdcr::bvp::NewtonOptions;
 using tdcr::bvp::NewtonSolver;
 using tdcr::bvp::SparsityPattern;
+
+// Count every operator new in this test binary: a solve may allocate a few strings for its
+// report, but nothing per Newton iteration.
+static std::atomic<long> g_allocations{0};
+void* operator new(std::size_t n) {
+  ++g_allocations;
+  if (void* p = std::malloc(n ? n : 1)) return p;
+  throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 
 namespace {
 
@@ -141,6 +155,15 @@ class Fragile : public tdcr::bvp::ResidualSystem {
  private:
   double limit_;
   bool nan_;
+};
+
+// Dense3 whose analytic Jacobian cannot be evaluated.
+class BadJacobian : public Dense3 {
+ public:
+  bool jacobian(const Eigen::Ref<const Eigen::VectorXd>&, const Eigen::Ref<const Eigen::VectorXd>&,
+                Eigen::Ref<Eigen::MatrixXd>) override {
+    return false;
+  }
 };
 
 class Throwing : public tdcr::bvp::ResidualSystem {
@@ -367,4 +390,55 @@ TEST(BvpNewton, OptionsFromSolverOptionsAndValidation) {
   EXPECT_THROW(solver.solve(sys, x, bad), tdcr::InputError);
   Eigen::VectorXd wrong = Eigen::VectorXd::Zero(3);
   EXPECT_THROW(solver.solve(sys, wrong), std::invalid_argument);
+}
+
+TEST(BvpNewton, StepToleranceStopIsNotConvergence) {
+  // A huge step tolerance stops KINSOL after the first step with KIN_STEP_LT_STPTOL while the
+  // residual is still large: that must not be reported as converged.
+  Bratu sys(50, 3.0, true);
+  NewtonSolver solver;
+  Eigen::VectorXd u = Eigen::VectorXd::Zero(50);
+  NewtonOptions o;
+  o.step_tolerance = 1e3;
+  const auto r = solver.solve(sys, u, o);
+  EXPECT_EQ(r.flag, 2);
+  EXPECT_EQ(r.termination, TerminationType::NoConvergence) << r.message;
+  EXPECT_GT(r.residual_norm, o.function_tolerance);
+  EXPECT_EQ(r.message.rfind("KIN_STEP_LT_STPTOL", 0), 0u) << r.message;
+}
+
+TEST(BvpNewton, JacobianFailureIsReported) {
+  BadJacobian sys;
+  NewtonSolver solver;
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(3);
+  const auto r = solver.solve(sys, x);
+  EXPECT_FALSE(r.converged());
+  EXPECT_EQ(r.termination, TerminationType::IntegrationFailed) << r.message;
+  EXPECT_NE(r.message.find("Jacobian"), std::string::npos) << r.message;
+}
+
+TEST(BvpNewton, AllocationsDoNotGrowWithIterations) {
+  const int n = 300;
+  Bratu sys(n, 1.0, false);  // grouped FD Jacobian on KLU
+  NewtonSolver solver;
+  NewtonOptions o;
+  o.linear_solver = LinearSolverKind::SparseKLU;
+  Eigen::VectorXd u = Eigen::VectorXd::Zero(n);
+  ASSERT_TRUE(solver.solve(sys, u, o).converged());  // warm-up: builds the workspace
+  const Eigen::VectorXd solution = u;
+
+  u.setZero();
+  long before = g_allocations.load();
+  const auto many = solver.solve(sys, u, o);
+  const long allocations_many = g_allocations.load() - before;
+
+  u = solution * 1.001;
+  before = g_allocations.load();
+  const auto few = solver.solve(sys, u, o);
+  const long allocations_few = g_allocations.load() - before;
+
+  ASSERT_TRUE(many.converged() && few.converged());
+  ASSERT_GT(many.iterations, few.iterations);
+  EXPECT_EQ(allocations_many, allocations_few);
+  EXPECT_LE(allocations_many, 8);  // the report's strings only
 }

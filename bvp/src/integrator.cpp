@@ -23,6 +23,33 @@ std::string number(double v) {
   std::snprintf(buf, sizeof buf, "%.17g", v);
   return buf;
 }
+/// CVODE's flag names, without CVodeGetReturnFlagName (which returns malloc'd memory).
+const char* cvode_flag_name(int flag) {
+  switch (flag) {
+    case CV_SUCCESS: return "CV_SUCCESS";
+    case CV_TSTOP_RETURN: return "CV_TSTOP_RETURN";
+    case CV_TOO_MUCH_WORK: return "CV_TOO_MUCH_WORK";
+    case CV_TOO_MUCH_ACC: return "CV_TOO_MUCH_ACC";
+    case CV_ERR_FAILURE: return "CV_ERR_FAILURE";
+    case CV_CONV_FAILURE: return "CV_CONV_FAILURE";
+    case CV_RHSFUNC_FAIL: return "CV_RHSFUNC_FAIL";
+    case CV_FIRST_RHSFUNC_ERR: return "CV_FIRST_RHSFUNC_ERR";
+    case CV_REPTD_RHSFUNC_ERR: return "CV_REPTD_RHSFUNC_ERR";
+    case CV_UNREC_RHSFUNC_ERR: return "CV_UNREC_RHSFUNC_ERR";
+    case CV_NLS_INIT_FAIL: return "CV_NLS_INIT_FAIL";
+    case CV_NLS_SETUP_FAIL: return "CV_NLS_SETUP_FAIL";
+    case CV_NLS_FAIL: return "CV_NLS_FAIL";
+    case CV_MEM_FAIL: return "CV_MEM_FAIL";
+    case CV_MEM_NULL: return "CV_MEM_NULL";
+    case CV_ILL_INPUT: return "CV_ILL_INPUT";
+    case CV_NO_MALLOC: return "CV_NO_MALLOC";
+    case CV_TOO_CLOSE: return "CV_TOO_CLOSE";
+    case CV_VECTOROP_ERR: return "CV_VECTOROP_ERR";
+    case CV_CONTEXT_ERR: return "CV_CONTEXT_ERR";
+    default: return "CV_UNKNOWN_FLAG";
+  }
+}
+
 }  // namespace
 
 Integrator::~Integrator() = default;
@@ -154,7 +181,7 @@ struct CvodeIntegrator::Impl {
     if (ret == CV_SUCCESS) ret = CVodeSetMaxNumSteps(mem, max_steps);
     if (ret == CV_SUCCESS) ret = CVodeSetMaxHnilWarns(mem, -1);  // no t+h==t warnings
     if (ret != CV_SUCCESS) {
-      err = "cvode: configuration failed (" + std::to_string(ret) + "): " + message;
+      err = std::string("cvode configuration: ") + cvode_flag_name(ret) + ": " + message;
       return false;
     }
     return true;
@@ -208,7 +235,7 @@ bool CvodeIntegrator::integrate(const OdeSystem& system, double s0, double s1, d
     ret = CVodeReInit(m.mem, s0, m.y);
   }
   if (ret != CV_SUCCESS) {
-    last_error_ = "cvode: init failed (" + std::to_string(ret) + "): " + m.message;
+    last_error_ = std::string("cvode init: ") + cvode_flag_name(ret) + ": " + m.message;
     m.system = nullptr;
     return false;
   }
@@ -235,7 +262,7 @@ bool CvodeIntegrator::integrate(const OdeSystem& system, double s0, double s1, d
     std::rethrow_exception(e);
   }
   if (ret < 0) {
-    last_error_ = "cvode: flag " + std::to_string(ret) + " at s = " + number(s_reached) + ": " +
+    last_error_ = std::string(cvode_flag_name(ret)) + " at s = " + number(s_reached) + ": " +
                   m.message;
     return false;
   }
