@@ -1,0 +1,477 @@
+// Scene files: every bad input is an InputError naming the JSON path and the value; a scene
+// round-trips through scene_to_json; every example parses; the solution JSON contract.
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "tdcr/core/error.hpp"
+#include "tdcr/core/paper_robot.hpp"
+#include "tdcr/core/scene_io.hpp"
+
+namespace {
+
+using json = nlohmann::json;
+using tdcr::InputError;
+
+/// A small valid scene: two segments of two tendons each, tension actuated.
+json base_scene() {
+  return json::parse(R"({
+    "robot": {
+      "backbone": {"youngs_modulus": 2.11e11, "poisson_ratio": 0.3, "outer_radius": 0.0004},
+      "segments": [
+        {"length": 0.05, "disks": 10, "tendons": [{"x": 0, "y": 0.008}, {"x": 0, "y": -0.008}]},
+        {"length": 0.05, "disks": 10, "tendons": [{"x": 0, "y": 0.008}, {"x": 0, "y": -0.008}]}
+      ]
+    },
+    "actuation": {"tensions": [1.0, 0.0, 0.0, 0.0]},
+    "model": "vc"
+  })");
+}
+
+/// The base scene with the value at JSON pointer `ptr` set to `v`.
+std::string with(const std::string& ptr, const json& v) {
+  json j = base_scene();
+  j[json::json_pointer(ptr)] = v;
+  return j.dump();
+}
+
+/// The base scene with the value at `ptr` replaced by raw JSON text (for 1e999 and friends).
+std::string with_raw(const std::string& ptr, const std::string& raw) {
+  const std::string marker = "@@RAW@@";
+  std::string text = with(ptr, marker);
+  text.replace(text.find("\"" + marker + "\""), marker.size() + 2, raw);
+  return text;
+}
+
+/// The base scene without the value at `ptr`.
+std::string without(const std::string& ptr) {
+  json j = base_scene();
+  const json::json_pointer p(ptr);
+  j[p.parent_pointer()].erase(p.back());
+  return j.dump();
+}
+
+/// The base scene changed by `edit`.
+std::string edited(const std::function<void(json&)>& edit) {
+  json j = base_scene();
+  edit(j);
+  return j.dump();
+}
+
+struct BadInput {
+  std::string name;      ///< Test name suffix.
+  std::string text;      ///< Scene file text.
+  std::string field;     ///< Expected InputError::field().
+  std::string in_what;   ///< Text what() must contain (the offending value, or a message part).
+};
+
+std::ostream& operator<<(std::ostream& os, const BadInput& b) { return os << b.name; }
+
+std::vector<BadInput> bad_inputs() {
+  return {
+      // Malformed files
+      {"MalformedTrailingComma", R"({"robot": {},})", "scene.json", "byte"},
+      {"EmptyText", "", "scene.json", "byte 1"},
+      {"RootIsArray", "[1, 2]", "scene.json", "[1,2]"},
+      {"DuplicateKey",
+       R"({"robot": {"segments": [{"length": 0.05, "length": 0.04, "disks": 1, "tendons": []}]},
+           "actuation": {"tensions": []}})",
+       "robot.segments[0].length", "duplicate"},
+      {"NumberOverflow", with_raw("/robot/segments/1/length", "1e999"), "robot.segments[1].length", "1e999"},
+      {"NumberOverflowInArray", with_raw("/actuation/tensions/2", "-1e999"), "actuation.tensions[2]", "-1e999"},
+      // Missing required keys
+      {"MissingRobot", without("/robot"), "robot", "is required"},
+      {"MissingSegments", without("/robot/segments"), "robot.segments", "is required"},
+      {"MissingLength", without("/robot/segments/1/length"), "robot.segments[1].length", "is required"},
+      {"MissingDisks", without("/robot/segments/0/disks"), "robot.segments[0].disks", "is required"},
+      {"MissingTendons", without("/robot/segments/0/tendons"), "robot.segments[0].tendons", "is required"},
+      {"MissingTendonY", without("/robot/segments/0/tendons/1/y"), "robot.segments[0].tendons[1].y",
+       "is required"},
+      {"MissingActuation", without("/actuation"), "actuation", "is required"},
+      {"ActuationEmpty", with("/actuation", json::object()), "actuation", "tensions"},
+      // Wrong types
+      {"RobotNotObject", with("/robot", 3), "robot", "3"},
+      {"SegmentsNotArray", with("/robot/segments", json::object()), "robot.segments", "{}"},
+      {"SegmentsEmpty", with("/robot/segments", json::array()), "robot.segments", "[]"},
+      {"LengthString", with("/robot/segments/1/length", "0.05"), "robot.segments[1].length", "\"0.05\""},
+      {"LengthBool", with("/robot/segments/0/length", true), "robot.segments[0].length", "true"},
+      {"LengthNull", with("/robot/segments/0/length", nullptr), "robot.segments[0].length", "null"},
+      {"DisksFloat", with("/robot/segments/0/disks", 2.5), "robot.segments[0].disks", "2.5"},
+      {"DisksHuge", with_raw("/robot/segments/0/disks", "10000000000"), "robot.segments[0].disks",
+       "10000000000"},
+      {"TendonNotObject", with("/robot/segments/0/tendons/0", json::array({0, 0.008})),
+       "robot.segments[0].tendons[0]", "[0,0.008]"},
+      {"TendonXString", with("/robot/segments/1/tendons/0/x", "zero"), "robot.segments[1].tendons[0].x",
+       "\"zero\""},
+      {"TensionString", with("/actuation/tensions/0", "1"), "actuation.tensions[0]", "\"1\""},
+      {"TensionsNotArray", with("/actuation/tensions", 1.0), "actuation.tensions", "1.0"},
+      {"TipForceTwoValues", with("/loads", {{"tip_force", {0, 0.5}}}), "loads.tip_force", "[0,0.5]"},
+      {"TipForceString", with("/loads", {{"tip_force", {"0", 0.5, 0}}}), "loads.tip_force[0]", "\"0\""},
+      {"GravityNull", with("/loads", {{"gravity", {0, nullptr, -9.81}}}), "loads.gravity[1]", "null"},
+      {"ShearExtensionString", with("/effects", {{"shear_extension", "yes"}}), "effects.shear_extension",
+       "\"yes\""},
+      {"DiskNormalForceUnknown", with("/effects", {{"disk_normal_force", "ignored"}}),
+       "effects.disk_normal_force", "\"ignored\""},
+      {"TendonPathUnknown", with("/effects", {{"tendon_path", "free"}}), "effects.tendon_path", "\"free\""},
+      {"PrbGammaThreeValues", with("/effects", {{"prb", {{"gamma", {0.1, 0.3, 0.4}}}}}), "effects.prb.gamma",
+       "[0.1,0.3,0.4]"},
+      {"PrbKThetaNegative", with("/effects", {{"prb", {{"k_theta", {3.25, -2.84, 2.95}}}}}),
+       "effects.prb.k_theta[1]", "-2.84"},
+      {"ModelUnknown", with("/model", "cosserat"), "model", "\"cosserat\""},
+      {"ModelNumber", with("/model", 3), "model", "3"},
+      {"IntegratorUnknown", with("/solver", {{"integrator", "euler"}}), "solver.integrator", "\"euler\""},
+      {"LinearSolverUnknown", with("/solver", {{"linear_solver", "lu"}}), "solver.linear_solver", "\"lu\""},
+      {"MaxIterationsFloat", with("/solver", {{"max_iterations", 1.5}}), "solver.max_iterations", "1.5"},
+      {"ContinuationNumber", with("/solver", {{"continuation", 1}}), "solver.continuation", "1"},
+      // Unknown keys at every level, with a suggestion
+      {"UnknownTopLevelKey", with("/modle", "vc"), "modle", "did you mean \"model\""},
+      {"UnknownSegmentKey", with("/robot/segments/0/lenght", 0.05), "robot.segments[0].lenght",
+       "did you mean \"length\""},
+      {"UnknownBackboneKey", with("/robot/backbone/youngs_modulu", 2e11), "robot.backbone.youngs_modulu",
+       "did you mean \"youngs_modulus\""},
+      {"UnknownTendonKey", with("/robot/segments/1/tendons/1/z", 0.0), "robot.segments[1].tendons[1].z",
+       "unknown key"},
+      {"UnknownLoadsKey", with("/loads", {{"tip_forces", {0, 0, 0}}}), "loads.tip_forces",
+       "did you mean \"tip_force\""},
+      {"UnknownSolverKey", with("/solver", {{"max_iteration", 10}}), "solver.max_iteration",
+       "did you mean \"max_iterations\""},
+      {"UnknownPrbKey", with("/effects", {{"prb", {{"gama", {1, 1, 1, 1}}}}}), "effects.prb.gama",
+       "did you mean \"gamma\""},
+      {"UnknownStiffnessKey", with("/robot/backbone", {{"stiffness", {{"EI", 1}, {"GJ", 1}, {"EA", 1}, {"GA", 1}, {"EB", 1}}}}),
+       "robot.backbone.stiffness.EB", "unknown key"},
+      // Values the robot cannot have
+      {"LengthNegative", with("/robot/segments/1/length", -0.05), "robot.segments[1].length", "-0.05"},
+      {"LengthZero", with("/robot/segments/0/length", 0), "robot.segments[0].length", "0"},
+      {"DisksZero", with("/robot/segments/0/disks", 0), "robot.segments[0].disks", "0"},
+      {"DisksNegative", with("/robot/segments/1/disks", -3), "robot.segments[1].disks", "-3"},
+      {"TendonOnAxis", with("/robot/segments/0/tendons/1", {{"x", 0}, {"y", 0}}), "robot.segments[0].tendons[1]",
+       "(0, 0)"},
+      {"DiskMassNegative", with("/robot/segments/0/disk_mass", -0.001), "robot.segments[0].disk_mass",
+       "-0.001"},
+      {"YoungsModulusNegative", with("/robot/backbone/youngs_modulus", -1e9), "robot.backbone.youngs_modulus",
+       "-1e+09"},
+      {"InnerRadiusTooLarge", with("/robot/backbone/inner_radius", 0.0005), "robot.backbone.inner_radius",
+       "0.0005"},
+      {"PoissonAndShearModulus", with("/robot/backbone/shear_modulus", 8e10), "robot.backbone.shear_modulus",
+       "80000000000"},
+      {"StiffnessIncomplete", with("/robot/backbone", {{"stiffness", {{"EI", 1}, {"GJ", 1}, {"EA", 1}}}}),
+       "robot.backbone.stiffness.GA", "is required"},
+      {"StiffnessAndMaterial",
+       with("/robot/backbone", {{"youngs_modulus", 2e11}, {"stiffness", {{"EI", 1}, {"GJ", 1}, {"EA", 1}, {"GA", 1}}}}),
+       "robot.backbone.youngs_modulus", "200000000000"},
+      // Actuation
+      {"TensionNegative", with("/actuation/tensions/2", -1.0), "actuation.tensions[2]", "-1"},
+      {"TensionsTooFew", with("/actuation/tensions", {1.0, 0.0, 0.0}), "actuation.tensions", "3 values"},
+      {"TensionsAndDisplacements", with("/actuation/displacements", {0, 0, 0, 0}), "actuation.displacements",
+       "[0,0,0,0]"},
+      {"ConventionWithTensions", with("/actuation/displacement_convention", "at_base"),
+       "actuation.displacement_convention", "\"at_base\""},
+      {"ConventionUnknown",
+       edited([](json& j) { j["actuation"] = {{"displacements", {0, 0, 0, 0}}, {"displacement_convention", "at_tip"}}; }),
+       "actuation.displacement_convention", "\"at_tip\""},
+      {"DisplacementsTooMany", edited([](json& j) { j["actuation"] = {{"displacements", {0, 0, 0, 0, 0}}}; }),
+       "actuation.displacements", "5 values"},
+      // Solver values
+      {"Rk4StepsZero", with("/solver", {{"rk4_steps", 0}}), "solver.rk4_steps", "0"},
+      {"FunctionToleranceNegative", with("/solver", {{"function_tolerance", -1e-10}}), "solver.function_tolerance",
+       "-1e-10"},
+  };
+}
+
+class SceneBadInput : public ::testing::TestWithParam<BadInput> {};
+
+TEST_P(SceneBadInput, ThrowsInputErrorNamingFieldAndValue) {
+  const BadInput& b = GetParam();
+  try {
+    tdcr::parse_scene(b.text, "scene.json");
+    FAIL() << "no InputError for " << b.text;
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), b.field) << e.what();
+    EXPECT_NE(std::string(e.what()).find(b.in_what), std::string::npos)
+        << "what() = " << e.what() << "\nexpected to contain: " << b.in_what;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(ScenesIo, SceneBadInput, ::testing::ValuesIn(bad_inputs()),
+                         [](const ::testing::TestParamInfo<BadInput>& info) { return info.param.name; });
+
+TEST(SceneIo, MalformedJsonNamesSourceAndBytePosition) {
+  try {
+    tdcr::parse_scene("{\"robot\": [1, 2,, 3]}", "my_scene.json");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "my_scene.json");
+    EXPECT_NE(std::string(e.what()).find("byte 17"), std::string::npos) << e.what();
+  }
+}
+
+TEST(SceneIo, MissingFileIsInputErrorNamingPath) {
+  const std::string path = (std::filesystem::temp_directory_path() / "tdcr_no_such_scene.json").string();
+  try {
+    tdcr::load_scene(path);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), path);
+    EXPECT_NE(std::string(e.what()).find("cannot be opened"), std::string::npos) << e.what();
+  }
+}
+
+TEST(SceneIo, DirectoryIsNotAScene) {
+  const std::string dir = std::filesystem::temp_directory_path().string();
+  EXPECT_THROW(tdcr::load_scene(dir), InputError);
+}
+
+TEST(SceneIo, MinimalSceneTakesDefaults) {
+  const tdcr::Scene s = tdcr::parse_scene(base_scene().dump());
+  const tdcr::Scene d;
+  EXPECT_EQ(s.robot.segments.size(), 2u);
+  EXPECT_EQ(s.robot.tendon_count(), 4);
+  EXPECT_EQ(s.actuation.kind, tdcr::Actuation::Kind::Tensions);
+  EXPECT_EQ(s.loads.tip_force, tdcr::Vec3::Zero());
+  EXPECT_EQ(s.effects.shear_extension, d.effects.shear_extension);
+  EXPECT_EQ(s.effects.disk_normal_force, d.effects.disk_normal_force);
+  EXPECT_EQ(s.solver.max_iterations, d.solver.max_iterations);
+  EXPECT_EQ(s.solver.rk4_steps, d.solver.rk4_steps);
+  EXPECT_EQ(s.robot.segments[0].disk_mass, 0.0);
+  EXPECT_FALSE(s.robot.backbone.shear_modulus.has_value());
+}
+
+TEST(SceneIo, ParsesFullKeySet) {
+  const char* text = R"({
+    "description": "every key",
+    "robot": {
+      "backbone": {"youngs_modulus": 6e10, "shear_modulus": 2.3e10, "outer_radius": 0.0005,
+                   "inner_radius": 0.0002, "mass_per_length": 0.004},
+      "segments": [
+        {"length": 0.06, "disks": 3, "tendons": [{"x": 0.01, "y": 0}, {"x": -0.005, "y": 0.0087},
+                                                 {"x": -0.005, "y": -0.0087}], "disk_mass": 0.002},
+        {"length": 0.04, "disks": 1, "tendons": [], "disk_mass": 0.001}
+      ]
+    },
+    "actuation": {"displacements": [0.001, -0.0005, -0.0005], "displacement_convention": "per_segment"},
+    "loads": {"tip_force": [0.1, -0.2, 0.3], "tip_moment": [0.01, 0.02, -0.03], "gravity": [0, 0, -9.81]},
+    "effects": {"shear_extension": false, "disk_normal_force": "kept", "tendon_path": "partially_constrained",
+                "prb": {"gamma": [0.1, 0.3, 0.4, 0.2], "k_theta": [3, 2.5, 2.75]}},
+    "model": "ccsub",
+    "solver": {"integrator": "cvode", "rk4_steps": 16, "cvode_rtol": 1e-6, "cvode_atol": 1e-9,
+               "function_tolerance": 1e-8, "step_tolerance": 1e-12, "max_iterations": 50,
+               "linear_solver": "klu", "continuation": true, "max_continuation_steps": 20}
+  })";
+  const tdcr::Scene s = tdcr::parse_scene(text);
+  const auto& b = s.robot.backbone;
+  EXPECT_EQ(b.youngs_modulus, 6e10);
+  ASSERT_TRUE(b.shear_modulus.has_value());
+  EXPECT_EQ(*b.shear_modulus, 2.3e10);
+  EXPECT_EQ(b.outer_radius, 0.0005);
+  EXPECT_EQ(b.inner_radius, 0.0002);
+  ASSERT_TRUE(b.mass_per_length.has_value());
+  EXPECT_EQ(*b.mass_per_length, 0.004);
+  ASSERT_EQ(s.robot.segments.size(), 2u);
+  EXPECT_EQ(s.robot.segments[0].length, 0.06);
+  EXPECT_EQ(s.robot.segments[0].disks, 3);
+  ASSERT_EQ(s.robot.segments[0].tendons.size(), 3u);
+  EXPECT_EQ(s.robot.segments[0].tendons[1].x, -0.005);
+  EXPECT_EQ(s.robot.segments[0].tendons[1].y, 0.0087);
+  EXPECT_EQ(s.robot.segments[0].disk_mass, 0.002);
+  EXPECT_TRUE(s.robot.segments[1].tendons.empty());
+  EXPECT_EQ(s.actuation.kind, tdcr::Actuation::Kind::Displacements);
+  EXPECT_EQ(s.actuation.convention, tdcr::Actuation::DisplacementConvention::PerSegment);
+  EXPECT_EQ(s.actuation.values, (std::vector<double>{0.001, -0.0005, -0.0005}));
+  EXPECT_EQ(s.loads.tip_force, tdcr::Vec3(0.1, -0.2, 0.3));
+  EXPECT_EQ(s.loads.tip_moment, tdcr::Vec3(0.01, 0.02, -0.03));
+  EXPECT_EQ(s.loads.gravity, tdcr::Vec3(0, 0, -9.81));
+  EXPECT_FALSE(s.effects.shear_extension);
+  EXPECT_EQ(s.effects.disk_normal_force, tdcr::DiskNormalForce::Kept);
+  EXPECT_EQ(s.effects.tendon_path, tdcr::TendonPath::PartiallyConstrained);
+  EXPECT_EQ(s.effects.prb.gamma[3], 0.2);
+  EXPECT_EQ(s.effects.prb.k_theta[2], 2.75);
+  EXPECT_EQ(s.model, "ccsub");
+  EXPECT_EQ(s.solver.integrator, tdcr::IntegratorKind::Cvode);
+  EXPECT_EQ(s.solver.rk4_steps, 16);
+  EXPECT_EQ(s.solver.cvode_rtol, 1e-6);
+  EXPECT_EQ(s.solver.cvode_atol, 1e-9);
+  EXPECT_EQ(s.solver.function_tolerance, 1e-8);
+  EXPECT_EQ(s.solver.step_tolerance, 1e-12);
+  EXPECT_EQ(s.solver.max_iterations, 50);
+  EXPECT_EQ(s.solver.linear_solver, tdcr::LinearSolverKind::SparseKLU);
+  EXPECT_TRUE(s.solver.continuation);
+  EXPECT_EQ(s.solver.max_continuation_steps, 20);
+}
+
+TEST(SceneIo, ParsesDirectStiffness) {
+  const tdcr::Scene s = tdcr::parse_scene(
+      with("/robot/backbone", {{"stiffness", {{"EI", 4e-3}, {"GJ", 3e-3}, {"EA", 1e5}, {"GA", 4e4}}},
+                               {"mass_per_length", 0.001}}));
+  ASSERT_TRUE(s.robot.backbone.stiffness.has_value());
+  EXPECT_EQ(s.robot.backbone.effective_stiffness().EI, 4e-3);
+  EXPECT_EQ(s.robot.backbone.effective_stiffness().GA, 4e4);
+}
+
+void expect_same_scene(const tdcr::Scene& a, const tdcr::Scene& b) {
+  // The serialised form lists every field; equal text means equal scenes.
+  EXPECT_EQ(tdcr::scene_to_json(a), tdcr::scene_to_json(b));
+  ASSERT_EQ(a.robot.segments.size(), b.robot.segments.size());
+  EXPECT_EQ(a.actuation.values, b.actuation.values);
+  EXPECT_EQ(a.robot.backbone.effective_stiffness().EI, b.robot.backbone.effective_stiffness().EI);
+}
+
+TEST(SceneIo, RoundTripsPaperScene) {
+  tdcr::Scene s = tdcr::paper::scene(10, 6, "vcref");
+  s.loads.tip_force = tdcr::Vec3(0.1, 0.2, -0.3);
+  s.loads.gravity = tdcr::Vec3(0, 0, -9.81);
+  s.robot.backbone.density = 6450.0;
+  s.robot.segments[1].disk_mass = 1e-3 / 3.0;  // not a short decimal: checks exact round trip
+  s.effects.shear_extension = false;
+  s.effects.disk_normal_force = tdcr::DiskNormalForce::Kept;
+  s.effects.prb.k_theta[1] = 2.5;
+  s.solver.integrator = tdcr::IntegratorKind::Cvode;
+  s.solver.linear_solver = tdcr::LinearSolverKind::Dense;
+  s.solver.continuation = true;
+  s.solver.max_iterations = 77;
+  const tdcr::Scene back = tdcr::parse_scene(tdcr::scene_to_json(s));
+  expect_same_scene(s, back);
+  EXPECT_EQ(back.robot.segments[1].disk_mass, 1e-3 / 3.0);
+  EXPECT_EQ(back.effects.prb.gamma[0], s.effects.prb.gamma[0]);
+  EXPECT_EQ(back.solver.max_iterations, 77);
+}
+
+TEST(SceneIo, RoundTripsDisplacementsShearModulusAndStiffness) {
+  tdcr::Scene s = tdcr::paper::scene(3, 1, "cc");
+  s.actuation.kind = tdcr::Actuation::Kind::Displacements;
+  s.actuation.values = {0.002, -0.002, 0.0, 0.0};
+  s.actuation.convention = tdcr::Actuation::DisplacementConvention::PerSegment;
+  s.robot.backbone.shear_modulus = 7.5e10;
+  s.robot.backbone.mass_per_length = 0.0031;
+  expect_same_scene(s, tdcr::parse_scene(tdcr::scene_to_json(s)));
+
+  s.robot.backbone.stiffness = tdcr::BackboneStiffness{1e-3, 8e-4, 1e5, 4e4};
+  const tdcr::Scene back = tdcr::parse_scene(tdcr::scene_to_json(s));
+  expect_same_scene(s, back);
+  ASSERT_TRUE(back.robot.backbone.stiffness.has_value());
+  EXPECT_EQ(back.robot.backbone.stiffness->GJ, 8e-4);
+}
+
+TEST(SceneIo, EveryExampleParsesAndValidates) {
+  int count = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(TDCR_EXAMPLES_DIR)) {
+    if (entry.path().extension() != ".json") continue;
+    SCOPED_TRACE(entry.path().string());
+    tdcr::Scene s;
+    ASSERT_NO_THROW(s = tdcr::load_scene(entry.path().string()));
+    EXPECT_NO_THROW(s.validate());
+    // Examples are the paper robot: 2 x 50 mm segments, 10 disks each, 4 tendons.
+    EXPECT_EQ(s.robot.segments.size(), 2u);
+    EXPECT_EQ(s.robot.tendon_count(), 4);
+    EXPECT_DOUBLE_EQ(s.robot.total_length(), 0.1);
+    EXPECT_EQ(s.model, entry.path().stem().string() == "paper_robot_tip_force"
+                           ? "vc"
+                           : entry.path().stem().string().substr(std::string("paper_robot_").size()));
+    expect_same_scene(s, tdcr::parse_scene(tdcr::scene_to_json(s)));
+    ++count;
+  }
+  EXPECT_GE(count, 6);
+}
+
+TEST(SceneIo, SceneDataFilesParse) {
+  const std::filesystem::path dir = std::filesystem::path(TDCR_TEST_DATA_DIR) / "scenes";
+  if (!std::filesystem::exists(dir)) GTEST_SKIP() << "no " << dir;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    if (entry.path().extension() != ".json") continue;
+    SCOPED_TRACE(entry.path().string());
+    EXPECT_NO_THROW(tdcr::load_scene(entry.path().string()));
+  }
+}
+
+tdcr::Solution sample_solution() {
+  tdcr::Solution s;
+  s.model = "vc";
+  s.summary.termination = tdcr::TerminationType::Converged;
+  s.summary.message = "KINSOL_SUCCESS";
+  s.summary.iterations = 5;
+  s.summary.residual_norm = 1e-12;
+  s.summary.linear_solver = "dense";
+  s.summary.integrator = "rk4";
+  for (int i = 0; i < 3; ++i) {
+    tdcr::Frame f;
+    f.p = tdcr::Vec3(0.0, 0.001 * i, 0.01 * i);
+    f.R = Eigen::AngleAxisd(0.1 * i, tdcr::Vec3::UnitX()).toRotationMatrix();
+    s.disk_frames.push_back(f);
+  }
+  s.tendon_displacements = {0.001, -0.001};
+  s.tensions = {1.0, 0.0};
+  return s;
+}
+
+TEST(SolutionJson, HasEveryContractKey) {
+  tdcr::SolutionJsonOptions o;
+  o.repeat = 7;
+  o.median_us = 12.5;
+  o.min_us = 11.0;
+  const json j = json::parse(tdcr::solution_to_json(sample_solution(), o));
+  for (const char* k : {"model", "status", "reason", "iterations", "residual_norm", "tip", "disks",
+                        "tendon_displacements", "timing", "summary"})
+    EXPECT_TRUE(j.contains(k)) << k;
+  EXPECT_EQ(j["model"], "vc");
+  EXPECT_EQ(j["status"], "converged");
+  EXPECT_EQ(j["reason"], "converged: KINSOL_SUCCESS");
+  EXPECT_EQ(j["iterations"], 5);
+  EXPECT_EQ(j["disks"].size(), 3u);
+  EXPECT_EQ(j["tip"]["position"], json({0.0, 0.002, 0.02}));
+  EXPECT_DOUBLE_EQ(j["tip"]["rotation"][1][2].get<double>(), -std::sin(0.2));  // row-major R(1, 2)
+  EXPECT_EQ(j["timing"]["repeat"], 7);
+  EXPECT_EQ(j["timing"]["median_us"], 12.5);
+  EXPECT_EQ(j["timing"]["min_us"], 11.0);
+  for (const char* k : {"termination", "message", "solver_flag", "iterations", "residual_evaluations",
+                        "jacobian_evaluations", "residual_norm", "physical_residual", "unknowns",
+                        "continuation_steps", "linear_solver", "integrator", "solve_time_s"})
+    EXPECT_TRUE(j["summary"].contains(k)) << k;
+  EXPECT_EQ(j["summary"]["linear_solver"], "dense");
+}
+
+TEST(SolutionJson, FailedSolveWithNonFiniteValuesIsValidJson) {
+  tdcr::Solution s = sample_solution();
+  s.summary.termination = tdcr::TerminationType::NonFiniteResidual;
+  s.summary.message = "residual is NaN";
+  s.summary.residual_norm = std::numeric_limits<double>::quiet_NaN();
+  s.disk_frames.back().p.x() = std::numeric_limits<double>::infinity();
+  s.tendon_displacements[0] = -std::numeric_limits<double>::infinity();
+  const std::string text = tdcr::solution_to_json(s);
+  json j;
+  ASSERT_NO_THROW(j = json::parse(text)) << text;
+  EXPECT_EQ(j["status"], "failed");
+  EXPECT_EQ(j["reason"], "non_finite_residual: residual is NaN");
+  EXPECT_TRUE(j["residual_norm"].is_null());
+  EXPECT_TRUE(j["tip"]["position"][0].is_null());
+  EXPECT_TRUE(j["tendon_displacements"][0].is_null());
+}
+
+TEST(SolutionJson, EmptySolutionHasNullTip) {
+  tdcr::Solution s;
+  s.model = "vcref";
+  const json j = json::parse(tdcr::solution_to_json(s));
+  EXPECT_EQ(j["status"], "failed");
+  EXPECT_TRUE(j["tip"]["position"].is_null());
+  EXPECT_TRUE(j["disks"].empty());
+}
+
+TEST(SolutionJson, OptionalDisksAndBackbone) {
+  tdcr::Solution s = sample_solution();
+  s.backbone.resize(4);
+  tdcr::SolutionJsonOptions o;
+  o.include_disks = false;
+  o.include_backbone = true;
+  const json j = json::parse(tdcr::solution_to_json(s, o));
+  EXPECT_FALSE(j.contains("disks"));
+  ASSERT_TRUE(j.contains("backbone"));
+  EXPECT_EQ(j["backbone"].size(), 4u);
+  EXPECT_TRUE(j["backbone"][0].contains("n"));
+}
+
+}  // namespace
