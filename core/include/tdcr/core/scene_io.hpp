@@ -12,6 +12,34 @@
 ///  "effects": {"shear_extension": true, "disk_normal_force": "removed"},
 ///  "model": "vc", "solver": {"integrator": "rk4"}}
 /// @endcode
+///
+/// Every key (SI units; defaults are those of the C++ structs, see Backbone, Segment, Actuation,
+/// Loads, Effects, SolverOptions):
+/// - `robot` (required)
+///   - `backbone`: `youngs_modulus` (Pa), `poisson_ratio` or `shear_modulus` (Pa, not both),
+///     `outer_radius`, `inner_radius` (m), `density` (kg/m^3) or `mass_per_length` (kg/m, not
+///     both); or `stiffness`: {`EI`, `GJ`, `EA`, `GA`} (all four required) instead of the
+///     material and radii (then only `mass_per_length` gives a mass).
+///   - `segments` (required, non-empty): [{`length` (m, required), `disks` (integer, required),
+///     `tendons` (required, may be empty): [{`x`, `y`} (m, both required)], `disk_mass` (kg)}].
+/// - `actuation` (required): exactly one of `tensions` (N, >= 0) and `displacements` (m, positive
+///   when pulled), one value per tendon in global order; with displacements optionally
+///   `displacement_convention`: `"at_base"` (default) or `"per_segment"`.
+/// - `loads`: `tip_force` (N), `tip_moment` (N m), `gravity` (m/s^2): 3-vectors, base frame.
+/// - `effects`: `shear_extension` (bool), `disk_normal_force` (`"removed"` | `"kept"`),
+///   `tendon_path` (`"fully_constrained"` | `"partially_constrained"`), `prb`: {`gamma`: [4],
+///   `k_theta`: [3]}.
+/// - `model`: `"cc"` | `"ccsub"` | `"prb"` | `"vc"` | `"vcref"` | `"auto"`.
+/// - `solver`: `integrator` (`"rk4"` | `"cvode"`), `rk4_steps` (integer), `cvode_rtol`,
+///   `cvode_atol`, `function_tolerance`, `step_tolerance`, `max_iterations` (integer),
+///   `linear_solver` (`"auto"` | `"dense"` | `"klu"`), `continuation` (bool),
+///   `max_continuation_steps` (integer).
+/// - `description`: free text for the reader of the file; ignored.
+///
+/// Rules: an unknown key at any level is an error (with the closest known key suggested), as is
+/// a duplicate key; numbers must be JSON numbers (not strings, not booleans) and finite
+/// (1e999 is rejected); integers must be written without a fraction; malformed JSON is
+/// reported with its byte position and the source name as the field.
 #pragma once
 
 #include <string>
@@ -41,8 +69,19 @@ struct SolutionJsonOptions {
   double min_us = 0.0;           ///< Minimum solve time (us).
 };
 
-/// @brief The CLI's JSON contract: {"model", "status", "reason", "iterations", "residual_norm",
-/// "tip": {"position", "rotation"}, "disks": [...], "tendon_displacements", "timing"}.
+/// @brief The CLI's JSON contract, keys in this order:
+/// - `model` (string), `status` (`"converged"` or `"failed"`), `reason` (the termination name,
+///   then ": " and the summary message if any), `iterations`, `residual_norm`;
+/// - `tip`: {`position`: [3] (m, base frame), `rotation`: [[3], [3], [3]] (rows of R: rotation[i][j]
+///   = R(i, j), columns are the tip frame's axes)}; both null when the solution has no frames;
+/// - `disks`: [{`position`, `rotation`}, ...] from the base disk to the tip (if include_disks);
+/// - `tendon_displacements`: [m per tendon], `tensions`: [N per tendon];
+/// - `backbone`: [{`s`, `position`, `rotation`, `n`, `m`}, ...] (only if include_backbone);
+/// - `timing`: {`repeat`, `median_us`, `min_us`};
+/// - `summary`: every SolverSummary field (`termination`, `message`, `solver_flag`, `iterations`,
+///   `residual_evaluations`, `jacobian_evaluations`, `residual_norm`, `physical_residual`,
+///   `unknowns`, `continuation_steps`, `linear_solver`, `integrator`, `solve_time_s`).
+/// Non-finite numbers are written as null: the text is always valid JSON.
 std::string solution_to_json(const Solution& solution, const SolutionJsonOptions& options = {});
 
 }  // namespace tdcr
