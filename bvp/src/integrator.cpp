@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <exception>
+#include <limits>
 #include <stdexcept>
 #include <utility>
 
@@ -53,6 +54,8 @@ const char* cvode_flag_name(int flag) {
 }  // namespace
 
 Integrator::~Integrator() = default;
+
+double Integrator::relative_noise() const { return std::numeric_limits<double>::epsilon(); }
 
 // ---------------------------------------------------------------------------------------------
 // RK4
@@ -203,6 +206,7 @@ CvodeIntegrator::CvodeIntegrator(CvodeIntegrator&&) noexcept = default;
 CvodeIntegrator& CvodeIntegrator::operator=(CvodeIntegrator&&) noexcept = default;
 
 int CvodeIntegrator::rhs_evaluations() const { return impl_->nrhs; }
+double CvodeIntegrator::relative_noise() const { return impl_->rtol; }
 long CvodeIntegrator::steps_taken() const { return impl_->nsteps_total; }
 
 bool CvodeIntegrator::integrate(const OdeSystem& system, double s0, double s1, double* y) {

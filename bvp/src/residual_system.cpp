@@ -111,6 +111,8 @@ std::vector<int> column_groups(const SparsityPattern& pattern, int* num_groups) 
   return group;
 }
 
+double ResidualSystem::relative_noise() const { return std::numeric_limits<double>::epsilon(); }
+
 void FiniteDifferenceWorkspace::prepare(int n) {
   if (x_pert.size() != n) {
     x_pert.resize(n);
@@ -135,9 +137,13 @@ namespace {
 
 bool all_finite(const Eigen::Ref<const Eigen::VectorXd>& v) { return v.allFinite(); }
 
-/// Increment for column j: relative to |x_j|, but never below the typical size 1/uscale_j so
-/// that a zero unknown still gets a meaningful step. The step actually taken is recomputed as
-/// (x + h) - x so that the representable difference is the one divided by.
+double fd_factor(const ResidualSystem& system) {
+  return std::sqrt(std::max(std::numeric_limits<double>::epsilon(), system.relative_noise()));
+}
+
+// Increment relative to |x|, but never below the typical size 1/uscale so that a zero unknown
+// still gets a meaningful step. The step actually taken is recomputed as (x + h) - x so that
+// the representable difference is the one divided by.
 double fd_increment(double xj, double uscale_j, double factor) {
   const double typical = (uscale_j > 0.0 && std::isfinite(uscale_j)) ? 1.0 / uscale_j : 1.0;
   const double h = factor * std::max(std::abs(xj), typical);
@@ -145,6 +151,11 @@ double fd_increment(double xj, double uscale_j, double factor) {
 }
 
 }  // namespace
+
+double finite_difference_step(double x, double uscale, double relative_noise) {
+  return fd_increment(
+      x, uscale, std::sqrt(std::max(std::numeric_limits<double>::epsilon(), relative_noise)));
+}
 
 bool finite_difference_jacobian(ResidualSystem& system, const Eigen::Ref<const Eigen::VectorXd>& x,
                                 const Eigen::Ref<const Eigen::VectorXd>& f,
@@ -155,7 +166,7 @@ bool finite_difference_jacobian(ResidualSystem& system, const Eigen::Ref<const E
   const int n = static_cast<int>(x.size());
   ws.prepare(n);
   system.unknown_scale(ws.uscale);
-  const double factor = std::sqrt(std::numeric_limits<double>::epsilon());
+  const double factor = fd_factor(system);
   ws.x_pert = x;
   for (int j = 0; j < n; ++j) {
     const double h = fd_increment(x[j], ws.uscale[j], factor);
@@ -180,7 +191,7 @@ bool finite_difference_sparse_jacobian(ResidualSystem& system,
       ws.group_cols.size() != static_cast<size_t>(pattern.cols))
     ws.prepare(pattern);
   system.unknown_scale(ws.uscale);
-  const double factor = std::sqrt(std::numeric_limits<double>::epsilon());
+  const double factor = fd_factor(system);
   ws.x_pert = x;
   for (int g = 0; g < ws.num_groups; ++g) {
     const int first = ws.group_ptr[g], last = ws.group_ptr[g + 1];
@@ -229,7 +240,8 @@ JacobianCheck check_jacobian(ResidualSystem& system, const Eigen::Ref<const Eige
   if (!analytic_jacobian_dense(system, x, f, out.analytic)) return out;
   system.unknown_scale(uscale);
   out.numeric.resize(n, n);
-  const double factor = std::cbrt(std::numeric_limits<double>::epsilon());
+  const double factor =
+      std::cbrt(std::max(std::numeric_limits<double>::epsilon(), system.relative_noise()));
   for (int j = 0; j < n; ++j) {
     const double h = fd_increment(x[j], uscale[j], factor);
     xp[j] = x[j] + h;

@@ -39,6 +39,11 @@ class Integrator {
   virtual std::string name() const = 0;
   /// @brief Right-hand side evaluations since construction (a cost measure for benchmarks).
   virtual int rhs_evaluations() const { return rhs_evaluations_; }
+  /// @brief Relative accuracy of the map y(s0) -> y(s1) as a function of y(s0): machine
+  /// epsilon for a fixed-step method (a smooth map), about the relative tolerance for an
+  /// error-controlled one (its step sequence changes with y(s0)). Finite differences through
+  /// the integrator should use increments of about sqrt(relative_noise()).
+  virtual double relative_noise() const;
   /// @brief Text of the last failure ("" if none), e.g. CVODE's error message.
   virtual std::string last_error() const { return last_error_; }
 
@@ -89,6 +94,8 @@ class CvodeIntegrator : public Integrator {
   bool integrate(const OdeSystem& system, double s0, double s1, double* y) override;
   std::string name() const override { return "cvode"; }
   int rhs_evaluations() const override;
+  /// @brief The relative tolerance (see Integrator::relative_noise).
+  double relative_noise() const override;
   /// @brief Internal CVODE steps since construction.
   long steps_taken() const;
 

@@ -6,6 +6,7 @@
 /// business of whoever implements ResidualSystem.
 #pragma once
 
+#include <limits>
 #include <utility>
 #include <vector>
 
@@ -123,6 +124,12 @@ class ResidualSystem {
   /// the step tolerance, the maximum Newton step and the finite-difference increments.
   /// Default: all ones.
   virtual void unknown_scale(Eigen::Ref<Eigen::VectorXd> s) const { s.setOnes(); }
+
+  /// @brief Relative accuracy of residual() (default: machine epsilon). A residual computed
+  /// through an error-controlled integrator (CVODE) is only a smooth function of x up to about
+  /// its tolerance, and a finite-difference increment of sqrt(eps) would then mostly
+  /// differentiate noise; finite differences use sqrt(max(eps, relative_noise())) instead.
+  virtual double relative_noise() const;
 };
 
 /// @brief Scratch memory for finite-difference Jacobians, so that repeated Jacobians (one per
@@ -144,8 +151,15 @@ struct FiniteDifferenceWorkspace {
   void prepare(const SparsityPattern& pattern);
 };
 
+/// @brief The forward-difference increment used throughout bvp for an unknown of value x and
+/// unknown scale uscale: sqrt(max(eps, relative_noise)) * max(|x|, 1/uscale), rounded so that
+/// (x + h) - x == h exactly. Exposed for systems that difference their own sub-problems.
+double finite_difference_step(double x, double uscale,
+                              double relative_noise = std::numeric_limits<double>::epsilon());
+
 /// @brief Forward-difference dense Jacobian: column j is (F(x + h_j e_j) - f) / h_j with
-/// h_j = sqrt(eps) * max(|x_j|, 1 / uscale_j), the increment KINSOL itself uses.
+/// h_j = sqrt(eps) * max(|x_j|, 1 / uscale_j), the increment KINSOL itself uses (eps is
+/// replaced by system.relative_noise() if that is larger).
 ///
 /// Costs size() residual evaluations. Use finite_difference_sparse_jacobian when a sparsity
 /// pattern is known.
@@ -194,7 +208,8 @@ struct JacobianCheck {
 /// it allocates). For a sparse system the scattered analytic values are compared on the full
 /// matrix, so an entry missing from sparsity() shows up as a relative error of 1.
 ///
-/// Central differences with h_j = eps^(1/3) max(|x_j|, 1/uscale_j) are accurate to about
+/// Central differences with h_j = eps^(1/3) max(|x_j|, 1/uscale_j) (eps: the larger of machine
+/// epsilon and system.relative_noise()) are accurate to about
 /// 1e-10 relative for smooth F, so a correct Jacobian gives errors around 1e-8 or below.
 /// Entries small against the largest entry of the matrix are compared on an absolute floor of
 /// 1e-8 * max|J| to avoid dividing noise by zero.
