@@ -1,9 +1,569 @@
-// Placeholder until the vc model lands: a clear error instead of a missing symbol.
-#include "common/model_factories.hpp"
-#include "tdcr/core/error.hpp"
+// The VC model: Cosserat rod with fully constrained tendons, single shooting (see vc.hpp).
+#include "tdcr/models/vc.hpp"
 
-namespace tdcr::detail {
-std::unique_ptr<StaticModel> make_vc_model(const Scene&) {
-  throw InputError("model", "vc", "this model is not available in this build yet");
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Dense>
+
+#include "common/model_factories.hpp"
+#include "common/newton_summary.hpp"
+#include "tdcr/bvp/integrator.hpp"
+#include "tdcr/bvp/newton_solver.hpp"
+#include "tdcr/bvp/residual_system.hpp"
+#include "tdcr/core/error.hpp"
+#include "tdcr/core/lie.hpp"
+#include "tdcr/models/cosserat_rod.hpp"
+
+namespace tdcr {
+
+using Vec6 = Eigen::Matrix<double, 6, 1>;
+using Mat6 = Eigen::Matrix<double, 6, 6>;
+
+namespace {
+
+/// A tensioned tendon as the right-hand side sees it (body-frame offset, its hat, tension).
+struct TendonTerm {
+  Vec3 r = Vec3::Zero();
+  Mat3 rx = Mat3::Zero();
+  double T = 0.0;
+};
+
+/// A tendon whose length is integrated (every tendon through the segment, tensioned or not).
+struct LengthTerm {
+  Vec3 r = Vec3::Zero();
+  int index = 0;
+};
+
+/// Loads of one segment at the current load factor.
+struct SegmentLoads {
+  std::vector<TendonTerm> tendons;      ///< T > 0, running through the segment.
+  std::vector<TendonTerm> terminating;  ///< T > 0, ending at the segment's end.
+  std::vector<LengthTerm> lengths;      ///< Every tendon running through the segment.
+};
+
+/// Everything the scene applies, at load factor lambda (continuation scales it).
+struct LoadCase {
+  std::vector<SegmentLoads> segments;
+  std::vector<Vec3> disk_weight;  ///< m_d g per disk (index 0 = base disk, unused).
+  Vec3 weight = Vec3::Zero();     ///< rho A g (N/m, base frame).
+  Vec3 tip_force = Vec3::Zero();
+  Vec3 tip_moment = Vec3::Zero();
+};
+
+}  // namespace
+
+struct VcModel::Impl {
+  TendonRouting routing;
+  cosserat::Section section;
+  Vec3 kse = Vec3::Zero();  // GA, GA, EA
+  Vec3 kbt = Vec3::Zero();  // EI, EI, GJ
+  bool shear = true;
+  bool backbone_weight = false;
+  bool disk_weight = false;
+  bool tip_wrench = false;
+  bool lengths_in_shots = false;  // CVODE: integrate tendon lengths in every shot
+  int tendon_count = 0;
+  double length = 0.0;
+  double force_scale = 1.0;
+  double moment_scale = 1.0;
+  LoadCase full;  // the scene's loads at lambda = 1
+  std::vector<double> tensions;
+  Vec3 weight_total = Vec3::Zero();
+  Vec3 weight_moment = Vec3::Zero();  // sum over weights of p x W for the straight robot
+};
+
+namespace {
+
+/// The rod ODE of one segment (18 states, plus one length per tendon if requested).
+class RodOde final : public bvp::OdeSystem {
+ public:
+  using Fn = void (*)(const RodOde&, const double*, double*);
+
+  RodOde(const VcModel::Impl& model, bool lengths) : model_(model), lengths_(lengths) {
+    if (model.shear)
+      fn_ = model.backbone_weight ? &rhs_impl<true, true> : &rhs_impl<true, false>;
+    else
+      fn_ = model.backbone_weight ? &rhs_impl<false, true> : &rhs_impl<false, false>;
+  }
+  int dimension() const override { return cosserat::kStateSize + (lengths_ ? model_.tendon_count : 0); }
+  void rhs(double, const double* y, double* dyds) const override { fn_(*this, y, dyds); }
+  void set(const SegmentLoads* seg, const Vec3* weight) {
+    seg_ = seg;
+    weight_ = weight;
+  }
+
+ private:
+  template <bool Shear, bool Gravity>
+  static void rhs_impl(const RodOde& o, const double* y, double* dyds) {
+    const VcModel::Impl& M = o.model_;
+    const Eigen::Map<const Mat3> R = cosserat::rotation(y);
+    const Vec3 n = cosserat::force(y);
+    const Vec3 m = cosserat::moment(y);
+    const Vec3 nb = R.transpose() * n;
+    const Vec3 mb = R.transpose() * m;
+    const Vec3 u = M.section.inv_kbt.cwiseProduct(mb);
+    Vec3 v = Vec3::UnitZ();
+    if constexpr (Shear) v += M.section.inv_kse.cwiseProduct(nb);
+    const Vec3 dp = R * v;
+    cosserat::position(dyds) = dp;
+    cosserat::rotation(dyds) = R * lie::hat(u);
+
+    const std::vector<TendonTerm>& tendons = o.seg_->tendons;
+    if (tendons.empty()) {
+      // Free rod: no tendon load, no linear solve.
+      if constexpr (Gravity)
+        cosserat::force(dyds) = -*o.weight_;
+      else
+        cosserat::force(dyds).setZero();
+      cosserat::moment(dyds) = -dp.cross(n);
+    } else {
+      Mat3 sumA = Mat3::Zero();    // sum A_k
+      Mat3 sumAr = Mat3::Zero();   // sum A_k [r_k]x
+      Mat3 sumrAr = Mat3::Zero();  // sum [r_k]x A_k [r_k]x
+      Vec3 suma = Vec3::Zero();    // sum a_k
+      Vec3 sumra = Vec3::Zero();   // sum r_k x a_k
+      for (const TendonTerm& t : tendons) {
+        const Vec3 q = v + u.cross(t.r);
+        const double inv_q = 1.0 / q.norm();
+        const Vec3 tk = q * inv_q;
+        const double c = t.T * inv_q;
+        const Mat3 A = c * (Mat3::Identity() - tk * tk.transpose());
+        const Vec3 a = c * u.cross(q);
+        const Mat3 Ar = A * t.rx;
+        if constexpr (Shear) sumA += A;
+        sumAr += Ar;
+        sumrAr.noalias() += t.rx * Ar;
+        suma += a;
+        sumra += t.r.cross(a);
+      }
+      Vec3 fe_b = Vec3::Zero();
+      if constexpr (Gravity) fe_b = R.transpose() * *o.weight_;
+      const Vec3 b_m = -u.cross(mb) - v.cross(nb) - sumra;
+      if constexpr (Shear) {
+        Mat6 K;
+        K.topLeftCorner<3, 3>() = sumA;
+        K.topLeftCorner<3, 3>().diagonal() += M.kse;
+        K.topRightCorner<3, 3>() = -sumAr;
+        K.bottomLeftCorner<3, 3>() = -sumAr.transpose();  // = sum [r]x A (A symmetric)
+        K.bottomRightCorner<3, 3>() = -sumrAr;
+        K.bottomRightCorner<3, 3>().diagonal() += M.kbt;
+        Vec6 b;
+        b.head<3>() = -u.cross(nb) - suma - fe_b;
+        b.tail<3>() = b_m;
+        const Vec6 x = K.llt().solve(b);
+        const Vec3 vs = x.head<3>();
+        const Vec3 us = x.tail<3>();
+        cosserat::force(dyds) = R * (M.kse.cwiseProduct(vs) + u.cross(nb));
+        cosserat::moment(dyds) = R * (M.kbt.cwiseProduct(us) + u.cross(mb));
+      } else {
+        Mat3 K = -sumrAr;
+        K.diagonal() += M.kbt;
+        const Vec3 us = K.llt().solve(b_m);
+        // Body-frame tendon force sum a_k + A_k (u_s x r_k) = sum a_k - (sum A_k [r_k]x) u_s.
+        const Vec3 fb = suma - sumAr * us;
+        Vec3 dn = -(R * fb);
+        if constexpr (Gravity) dn -= *o.weight_;
+        cosserat::force(dyds) = dn;
+        cosserat::moment(dyds) = R * (M.kbt.cwiseProduct(us) + u.cross(mb));
+      }
+    }
+    if (o.lengths_) {
+      double* dl = dyds + cosserat::kStateSize;
+      for (int k = 0; k < M.tendon_count; ++k) dl[k] = 0.0;
+      for (const LengthTerm& t : o.seg_->lengths) dl[t.index] = (v + u.cross(t.r)).norm();
+    }
+  }
+
+  const VcModel::Impl& model_;
+  bool lengths_;
+  Fn fn_ = nullptr;
+  const SegmentLoads* seg_ = nullptr;
+  const Vec3* weight_ = nullptr;
+};
+
+/// What the final pass records.
+struct Record {
+  std::vector<Frame>* frames = nullptr;
+  std::vector<BackboneSample>* samples = nullptr;
+  std::vector<double>* segment_end_lengths = nullptr;  // [segment * K + k]
+};
+
+}  // namespace
+
+struct VcWorkspace::Impl {
+  std::unique_ptr<bvp::Integrator> shot_integrator;
+  std::unique_ptr<bvp::Integrator> final_integrator;  // may alias shot_integrator (CVODE)
+  bvp::NewtonSolver newton;
+  std::unique_ptr<RodOde> shot_rod;
+  std::unique_ptr<RodOde> final_rod;
+  LoadCase loads;
+  Eigen::VectorXd y;
+  Eigen::VectorXd x;
+  double lambda = -1.0;
+};
+
+VcWorkspace::~VcWorkspace() = default;
+
+long VcWorkspace::rhs_evaluations() const {
+  if (!impl) return 0;
+  long n = impl->shot_integrator->rhs_evaluations();
+  if (impl->final_integrator.get() != nullptr) n += impl->final_integrator->rhs_evaluations();
+  return n;
 }
-}  // namespace tdcr::detail
+
+namespace {
+
+/// The scaled loads at factor lambda, written into `out` (allocation-free once sized).
+void scale_loads(const LoadCase& full, double lambda, LoadCase& out) {
+  out.segments.resize(full.segments.size());
+  for (std::size_t i = 0; i < full.segments.size(); ++i) {
+    out.segments[i] = full.segments[i];
+    for (TendonTerm& t : out.segments[i].tendons) t.T *= lambda;
+    for (TendonTerm& t : out.segments[i].terminating) t.T *= lambda;
+  }
+  out.disk_weight = full.disk_weight;
+  for (Vec3& w : out.disk_weight) w *= lambda;
+  out.weight = lambda * full.weight;
+  out.tip_force = lambda * full.tip_force;
+  out.tip_moment = lambda * full.tip_moment;
+}
+
+/// One shot from the base. `y` has room for the rod's dimension. Returns false if integration
+/// failed; otherwise `res` = (n(L+) - F_tip, m(L+) - M_tip).
+bool shoot_impl(const VcModel::Impl& M, const LoadCase& L, bvp::Integrator& integ, RodOde& rod, double* y,
+                const Vec6& x, Vec6& res, const Record* rec) {
+  const int dim = rod.dimension();
+  for (int i = 0; i < dim; ++i) y[i] = 0.0;
+  cosserat::rotation(y) = Mat3::Identity();
+  cosserat::force(y) = x.head<3>();
+  cosserat::moment(y) = x.tail<3>();
+  const TendonRouting& rt = M.routing;
+  if (rec) {
+    rec->frames->push_back(Frame{});
+    rec->samples->push_back(BackboneSample{0.0, Frame{}, x.head<3>(), x.tail<3>()});
+  }
+  const int nseg = static_cast<int>(L.segments.size());
+  for (int i = 0; i < nseg; ++i) {
+    const SegmentLoads& seg = L.segments[i];
+    rod.set(&seg, &L.weight);
+    const int last = rt.segment_end_disk[i];
+    const int first = i == 0 ? 1 : rt.segment_end_disk[i - 1] + 1;
+    for (int j = first; j <= last; ++j) {
+      if (!integ.integrate(rod, rt.disk_s[j - 1], rt.disk_s[j], y)) return false;
+      if (j == last && !seg.terminating.empty()) {
+        // Eq. 40-41: tendon termination forces, with u, v just proximal of the end.
+        const Mat3 R = cosserat::rotation(static_cast<const double*>(y));
+        const Vec3 u = M.section.curvature(R, cosserat::moment(y));
+        const Vec3 v = M.section.strain(R, cosserat::force(y));
+        Vec3 dn = Vec3::Zero(), dm = Vec3::Zero();
+        for (const TendonTerm& t : seg.terminating) {
+          const Vec3 q = v + u.cross(t.r);
+          const Vec3 F = -(t.T / q.norm()) * (R * q);
+          dn += F;
+          dm += (R * t.r).cross(F);
+        }
+        cosserat::force(y) -= dn;
+        cosserat::moment(y) -= dm;
+      }
+      if (M.disk_weight) cosserat::force(y) -= L.disk_weight[j];
+      if (rec) {
+        const Frame f = cosserat::frame_of(y);
+        rec->frames->push_back(f);
+        rec->samples->push_back(
+            BackboneSample{rt.disk_s[j], f, Vec3(cosserat::force(y)), Vec3(cosserat::moment(y))});
+      }
+    }
+    if (rec && rec->segment_end_lengths && dim > cosserat::kStateSize)
+      for (int k = 0; k < M.tendon_count; ++k)
+        (*rec->segment_end_lengths)[i * M.tendon_count + k] = y[cosserat::kStateSize + k];
+  }
+  res.head<3>() = cosserat::force(y);
+  res.tail<3>() = cosserat::moment(y);
+  if (M.tip_wrench) {
+    res.head<3>() -= L.tip_force;
+    res.tail<3>() -= L.tip_moment;
+  }
+  return res.allFinite();
+}
+
+/// The shooting problem as KINSOL sees it.
+class ShootingSystem final : public bvp::ResidualSystem {
+ public:
+  ShootingSystem(const VcModel::Impl& M, VcWorkspace::Impl& W) : M_(M), W_(W) {}
+  int size() const override { return 6; }
+  bool residual(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> f) override {
+    const Vec6 xx = x;
+    Vec6 r;
+    if (!shoot_impl(M_, W_.loads, *W_.shot_integrator, *W_.shot_rod, W_.y.data(), xx, r, nullptr)) return false;
+    f = r;
+    return true;
+  }
+  // Forward-difference Jacobian by the solver (6 extra shots), with increments
+  // sqrt(max(eps, relative_noise)): sqrt(eps) for RK4, sqrt(rtol) for CVODE.
+  double relative_noise() const override { return W_.shot_integrator->relative_noise(); }
+  void residual_scale(Eigen::Ref<Eigen::VectorXd> s) const override {
+    s.head<3>().setConstant(1.0 / M_.force_scale);
+    s.tail<3>().setConstant(1.0 / M_.moment_scale);
+  }
+  void unknown_scale(Eigen::Ref<Eigen::VectorXd> s) const override { residual_scale(s); }
+
+ private:
+  const VcModel::Impl& M_;
+  VcWorkspace::Impl& W_;
+};
+
+void prepare_workspace(const VcModel::Impl& M, const SolverOptions& opt, VcWorkspace::Impl& W) {
+  if (W.shot_integrator) return;
+  W.shot_integrator = bvp::make_integrator(opt);
+  W.shot_rod = std::make_unique<RodOde>(M, M.lengths_in_shots);
+  W.final_rod = std::make_unique<RodOde>(M, true);
+  if (!M.lengths_in_shots) W.final_integrator = bvp::make_integrator(opt);
+  W.y = Eigen::VectorXd::Zero(cosserat::kStateSize + M.tendon_count);
+  W.x = Eigen::VectorXd::Zero(6);
+}
+
+void set_lambda(const VcModel::Impl& M, VcWorkspace::Impl& W, double lambda) {
+  if (W.lambda == lambda) return;
+  scale_loads(M.full, lambda, W.loads);
+  W.lambda = lambda;
+}
+
+}  // namespace
+
+VcModel::VcModel(const Scene& scene, VcOptions options) : scene_(scene), options_(options) {
+  scene_.validate();
+  if (scene_.actuation.kind != Actuation::Kind::Tensions)
+    throw InputError("actuation.kind", "displacements", "the VC model is driven by tensions");
+  auto impl = std::make_shared<Impl>();
+  Impl& M = *impl;
+  const Robot& robot = scene_.robot;
+  const SceneEffects e = scene_.active_effects();
+  M.routing = TendonRouting::from(robot);
+  M.section = cosserat::Section::from(scene_);
+  const BackboneStiffness k = robot.backbone.effective_stiffness();
+  M.kse = Vec3(k.GA, k.GA, k.EA);
+  M.kbt = Vec3(k.EI, k.EI, k.GJ);
+  M.shear = e.shear_extension;
+  M.backbone_weight = e.backbone_weight;
+  M.disk_weight = e.disk_weight;
+  M.tip_wrench = e.tip_wrench;
+  M.lengths_in_shots = scene_.solver.integrator == IntegratorKind::Cvode;
+  M.tendon_count = static_cast<int>(M.routing.tendons.size());
+  M.length = robot.total_length();
+  M.tensions = scene_.actuation.values;
+
+  const int nseg = static_cast<int>(robot.segments.size());
+  M.full.segments.resize(nseg);
+  double sum_T = 0.0, r_max = 0.0;
+  Vec3 tendon_moment = Vec3::Zero();
+  for (const RoutedTendon& t : M.routing.tendons) {
+    const double T = M.tensions[t.index];
+    TendonTerm term{t.r, lie::hat(t.r), T};
+    for (int i = 0; i <= t.segment; ++i) {
+      M.full.segments[i].lengths.push_back(LengthTerm{t.r, t.index});
+      if (T > 0.0) M.full.segments[i].tendons.push_back(term);
+    }
+    if (T > 0.0) {
+      M.full.segments[t.segment].terminating.push_back(term);
+      sum_T += T;
+      r_max = std::max(r_max, t.r.norm());
+      tendon_moment += T * Vec3::UnitZ().cross(t.r);
+    }
+  }
+  M.full.disk_weight.assign(M.routing.disk_count(), Vec3::Zero());
+  if (e.disk_weight)
+    for (int j = 1; j < M.routing.disk_count(); ++j) {
+      M.full.disk_weight[j] = robot.segments[M.routing.disk_segment[j]].disk_mass * scene_.loads.gravity;
+      M.weight_total += M.full.disk_weight[j];
+      M.weight_moment += (M.routing.disk_s[j] * Vec3::UnitZ()).cross(M.full.disk_weight[j]);
+    }
+  if (e.backbone_weight) {
+    M.full.weight = M.section.weight;
+    M.weight_total += M.length * M.section.weight;
+    M.weight_moment += (0.5 * M.length * M.length * Vec3::UnitZ()).cross(M.section.weight);
+  }
+  if (e.tip_wrench) {
+    M.full.tip_force = scene_.loads.tip_force;
+    M.full.tip_moment = scene_.loads.tip_moment;
+  }
+  const double ext = M.full.tip_force.norm() + M.weight_total.norm();
+  M.force_scale = sum_T + ext + 1e-3;
+  M.moment_scale = sum_T * r_max + ext * M.length + M.full.tip_moment.norm() + 1e-3 * M.length;
+  (void)tendon_moment;
+  impl_ = std::move(impl);
+}
+
+VcModel::~VcModel() = default;
+
+std::unique_ptr<ModelWorkspace> VcModel::make_workspace() const {
+  auto ws = std::make_unique<VcWorkspace>();
+  ws->impl = std::make_unique<VcWorkspace::Impl>();
+  return ws;
+}
+
+Vec6 VcModel::initial_guess(VcInitialGuess guess) const {
+  Vec6 x = Vec6::Zero();
+  if (guess == VcInitialGuess::Zero) return x;
+  const Impl& M = *impl_;
+  double sum_T = 0.0;
+  Vec3 tm = Vec3::Zero();
+  for (const RoutedTendon& t : M.routing.tendons) {
+    const double T = M.tensions[t.index];
+    sum_T += T;
+    tm += T * Vec3::UnitZ().cross(t.r);
+  }
+  x.head<3>() = M.full.tip_force + M.weight_total - sum_T * Vec3::UnitZ();
+  x.tail<3>() = M.full.tip_moment + (M.length * Vec3::UnitZ()).cross(M.full.tip_force) + M.weight_moment + tm;
+  return x;
+}
+
+Vec6 VcModel::residual_scale() const {
+  Vec6 s;
+  s.head<3>().setConstant(1.0 / impl_->force_scale);
+  s.tail<3>().setConstant(1.0 / impl_->moment_scale);
+  return s;
+}
+
+bool VcModel::shoot(VcWorkspace& ws, const Vec6& x, Vec6& residual) const {
+  if (!ws.impl) ws.impl = std::make_unique<VcWorkspace::Impl>();
+  prepare_workspace(*impl_, scene_.solver, *ws.impl);
+  set_lambda(*impl_, *ws.impl, 1.0);
+  VcWorkspace::Impl& W = *ws.impl;
+  return shoot_impl(*impl_, W.loads, *W.shot_integrator, *W.shot_rod, W.y.data(), x, residual, nullptr);
+}
+
+Solution VcModel::solve(ModelWorkspace& workspace, const Solution* warm_start) const {
+  const auto t0 = std::chrono::steady_clock::now();
+  auto* ws = dynamic_cast<VcWorkspace*>(&workspace);
+  if (!ws) throw InputError("workspace", "", "not a VC workspace (use VcModel::make_workspace)");
+  if (!ws->impl) ws->impl = std::make_unique<VcWorkspace::Impl>();
+  const Impl& M = *impl_;
+  VcWorkspace::Impl& W = *ws->impl;
+  prepare_workspace(M, scene_.solver, W);
+
+  Solution sol;
+  sol.model = "vc";
+  SolverSummary& sum = sol.summary;
+  sum.unknowns = 6;
+  sum.integrator = W.shot_integrator->name();
+
+  Eigen::VectorXd& x = W.x;
+  if (warm_start && warm_start->unknowns.size() == 6 && warm_start->unknowns.allFinite())
+    x = warm_start->unknowns;
+  else
+    x = initial_guess(options_.initial_guess);
+
+  ShootingSystem system(M, W);
+  const bvp::NewtonOptions nopt = bvp::NewtonOptions::from(scene_.solver);
+  set_lambda(M, W, 1.0);
+  const Eigen::VectorXd x0 = x;
+  bvp::NewtonResult res = W.newton.solve(system, x, nopt);
+  detail::copy_newton_result(res, sum);
+
+  if (!res.converged() && scene_.solver.continuation) {
+    // Ramp tensions and loads from the unloaded robot (n = m = 0 is exact at lambda = 0), each
+    // step warm-started from the last converged one; halve the step on failure.
+    Eigen::VectorXd xc = Eigen::VectorXd::Zero(6);
+    double lambda = 0.0, step = 0.25;
+    int steps = 0;
+    bool ok = false;
+    while (steps < scene_.solver.max_continuation_steps && step > 1e-6) {
+      const double target = std::min(1.0, lambda + step);
+      set_lambda(M, W, target);
+      Eigen::VectorXd xt = xc;
+      res = W.newton.solve(system, xt, nopt);
+      ++steps;
+      sum.iterations += res.iterations;
+      sum.residual_evaluations += res.residual_evaluations;
+      sum.jacobian_evaluations += res.jacobian_evaluations;
+      if (res.converged()) {
+        lambda = target;
+        xc = xt;
+        step *= 1.5;
+        if (lambda == 1.0) {
+          ok = true;
+          break;
+        }
+      } else {
+        step *= 0.5;
+      }
+    }
+    sum.continuation_steps = steps;
+    set_lambda(M, W, 1.0);
+    if (ok) {
+      x = xc;
+      const int it = sum.iterations, re = sum.residual_evaluations, je = sum.jacobian_evaluations;
+      sum.iterations = 0;
+      sum.residual_evaluations = 0;
+      sum.jacobian_evaluations = 0;
+      detail::copy_newton_result(res, sum);
+      sum.iterations = it;
+      sum.residual_evaluations = re;
+      sum.jacobian_evaluations = je;
+      sum.message += " (after " + std::to_string(steps) + " continuation steps)";
+    } else {
+      sum.message += "; continuation stopped at load factor " + format_value(lambda);
+    }
+  }
+  (void)x0;
+
+  // Final pass at the returned unknowns: frames, samples, tendon lengths.
+  const Vec6 xs = x;
+  sol.unknowns = x;
+  sol.tensions = M.tensions;
+  sol.disk_frames.reserve(M.routing.disk_count());
+  sol.backbone.reserve(M.routing.disk_count());
+  const int nseg = static_cast<int>(scene_.robot.segments.size());
+  std::vector<double> seg_lengths(static_cast<std::size_t>(nseg) * M.tendon_count, 0.0);
+  Record rec{&sol.disk_frames, &sol.backbone, &seg_lengths};
+  bvp::Integrator& fin = M.lengths_in_shots ? *W.shot_integrator : *W.final_integrator;
+  RodOde& final_rod = *W.final_rod;
+  Vec6 r;
+  const bool integrated = shoot_impl(M, W.loads, fin, final_rod, W.y.data(), xs, r, &rec);
+  if (!integrated) {
+    sol.disk_frames.clear();
+    sol.backbone.clear();
+    if (sum.converged()) {
+      sum.termination = TerminationType::IntegrationFailed;
+      sum.message += "; the final pass at the solution failed to integrate";
+    }
+  } else {
+    // Tendon displacements from the integrated lengths (Eq. 56).
+    const bool per_segment = scene_.actuation.convention == Actuation::DisplacementConvention::PerSegment;
+    sol.tendon_displacements.assign(M.tendon_count, 0.0);
+    for (const RoutedTendon& t : M.routing.tendons) {
+      const double len_end = seg_lengths[t.segment * M.tendon_count + t.index];
+      double straight = M.routing.disk_s[t.end_disk];
+      double len = len_end;
+      if (per_segment && t.segment > 0) {
+        straight -= M.routing.segment_end_s[t.segment - 1];
+        len -= seg_lengths[(t.segment - 1) * M.tendon_count + t.index];
+      }
+      sol.tendon_displacements[t.index] = straight - len;
+    }
+    // The converged flag must describe the reported shape: recheck its residual.
+    if (sum.converged()) {
+      const double scaled =
+          std::max(r.head<3>().cwiseAbs().maxCoeff() / M.force_scale, r.tail<3>().cwiseAbs().maxCoeff() / M.moment_scale);
+      if (!(scaled <= scene_.solver.function_tolerance)) {
+        sum.termination = TerminationType::NoConvergence;
+        sum.message += "; final pass residual " + format_value(scaled) + " above tolerance";
+        sum.residual_norm = scaled;
+        sum.physical_residual = r.norm();
+      }
+    }
+  }
+  sum.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return sol;
+}
+
+namespace detail {
+std::unique_ptr<StaticModel> make_vc_model(const Scene& scene) { return std::make_unique<VcModel>(scene); }
+}  // namespace detail
+
+}  // namespace tdcr

@@ -1,0 +1,1 @@
+add_test(NAME bench_vc_smoke COMMAND bench_vc --quick)
