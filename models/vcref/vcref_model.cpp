@@ -1,9 +1,514 @@
-// Placeholder until the vcref model lands: a clear error instead of a missing symbol.
-#include "common/model_factories.hpp"
-#include "tdcr/core/error.hpp"
+// VCref: Cosserat rod per subsegment with discrete tendon disk forces, solved by multiple
+// shooting with a block-tridiagonal sparse Jacobian (see tdcr/models/vcref.hpp).
+#include "tdcr/models/vcref.hpp"
 
-namespace tdcr::detail {
-std::unique_ptr<StaticModel> make_vcref_model(const Scene&) {
-  throw InputError("model", "vcref", "this model is not available in this build yet");
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <vector>
+
+#include "common/model_factories.hpp"
+#include "common/newton_summary.hpp"
+#include "tdcr/bvp/integrator.hpp"
+#include "tdcr/bvp/newton_solver.hpp"
+#include "tdcr/bvp/residual_system.hpp"
+#include "tdcr/core/error.hpp"
+#include "tdcr/core/lie.hpp"
+#include "tdcr/models/cosserat_rod.hpp"
+#include "tdcr/models/tendon_physics.hpp"
+
+namespace tdcr {
+
+using cosserat::State;
+
+// Everything a solve needs that is decided once from the scene.
+struct VcrefModel::Data {
+  int N = 0;                       // total disks (disk N = tip)
+  int size = 0;                    // unknowns = residuals
+  TendonRouting routing;           // all tendons (outputs)
+  TendonRouting active;            // only tendons with nonzero tension (physics)
+  std::vector<double> tensions;    // by global index
+  std::vector<char> tendon_at;     // disk j receives a tendon wrench
+  std::vector<char> pass_through;  // some active tendon passes (does not end at) disk j
+  std::vector<Vec3> disk_weight;   // disk_mass * g per disk (only if disk_weight)
+  bool any_disk_weight = false;
+  bool tip_wrench = false;
+  bool remove_normal = true;
+  Vec3 tip_force = Vec3::Zero();
+  Vec3 tip_moment = Vec3::Zero();
+  cosserat::Section section;
+  double length = 0.0;             // robot length L
+  double force_scale = 1.0;        // F_s (N)
+  Eigen::VectorXd fscale, uscale;  // residual and unknown scales
+  bvp::SparsityPattern pattern;
+
+  // Index of component k (0..11: p, w, n, m) of unknown block b (block 0 holds n, m only).
+  int col(int b, int k) const { return b == 0 ? k - 6 : 6 + 12 * (b - 1) + k; }
+  // Index of residual component r of block j = 1..N (tip block: r = 6..11 only).
+  int row(int j, int r) const { return j == N ? 12 * (N - 1) + (r - 6) : 12 * (j - 1) + r; }
+};
+
+namespace {
+
+constexpr double kFdStep = 1e-7;  // forward-difference step, relative to the unknown's scale
+
+// The multiple-shooting residual system; owns the mutable memory of a solve.
+class VcrefSystem final : public bvp::ResidualSystem {
+ public:
+  VcrefSystem(const VcrefModel::Data& d, const Scene& scene)
+      : d_(d),
+        integrator_(bvp::make_integrator(scene.solver)),
+        rod_(d.section),
+        rbar_(d.N + 1, Mat3::Identity()),
+        frames_(d.N + 1),
+        end_(d.N + 1, State::Zero()),
+        saved_end_(d.N + 1, State::Zero()),
+        saved_frames_(d.N + 1),
+        tension_(d.tensions) {
+    xc_.resize(d.size);
+    fc_.resize(d.size);
+    fp_.resize(d.size);
+    xw_.resize(d.size);
+    fd_rel_ = kFdStep;
+    if (scene.solver.integrator == IntegratorKind::Cvode)  // adaptive steps: noise ~ rtol
+      fd_rel_ = std::max(kFdStep, std::sqrt(scene.solver.cvode_rtol));
+    frames_[0] = Frame{};
+  }
+
+  int size() const override { return d_.size; }
+  const bvp::SparsityPattern* sparsity() const override { return &d_.pattern; }
+  bool has_jacobian() const override { return true; }
+  void residual_scale(Eigen::Ref<Eigen::VectorXd> s) const override { s = d_.fscale; }
+  void unknown_scale(Eigen::Ref<Eigen::VectorXd> s) const override { s = d_.uscale; }
+
+  bool residual(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> f) override {
+    valid_ = false;
+    if (!evaluate(x, f)) return false;
+    xc_ = x;
+    fc_ = f;
+    valid_ = true;
+    return true;
+  }
+
+  bool sparse_jacobian(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>&,
+                       double* values) override {
+    if (!valid_ || std::memcmp(xc_.data(), x.data(), sizeof(double) * d_.size) != 0) {
+      valid_ = false;
+      if (!evaluate(x, fc_)) return false;
+      xc_ = x;
+      valid_ = true;
+    }
+    ++jacobians_;
+    const int N = d_.N;
+    xw_ = x;
+    bool ok = true;
+    for (int k = 0; k < 12 && ok; ++k) {
+      for (int g = 0; g < 3 && ok; ++g) {
+        bool any = false;
+        // Perturb component k of every block b = g mod 3 and redo what depends on it.
+        for (int b = g; b < N; b += 3) {
+          if (b == 0 && k < 6) continue;
+          any = true;
+          const int c = d_.col(b, k);
+          const double h = fd_rel_ * std::max(std::abs(x[c]), 1.0 / d_.uscale[c]);
+          xw_[c] = x[c] + h;
+          saved_frames_[b] = frames_[b];
+          saved_end_[b + 1] = end_[b + 1];
+          if (b >= 1 && k < 6) set_frame(b, xw_);
+          if (k < 3) {
+            // The free rod is translation invariant: the end state moves with the start.
+            end_[b + 1][k] += h;
+          } else if (!integrate(b + 1, xw_)) {
+            ok = false;
+          }
+          if (b + 1 == N) {
+            saved_frames_[N] = frames_[N];
+            frames_[N] = cosserat::frame_of(end_[N].data());
+          }
+        }
+        if (!any) continue;
+        if (ok) {
+          for (int b = g; b < N; b += 3) {
+            if (b == 0 && k < 6) continue;
+            for (int j = std::max(1, b - 1); j <= std::min(N, b + 1); ++j) block(j, xw_, fp_.data() + d_.row(j, j == N ? 6 : 0));
+            const int c = d_.col(b, k);
+            const double h = xw_[c] - x[c];
+            for (int e = d_.pattern.col_ptr[c]; e < d_.pattern.col_ptr[c + 1]; ++e) {
+              const int r = d_.pattern.row_idx[e];
+              values[e] = (fp_[r] - fc_[r]) / h;
+            }
+          }
+        }
+        // Restore.
+        for (int b = g; b < N; b += 3) {
+          if (b == 0 && k < 6) continue;
+          const int c = d_.col(b, k);
+          xw_[c] = x[c];
+          frames_[b] = saved_frames_[b];
+          end_[b + 1] = saved_end_[b + 1];
+          if (b + 1 == N) frames_[N] = saved_frames_[N];
+        }
+      }
+    }
+    return ok;
+  }
+
+  // F(x) into f; fills frames_ and end_. False if an interval cannot be integrated.
+  bool evaluate(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> f) {
+    const int N = d_.N;
+    for (int j = 1; j < N; ++j) set_frame(j, x);
+    for (int j = 1; j <= N; ++j)
+      if (!integrate(j, x)) return false;
+    frames_[N] = cosserat::frame_of(end_[N].data());
+    for (int j = 1; j <= N; ++j) block(j, x, f.data() + d_.row(j, j == N ? 6 : 0));
+    return f.allFinite();
+  }
+
+  // Frame of disk j from its unknowns: p_j and R_j = Rbar_j exp(w_j).
+  void set_frame(int j, const Eigen::Ref<const Eigen::VectorXd>& x) {
+    const int c = d_.col(j, 0);
+    frames_[j].p = x.segment<3>(c);
+    frames_[j].R = rbar_[j] * lie::exp_so3(x.segment<3>(c + 3));
+  }
+
+  // Integrate interval j (disk j-1 -> disk j) from disk j-1's frame and wrench into end_[j].
+  bool integrate(int j, const Eigen::Ref<const Eigen::VectorXd>& x) {
+    const int c = d_.col(j - 1, 6);
+    State& y = end_[j];
+    y = cosserat::make_state(frames_[j - 1], x.segment<3>(c), x.segment<3>(c + 3));
+    const double s0 = d_.routing.disk_s[j - 1], s1 = d_.routing.disk_s[j];
+    return integrator_->integrate(rod_, s0, s1, y.data());
+  }
+
+  // Residual block j (12 values, or 6 at the tip) from frames_, end_ and x.
+  void block(int j, const Eigen::Ref<const Eigen::VectorXd>& x, double* out) const {
+    const int N = d_.N;
+    const State& e = end_[j];
+    Vec3 F = cosserat::force(e.data());
+    Vec3 M = cosserat::moment(e.data());
+    if (d_.tendon_at[j]) {
+      const tendon::DiskWrench w = tendon::disk_wrench(j, frames_.data(), d_.active, tension_.data(), d_.remove_normal);
+      F -= w.force;
+      M -= w.moment;
+    }
+    if (d_.any_disk_weight) F -= load_ * d_.disk_weight[j];
+    Eigen::Map<Vec3> o0(out), o1(out + 3);
+    if (j < N) {
+      const int c = d_.col(j, 0);
+      Eigen::Map<Vec3> o2(out + 6), o3(out + 9);
+      o0 = x.segment<3>(c) - cosserat::position(e.data());
+      o1 = lie::vee(cosserat::rotation(e.data()).transpose() * frames_[j].R);
+      o2 = F - x.segment<3>(c + 6);
+      o3 = M - x.segment<3>(c + 9);
+    } else {
+      if (d_.tip_wrench) {
+        F -= load_ * d_.tip_force;
+        M -= load_ * d_.tip_moment;
+      }
+      o0 = F;
+      o1 = M;
+    }
+  }
+
+  // Scale every load (tensions, tip wrench, weights) by `factor` (continuation).
+  void set_load_factor(double factor) {
+    load_ = factor;
+    for (std::size_t k = 0; k < tension_.size(); ++k) tension_[k] = factor * d_.tensions[k];
+    cosserat::Section s = d_.section;
+    s.weight *= factor;
+    rod_ = cosserat::FreeRod(s);
+    valid_ = false;
+  }
+
+  // Straight robot with the straight robot's static internal wrenches (loads times load_).
+  void straight_guess(Eigen::VectorXd& x) {
+    const int N = d_.N;
+    x.setZero(d_.size);
+    for (int j = 0; j <= N; ++j) {
+      rbar_[j].setIdentity();
+      frames_[j] = Frame{Mat3::Identity(), Vec3(0.0, 0.0, d_.routing.disk_s[j])};
+    }
+    Vec3 n = Vec3::Zero(), m = Vec3::Zero();  // wrench just distal of disk j
+    const Vec3 w = rod_weight();
+    for (int j = N; j >= 1; --j) {
+      // Disk j: n(s_j-) = n(s_j+) + F_j.
+      if (d_.tendon_at[j]) {
+        const tendon::DiskWrench dw = tendon::disk_wrench(j, frames_.data(), d_.active, tension_.data(), d_.remove_normal);
+        n += dw.force;
+        m += dw.moment;
+      }
+      if (d_.any_disk_weight) n += load_ * d_.disk_weight[j];
+      if (j == N && d_.tip_wrench) {
+        n += load_ * d_.tip_force;
+        m += load_ * d_.tip_moment;
+      }
+      // Straight interval j: n' = -w, m' = -e_z x n.
+      const double l = d_.routing.disk_s[j] - d_.routing.disk_s[j - 1];
+      m += Vec3::UnitZ().cross(n * l + 0.5 * w * l * l);
+      n += w * l;
+      if (j - 1 >= 1) x.segment<3>(d_.col(j - 1, 0)) = frames_[j - 1].p;
+      x.segment<3>(d_.col(j - 1, 6)) = n;
+      x.segment<3>(d_.col(j - 1, 9)) = m;
+    }
+    valid_ = false;
+  }
+
+  // Warm start from a previous solution of the same discretisation.
+  bool warm_guess(const Solution& prev, Eigen::VectorXd& x) {
+    const int N = d_.N;
+    if (prev.unknowns.size() != d_.size || static_cast<int>(prev.disk_frames.size()) != N + 1 ||
+        !prev.unknowns.allFinite())
+      return false;
+    x = prev.unknowns;
+    for (int j = 1; j < N; ++j) {
+      rbar_[j] = lie::nearest_rotation(prev.disk_frames[j].R);
+      x.segment<3>(d_.col(j, 3)).setZero();
+    }
+    valid_ = false;
+    return true;
+  }
+
+  // Fold the rotation corrections into the reference rotations: R_j = Rbar_j, w_j = 0.
+  void rebase(Eigen::VectorXd& x) {
+    for (int j = 1; j < d_.N; ++j) {
+      const int c = d_.col(j, 3);
+      rbar_[j] = rbar_[j] * lie::exp_so3(x.segment<3>(c));
+      x.segment<3>(c).setZero();
+    }
+    valid_ = false;
+  }
+
+  Vec3 rod_weight() const { return d_.section.gravity ? Vec3(load_ * d_.section.weight) : Vec3::Zero(); }
+
+  // Largest rotation mismatch angle (rad) between integrated and unknown disk rotations at the
+  // last evaluation: a root of vee(skew(.)) with a mismatch near pi is spurious.
+  double max_mismatch_cosine_violation() const {
+    double worst = 1.0;
+    for (int j = 1; j < d_.N; ++j) {
+      const Mat3 A = cosserat::rotation(end_[j].data()).transpose() * frames_[j].R;
+      worst = std::min(worst, 0.5 * (A.trace() - 1.0));
+    }
+    return worst;
+  }
+
+  const std::vector<Frame>& frames() const { return frames_; }
+  const std::vector<State>& ends() const { return end_; }
+  std::string integrator_name() const { return integrator_->name(); }
+  int jacobians() const { return jacobians_; }
+
+ private:
+  const VcrefModel::Data& d_;
+  std::unique_ptr<bvp::Integrator> integrator_;
+  cosserat::FreeRod rod_;
+  std::vector<Mat3> rbar_;
+  std::vector<Frame> frames_;
+  std::vector<State> end_, saved_end_;
+  std::vector<Frame> saved_frames_;
+  std::vector<double> tension_;
+  double load_ = 1.0;
+  double fd_rel_ = kFdStep;
+  Eigen::VectorXd xc_, fc_, fp_, xw_;
+  bool valid_ = false;
+  int jacobians_ = 0;
+};
+
+class VcrefWorkspace final : public ModelWorkspace {
+ public:
+  VcrefWorkspace(const VcrefModel::Data& d, const Scene& scene) : system(d, scene) {}
+  VcrefSystem system;
+  bvp::NewtonSolver newton;
+};
+
+}  // namespace
+
+VcrefModel::VcrefModel(const Scene& scene) : scene_(scene) {
+  scene_.validate();
+  if (scene_.actuation.kind != Actuation::Kind::Tensions)
+    throw InputError("actuation.kind", "displacements", "the VCref model takes tendon tensions");
+  auto d = std::make_shared<Data>();
+  const Robot& robot = scene_.robot;
+  const SceneEffects e = scene_.active_effects();
+  d->routing = TendonRouting::from(robot);
+  d->N = robot.total_disks();
+  const int N = d->N;
+  d->size = 6 + 12 * (N - 1);
+  d->tensions = scene_.actuation.values;
+  d->active = d->routing;
+  d->active.tendons.clear();
+  for (const RoutedTendon& t : d->routing.tendons)
+    if (d->tensions[t.index] != 0.0) d->active.tendons.push_back(t);
+  d->tendon_at.assign(N + 1, 0);
+  d->pass_through.assign(N + 1, 0);
+  for (const RoutedTendon& t : d->active.tendons)
+    for (int j = 1; j <= t.end_disk; ++j) {
+      d->tendon_at[j] = 1;
+      if (j < t.end_disk) d->pass_through[j] = 1;
+    }
+  d->remove_normal = e.disk_normal_force_removed;
+  d->tip_wrench = e.tip_wrench;
+  d->tip_force = scene_.loads.tip_force;
+  d->tip_moment = scene_.loads.tip_moment;
+  d->section = cosserat::Section::from(scene_);
+  d->length = robot.total_length();
+  d->any_disk_weight = e.disk_weight;
+  d->disk_weight.assign(N + 1, Vec3::Zero());
+  double weight = 0.0;
+  if (e.disk_weight)
+    for (int j = 1; j <= N; ++j) {
+      d->disk_weight[j] = robot.segments[d->routing.disk_segment[j]].disk_mass * scene_.loads.gravity;
+      weight += d->disk_weight[j].norm();
+    }
+  if (e.backbone_weight) weight += d->section.weight.norm() * d->length;
+
+  // Scales (see header).
+  double tsum = 0.0;
+  for (double t : d->tensions) tsum += std::abs(t);
+  const double L = d->length;
+  d->force_scale = tsum + scene_.loads.tip_force.norm() + scene_.loads.tip_moment.norm() / L + weight + 1e-3;
+  const double Fs = d->force_scale;
+  d->fscale.resize(d->size);
+  d->uscale.resize(d->size);
+  const double comp_scale[4] = {1.0 / L, 1.0, 1.0 / Fs, 1.0 / (Fs * L)};
+  for (int j = 1; j <= N; ++j)
+    for (int r = (j == N ? 6 : 0); r < 12; ++r) d->fscale[d->row(j, r)] = comp_scale[r / 3];
+  for (int b = 0; b < N; ++b)
+    for (int k = (b == 0 ? 6 : 0); k < 12; ++k) d->uscale[d->col(b, k)] = comp_scale[k / 3];
+
+  // Block-tridiagonal pattern: row block j depends on x_{j-1} (through the end state of
+  // interval j), on x_j, and on the pose of x_{j+1} (equilibrium rows, only if a tendon passes
+  // disk j). Row block N-1 depends on x_{N-1} also through the tip pose.
+  std::vector<std::pair<int, int>> entries;
+  entries.reserve(static_cast<std::size_t>(N) * 330);
+  auto add_block = [&](int j, int r0, int r1, int b, int k0, int k1) {
+    for (int r = r0; r < r1; ++r)
+      for (int k = k0; k < k1; ++k) entries.emplace_back(d->row(j, r), d->col(b, k));
+  };
+  for (int j = 1; j <= N; ++j) {
+    const int r0 = j == N ? 6 : 0;
+    add_block(j, r0, 12, j - 1, j - 1 == 0 ? 6 : 0, 12);
+    if (j < N) add_block(j, 0, 12, j, 0, 12);
+    if (j + 1 < N && d->pass_through[j]) add_block(j, 6, 12, j + 1, 0, 6);
+  }
+  d->pattern = bvp::SparsityPattern::from_triplets(d->size, d->size, entries);
+  data_ = d;
 }
-}  // namespace tdcr::detail
+
+int VcrefModel::unknowns() const { return data_->size; }
+
+std::unique_ptr<ModelWorkspace> VcrefModel::make_workspace() const {
+  return std::make_unique<VcrefWorkspace>(*data_, scene_);
+}
+
+Solution VcrefModel::solve(ModelWorkspace& workspace, const Solution* warm_start) const {
+  const auto t0 = std::chrono::steady_clock::now();
+  auto* ws = dynamic_cast<VcrefWorkspace*>(&workspace);
+  if (!ws) throw InputError("workspace", "", "not a VCref workspace (use VcrefModel::make_workspace)");
+  const Data& d = *data_;
+  VcrefSystem& sys = ws->system;
+  const bvp::NewtonOptions opts = bvp::NewtonOptions::from(scene_.solver);
+
+  Solution sol;
+  sol.model = "vcref";
+  SolverSummary& sum = sol.summary;
+  sum.unknowns = d.size;
+  sum.integrator = sys.integrator_name();
+
+  Eigen::VectorXd x;
+  sys.set_load_factor(1.0);
+  if (!(warm_start && sys.warm_guess(*warm_start, x))) sys.straight_guess(x);
+
+  bvp::NewtonResult r = ws->newton.solve(sys, x, opts);
+  detail::copy_newton_result(r, sum);
+
+  if (!r.converged() && scene_.solver.continuation) {
+    // Ramp all loads from the straight, unloaded robot (exact at factor 0) in adaptive steps.
+    double lambda = 0.0, dl = 0.25;
+    sys.set_load_factor(0.0);
+    sys.straight_guess(x);
+    Eigen::VectorXd x_ok = x;
+    int steps = 0;
+    while (lambda < 1.0 && steps < scene_.solver.max_continuation_steps && dl > 1e-4) {
+      const double next = std::min(1.0, lambda + dl);
+      sys.set_load_factor(next);
+      sys.rebase(x);
+      x_ok = x;
+      r = ws->newton.solve(sys, x, opts);
+      ++steps;
+      sum.iterations += r.iterations;
+      sum.residual_evaluations += r.residual_evaluations;
+      sum.jacobian_evaluations += r.jacobian_evaluations;
+      if (r.converged()) {
+        lambda = next;
+        dl *= 1.5;
+      } else {
+        x = x_ok;
+        dl *= 0.5;
+      }
+    }
+    sum.continuation_steps = steps;
+    const int its = sum.iterations, res = sum.residual_evaluations, jac = sum.jacobian_evaluations;
+    detail::copy_newton_result(r, sum);
+    sum.iterations = its;
+    sum.residual_evaluations = res;
+    sum.jacobian_evaluations = jac;
+    if (lambda < 1.0 || !r.converged()) {
+      sys.set_load_factor(lambda);
+      sum.termination = r.converged() ? TerminationType::NoConvergence : r.termination;
+      sum.message = "continuation stopped at load factor " + format_value(lambda) + "; last: " + r.message;
+    }
+  }
+
+  // Final state at the returned iterate (frames, interval ends).
+  Eigen::VectorXd f(d.size);
+  const bool evaluated = sys.residual(x, f);
+  if (!evaluated) {
+    if (sum.converged()) {
+      sum.termination = TerminationType::IntegrationFailed;
+      sum.message = "final residual evaluation failed; " + sum.message;
+    }
+  } else if (sum.converged() && sys.max_mismatch_cosine_violation() <= 0.0) {
+    // vee(skew(R^-T R_j)) also vanishes for a mismatch of pi: not an equilibrium.
+    sum.termination = TerminationType::NoConvergence;
+    sum.message = "spurious root: a disk rotation differs from its interval's end by >= 90 deg; " + sum.message;
+  }
+
+  // Outputs.
+  const int N = d.N;
+  if (evaluated) {
+    sol.disk_frames = sys.frames();
+    sol.disk_frames[N].R = lie::nearest_rotation(sol.disk_frames[N].R);
+    sol.backbone.resize(N + 1);
+    sol.backbone[0] = BackboneSample{0.0, Frame{}, x.segment<3>(0), x.segment<3>(3)};
+    for (int j = 1; j <= N; ++j) {
+      const double* e = sys.ends()[j].data();
+      sol.backbone[j] = BackboneSample{d.routing.disk_s[j], sol.disk_frames[j], cosserat::force(e), cosserat::moment(e)};
+    }
+    sol.tendon_displacements =
+        tendon::chord_displacements(sys.frames(), d.routing, scene_.actuation.convention);
+  } else {
+    sol.disk_frames.assign(N + 1, Frame{});
+  }
+  sol.tensions = d.tensions;
+  sol.unknowns = x;
+  sum.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return sol;
+}
+
+bvp::JacobianCheck VcrefModel::check_jacobian(ModelWorkspace& workspace, const Solution* at,
+                                              double perturbation) const {
+  auto* ws = dynamic_cast<VcrefWorkspace*>(&workspace);
+  if (!ws) throw InputError("workspace", "", "not a VCref workspace (use VcrefModel::make_workspace)");
+  VcrefSystem& sys = ws->system;
+  sys.set_load_factor(1.0);
+  Eigen::VectorXd x;
+  if (!(at && sys.warm_guess(*at, x))) sys.straight_guess(x);
+  for (int i = 0; i < x.size(); ++i) x[i] += perturbation * std::sin(1.0 + i) / data_->uscale[i];
+  return bvp::check_jacobian(sys, x);
+}
+
+namespace detail {
+std::unique_ptr<StaticModel> make_vcref_model(const Scene& scene) { return std::make_unique<VcrefModel>(scene); }
+}  // namespace detail
+
+}  // namespace tdcr

@@ -1,0 +1,104 @@
+/// @file vcref.hpp
+/// @brief The VCref model (paper Section 6.2, Table 2; Gao et al. 2017): a Cosserat rod between
+/// every pair of consecutive disks, tendons as straight chords between disk holes that apply
+/// discrete forces at the disks, solved by multiple shooting. It is tdcr's reference model.
+///
+/// **Physics.** Disks are numbered j = 0..N (0 = base disk, fixed at the base frame; N = tip
+/// disk). Every interval (disk j-1 -> disk j, one subsegment) is a free Cosserat rod
+/// (cosserat::FreeRod: paper Eq. 2-3, 34-39, with shear and extension unless
+/// `effects.shear_extension` is false, and the distributed backbone weight rho A g when
+/// gravity is on). At every disk j the tendons apply the discrete wrench of
+/// tendon::disk_wrench (Eq. 30-33), with the frictionless-disk condition Eq. 58 on pass-through
+/// tendons when `effects.disk_normal_force == Removed` (terminating tendons always pull with their
+/// full force, which reproduces the paper code's rule at the last disk of a segment and at the
+/// tip). A disk's weight disk_mass * g acts at its centre; the tip force and moment (base frame)
+/// act at the last disk. Disk equilibrium (Eq. 40-41):
+///   n(s_j-) = n(s_j+) + F_j,   m(s_j-) = m(s_j+) + M_j,
+/// where n, m are the rod's internal force and moment (base frame), F_j, M_j the tendon wrench
+/// (moment about the disk centre) plus the disk weight, plus the tip wrench at j = N, where
+/// n(s_N+) = m(s_N+) = 0.
+///
+/// **Formulation (multiple shooting, one shooting interval per subsegment).** Unknowns:
+/// x_0 = (n_0, m_0), the internal wrench just distal of the base disk (the base pose is known),
+/// and for every disk j = 1..N-1: x_j = (p_j, w_j, n_j, m_j), the disk pose and the internal
+/// wrench just distal of it, with R_j = Rbar_j exp(w_j). Rbar_j is a fixed reference rotation
+/// taken from the initial guess (identity for the straight guess, the previous solution's disk
+/// rotation for a warm start): w stays a small correction, away from the rotation-vector
+/// singularity at |w| = 2 pi, for bends of any angle. 6 + 12 (N - 1) unknowns.
+/// Residuals: interval j is integrated from disk j-1's state to s_j, giving the end state
+/// (p^-, R^-, n^-, m^-). For j = 1..N-1: pose continuity p_j - p^- (3) and
+/// vee(skew(R^-^T R_j)) (3; equals the rotation vector of the mismatch to first order and
+/// vanishes exactly when R_j is the orthonormal polar factor of the integrated R^-), and disk
+/// equilibrium n^- - n_j - F_j (3), m^- - m_j - M_j (3), where the tendon wrench uses the poses
+/// of disks j-1, j, j+1 (disk N's pose is the integrated end of the last interval). Tip:
+/// n^- - F_N - F_tip (3), m^- - M_N - M_tip (3). The Jacobian is block tridiagonal; it is
+/// assembled in compressed sparse column form (bvp::SparsityPattern) by forward differences that
+/// re-integrate only the intervals a perturbed unknown starts (position perturbations need no
+/// integration: the free rod is translation invariant), about 9 integrations of every interval
+/// per Jacobian. KINSOL solves the system with dense LU for small systems and KLU above
+/// NewtonOptions::dense_size_limit unknowns (LinearSolverKind::Automatic), so the cost grows
+/// linearly with the number of disks.
+///
+/// **Scaling.** Residuals: positions by 1/L (L = robot length), rotations by 1, forces by
+/// 1/F_s with F_s = sum of tensions + |F_tip| + |M_tip|/L + total weight + 1e-3 N, moments by
+/// 1/(F_s L). Unknowns alike.
+///
+/// **Outputs.** disk_frames: base, every disk, tip last (the interior disk poses are the solved
+/// unknowns; the tip pose is the end of the last interval, its rotation projected onto SO(3)).
+/// backbone: one sample per disk: sample 0 is the base with (n_0, m_0) just distal of the base;
+/// sample j >= 1 is disk j with the rod's internal wrench just proximal of the disk, n(s_j-),
+/// m(s_j-). tendon_displacements: from the chord lengths between the holes of consecutive disks
+/// (tendon::chord_displacements with the actuation's convention). unknowns: x as above; a warm
+/// start takes the poses and wrenches from the previous unknowns and its disk rotations as Rbar.
+///
+/// Input: tendon tensions (Actuation::Kind::Tensions). Integrator: SolverOptions::integrator
+/// (RK4 with rk4_steps steps per interval, or CVODE).
+#pragma once
+
+#include <memory>
+
+#include "tdcr/bvp/residual_system.hpp"
+#include "tdcr/core/robot.hpp"
+#include "tdcr/models/static_model.hpp"
+
+namespace tdcr {
+
+/// @brief The VCref model of one scene: immutable, built from a validated tension-driven scene.
+/// All mutable memory of a solve (integrator, Newton solver with its KLU factorisation, the
+/// end states of the intervals, Jacobian scratch) lives in the workspace from make_workspace(),
+/// which can be reused across solves.
+class VcrefModel final : public StaticModel {
+ public:
+  /// @brief Validate the scene and decide once which effects to evaluate (active tendons with
+  /// nonzero tension, tip wrench, backbone and disk weights). Throws InputError if the scene is
+  /// invalid or its actuation is not given as tensions.
+  explicit VcrefModel(const Scene& scene);
+  ModelKind kind() const override { return ModelKind::VCref; }
+  const Scene& scene() const override { return scene_; }
+  std::unique_ptr<ModelWorkspace> make_workspace() const override;
+  /// @brief Solve by multiple shooting. `warm_start`: a previous VCref Solution of a robot with
+  /// the same disks (its unknowns and disk rotations are the initial guess); otherwise (or if
+  /// the sizes do not match) the straight robot with the straight robot's static internal
+  /// wrenches. With SolverOptions::continuation, a failed direct solve is retried by ramping the
+  /// tensions and loads. Never throws for a non-convergent solve.
+  Solution solve(ModelWorkspace& workspace, const Solution* warm_start = nullptr) const override;
+
+  /// @brief Number of unknowns (and residuals): 6 + 12 (N - 1), N = total disks.
+  int unknowns() const;
+
+  /// @brief Diagnostics: the assembled sparse Jacobian against central differences of the
+  /// residual (bvp::check_jacobian), at the initial guess of `at` (a previous Solution, as for a
+  /// warm start) or the straight guess, each unknown x_i moved by
+  /// perturbation * sin(1 + i) * (typical magnitude of x_i) so the check can leave the guess.
+  bvp::JacobianCheck check_jacobian(ModelWorkspace& workspace, const Solution* at = nullptr,
+                                    double perturbation = 0.0) const;
+
+  /// @brief Internal data shared with the workspace (implementation detail).
+  struct Data;
+
+ private:
+  Scene scene_;
+  std::shared_ptr<const Data> data_;
+};
+
+}  // namespace tdcr
