@@ -225,7 +225,35 @@ TEST(SceneIo, MissingFileIsInputErrorNamingPath) {
 
 TEST(SceneIo, DirectoryIsNotAScene) {
   const std::string dir = std::filesystem::temp_directory_path().string();
-  EXPECT_THROW(tdcr::load_scene(dir), InputError);
+  try {
+    tdcr::load_scene(dir);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), dir);
+    EXPECT_NE(std::string(e.what()).find("directory"), std::string::npos) << e.what();
+  }
+}
+
+TEST(SceneIo, DeeplyNestedJsonIsRejectedNotACrash) {
+  const std::string text = "{\"robot\": " + std::string(100000, '[') + std::string(100000, ']') + "}";
+  try {
+    tdcr::parse_scene(text);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field().rfind("robot[0][0]", 0), 0u) << e.field();
+    EXPECT_NE(std::string(e.what()).find("nested too deeply"), std::string::npos) << e.what();
+  }
+}
+
+TEST(SceneIo, LongValuesAreShortenedInMessages) {
+  try {
+    tdcr::parse_scene(with("/robot/segments/0/length", std::vector<double>(1000, 1.0)));
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "robot.segments[0].length");
+    EXPECT_LT(std::string(e.what()).size(), 400u) << e.what();
+    EXPECT_NE(e.value().find("..."), std::string::npos) << e.value();
+  }
 }
 
 TEST(SceneIo, MinimalSceneTakesDefaults) {

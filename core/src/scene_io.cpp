@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -37,13 +38,17 @@ std::string index_path(const std::string& parent, std::size_t i) {
   return parent + "[" + std::to_string(i) + "]";
 }
 
-/// Compact JSON text of a value for messages (non-finite numbers as "nan"/"inf", not "null").
+/// Compact JSON text of a value for messages (non-finite numbers as "nan"/"inf", not "null"),
+/// shortened if long.
 std::string text_of(const json& j) {
   if (j.is_number_float()) {
     const double v = j.get<double>();
     if (!std::isfinite(v)) return format_value(v);
   }
-  return j.dump();
+  constexpr std::size_t kMaxLength = 120;
+  std::string text = j.dump();
+  if (text.size() > kMaxLength) text = text.substr(0, kMaxLength - 3) + "...";
+  return text;
 }
 
 std::string type_name(const json& j) {
@@ -406,6 +411,11 @@ class PathTracker {
     switch (event) {
       case json::parse_event_t::object_start:
       case json::parse_event_t::array_start:
+        // A scene is at most 5 levels deep; a bound keeps pathological files from exhausting
+        // the stack in recursive code (dump, destruction).
+        if (frames_.size() >= kMaxDepth)
+          throw InputError(pending_path(), "",
+                           "nested too deeply (more than " + std::to_string(kMaxDepth) + " levels)");
         begin_value();
         frames_.push_back(Frame{event == json::parse_event_t::object_start, {}, {}, -1});
         break;
@@ -436,6 +446,8 @@ class PathTracker {
   }
 
  private:
+  static constexpr std::size_t kMaxDepth = 64;
+
   struct Frame {
     bool is_object;
     std::set<std::string> keys;
@@ -658,6 +670,9 @@ Scene parse_scene(const std::string& json_text, const std::string& source) {
 }
 
 Scene load_scene(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw InputError(path, "", "cannot be opened as a scene file: it is a directory");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, "", "cannot be opened (missing or unreadable scene file)");
   std::ostringstream text;
