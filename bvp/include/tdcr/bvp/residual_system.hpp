@@ -45,6 +45,7 @@ struct SparsityPattern {
   bool operator==(const SparsityPattern& o) const {
     return rows == o.rows && cols == o.cols && col_ptr == o.col_ptr && row_idx == o.row_idx;
   }
+  /// @brief Structural inequality.
   bool operator!=(const SparsityPattern& o) const { return !(*this == o); }
 };
 
@@ -196,8 +197,8 @@ bool analytic_jacobian_dense(ResidualSystem& system, const Eigen::Ref<const Eige
 struct JacobianCheck {
   bool evaluated = false;           ///< False if F or the analytic Jacobian failed at x.
   double max_relative_error = 0.0;  ///< max_ij |J_a - J_fd| / max(|J_a|, |J_fd|, floor).
-  int worst_row = -1;               ///< Entry attaining max_relative_error.
-  int worst_col = -1;
+  int worst_row = -1;               ///< Row of the entry attaining max_relative_error.
+  int worst_col = -1;               ///< Column of that entry.
   Eigen::MatrixXd analytic;         ///< The analytic Jacobian (dense).
   Eigen::MatrixXd numeric;          ///< The central-difference Jacobian.
   /// @brief True if evaluated and max_relative_error <= tolerance.

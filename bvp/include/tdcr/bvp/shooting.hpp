@@ -26,6 +26,7 @@ namespace tdcr::bvp {
 /// @brief Read-only view of a shooting trajectory: start and end states of every interval.
 class ShootingNodes {
  public:
+  /// @brief View of N*m start states and N*m end states (interval-major, m per interval).
   ShootingNodes(const double* starts, const double* ends, int m, int n)
       : starts_(starts), ends_(ends), m_(m), n_(n) {}
   /// @brief State at the start of interval k (node s_k), m values.
