@@ -1,0 +1,74 @@
+/// @file ccsub.hpp
+/// @brief The CCsub model: constant curvature per subsegment with twist (paper Sections 3.1,
+/// 5.2.2; Eq. 8, 30-33, 43-47; Yuan et al. 2019), tension input, partially constrained tendons.
+///
+/// Kinematics. Subsegment j (between disks j-1 and j, length l_j) is a circular arc followed by
+/// a twist eps_j about its end tangent. In the frame of disk j-1 the arc has the curvature vector
+/// u_j = (u_x, u_y, 0) (rad/m): its end frame is the SE(3) exponential of (u_j l_j, e_z l_j)
+/// (equal to Eq. 5 and 8 with kappa = |u|, phi = atan2(-u_x, u_y), the bending direction
+/// (cos phi, sin phi) being u x e_z / |u|), post-multiplied by R_z(eps_j). So
+/// R_j = R_{j-1} exp([u_j l_j]) R_z(eps_j), which is Rz(phi) Ry(kappa l) Rz(eps - phi) of the
+/// paper. The exponential is regular at u = 0: the straight robot needs no offset.
+///
+/// Unknowns, three per subsegment and dimensionless: x_j = (l_j u_x, l_j u_y, eps_j) (rad).
+///
+/// Statics. The tendons apply at every disk the discrete forces of Eq. 30-33 (straight tendon
+/// pieces between holes), with Eq. 58 (frictionless disks: the force component along the disk
+/// normal removed at disks a tendon only passes) when effects.disk_normal_force is Removed. M_j,
+/// the moment about O_{j-1} of everything distal of disk j-1 (tendon forces at disks >= j, tip
+/// force and moment, gravity), follows recursively from the tip (Eq. 44-47). The constitutive
+/// law (Eq. 43) is compared in the frame of disk j-1, as the paper's code does:
+///
+///     EI u_j + (GJ eps_j / l_j) z_j = M_j,
+///
+/// where the bending moment EI u_j is perpendicular to z_{j-1} and z_j, and the torsion moment
+/// acts along the end tangent z_j. Projected on z_j this is St Venant's twist GJ eps_j / l_j =
+/// M_j . z_j. A pure tip moment M (no tension) therefore gives exactly an arc of curvature
+/// M / EI. The residual is scaled by l_j / EI (moments in units of the bending stiffness of one
+/// subsegment), so every residual is an angle: O(1) for any robot.
+///
+/// Loads: tip force and moment (base frame) at the tip disk centre; gravity (base frame): the
+/// weight of every disk at its centre, and the backbone weight rho A g l_j of subsegment j at
+/// the exact centroid of its arc (the distributed weight integrated along the arc). Inextensible,
+/// no shear (effects.shear_extension is not used by this model).
+///
+/// Solver: KINSOL Newton with line search on the 3J residuals (J subsegments carry load; those
+/// distal of the last loaded disk are exactly straight and are not unknowns), dense
+/// finite-difference Jacobian (column j of an N-subsegment system costs one O(N) residual).
+#pragma once
+
+#include <memory>
+
+#include "tdcr/models/static_model.hpp"
+
+namespace tdcr {
+
+/// @brief The CCsub model of one scene (tension actuation only).
+///
+/// Build it through make_model(ModelKind::CCsub, scene) or directly. The model is immutable;
+/// solve() takes a workspace (make_workspace()) holding the Newton solver and all buffers, which
+/// can be reused across solves. Solution::unknowns holds x_j = (l_j u_x, l_j u_y, eps_j) for all
+/// N subsegments (3N values, zero for unloaded distal subsegments); passing a previous Solution
+/// of a robot with the same number of disks as warm_start starts Newton from it.
+class CcsubModel final : public StaticModel {
+ public:
+  /// @brief Validates the scene; throws InputError for displacement actuation (CCsub is a
+  /// static model driven by tensions).
+  explicit CcsubModel(const Scene& scene);
+  ~CcsubModel() override;
+  ModelKind kind() const override { return ModelKind::CCsub; }
+  const Scene& scene() const override { return scene_; }
+  std::unique_ptr<ModelWorkspace> make_workspace() const override;
+  Solution solve(ModelWorkspace& workspace, const Solution* warm_start = nullptr) const override;
+
+  /// @brief Disk frames (base disk first, tip last) for unknowns x (size 3N, see class comment).
+  std::vector<Frame> frames(const Eigen::VectorXd& x) const;
+
+  struct Impl;  ///< Private implementation (loads, stiffness); public only for the solver code.
+
+ private:
+  Scene scene_;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace tdcr
