@@ -33,6 +33,7 @@ struct VcrefModel::Data {
   std::vector<char> pass_through;  // some active tendon passes (does not end at) disk j
   std::vector<Vec3> disk_weight;   // disk_mass * g per disk (only if disk_weight)
   bool any_disk_weight = false;
+  bool arc_guess = true;           // VcrefOptions::initial_guess
   bool tip_wrench = false;
   bool remove_normal = true;
   Vec3 tip_force = Vec3::Zero();
@@ -221,13 +222,25 @@ class VcrefSystem final : public bvp::ResidualSystem {
     valid_ = false;
   }
 
-  // Straight robot with the straight robot's static internal wrenches (loads times load_).
-  void straight_guess(Eigen::VectorXd& x) {
+  // Initial guess: disk poses on the constant-curvature arcs of the tendon moments (paper
+  // Eq. 8 with u = sum T_k (e_z x r_k) / EI per segment, the CC model's statics) or, with
+  // `arcs` false, the straight robot; wrenches from the statics of that shape (backward pass of
+  // the disk equilibria, loads times load_). Rbar_j = R_j, w_j = 0.
+  void shape_guess(Eigen::VectorXd& x, bool arcs) {
     const int N = d_.N;
     x.setZero(d_.size);
-    for (int j = 0; j <= N; ++j) {
-      rbar_[j].setIdentity();
-      frames_[j] = Frame{Mat3::Identity(), Vec3(0.0, 0.0, d_.routing.disk_s[j])};
+    frames_[0] = Frame{};
+    rbar_[0].setIdentity();
+    for (int j = 1; j <= N; ++j) {
+      const int seg = d_.routing.disk_segment[j];
+      const double l = d_.routing.disk_s[j] - d_.routing.disk_s[j - 1];
+      Vec3 u = Vec3::Zero();
+      if (arcs)
+        for (const RoutedTendon& t : d_.active.tendons)
+          if (t.segment >= seg) u += tension_[t.index] * Vec3::UnitZ().cross(t.r);
+      u = d_.section.inv_kbt.cwiseProduct(u);
+      frames_[j] = frames_[j - 1] * lie::exp_se3(u * l, Vec3::UnitZ() * l);
+      rbar_[j] = frames_[j].R;
     }
     Vec3 n = Vec3::Zero(), m = Vec3::Zero();  // wrench just distal of disk j
     const Vec3 w = rod_weight();
@@ -243,9 +256,10 @@ class VcrefSystem final : public bvp::ResidualSystem {
         n += load_ * d_.tip_force;
         m += load_ * d_.tip_moment;
       }
-      // Straight interval j: n' = -w, m' = -e_z x n.
+      // Interval j, chord approximation: n' = -w, m' = -p' x n.
       const double l = d_.routing.disk_s[j] - d_.routing.disk_s[j - 1];
-      m += Vec3::UnitZ().cross(n * l + 0.5 * w * l * l);
+      const Vec3 dp = frames_[j].p - frames_[j - 1].p;
+      m += dp.cross(n + 0.5 * w * l);
       n += w * l;
       if (j - 1 >= 1) x.segment<3>(d_.col(j - 1, 0)) = frames_[j - 1].p;
       x.segment<3>(d_.col(j - 1, 6)) = n;
@@ -253,6 +267,7 @@ class VcrefSystem final : public bvp::ResidualSystem {
     }
     valid_ = false;
   }
+  void straight_guess(Eigen::VectorXd& x) { shape_guess(x, d_.arc_guess); }
 
   // Warm start from a previous solution of the same discretisation.
   bool warm_guess(const Solution& prev, Eigen::VectorXd& x) {
@@ -322,7 +337,7 @@ class VcrefWorkspace final : public ModelWorkspace {
 
 }  // namespace
 
-VcrefModel::VcrefModel(const Scene& scene) : scene_(scene) {
+VcrefModel::VcrefModel(const Scene& scene, const VcrefOptions& options) : scene_(scene), options_(options) {
   scene_.validate();
   if (scene_.actuation.kind != Actuation::Kind::Tensions)
     throw InputError("actuation.kind", "displacements", "the VCref model takes tendon tensions");
@@ -346,6 +361,7 @@ VcrefModel::VcrefModel(const Scene& scene) : scene_(scene) {
       if (j < t.end_disk) d->pass_through[j] = 1;
     }
   d->remove_normal = e.disk_normal_force_removed;
+  d->arc_guess = options_.initial_guess == VcrefOptions::InitialGuess::ConstantCurvature;
   d->tip_wrench = e.tip_wrench;
   d->tip_force = scene_.loads.tip_force;
   d->tip_moment = scene_.loads.tip_moment;
