@@ -25,6 +25,7 @@
 #include "tdcr/core/lie.hpp"
 #include "tdcr/core/metrics.hpp"
 #include "tdcr/core/paper_robot.hpp"
+#include "tdcr/models/continuation.hpp"
 
 using namespace tdcr;
 
@@ -62,7 +63,7 @@ std::optional<Solution> try_solve(ModelKind kind, const Scene& scene, const Solu
   try {
     auto m = make_model(kind, scene);
     auto ws = m->make_workspace();
-    return m->solve(*ws, warm);
+    return solve_with_continuation(*m, *ws, warm);
   } catch (const InputError& e) {
     return std::nullopt;
   }

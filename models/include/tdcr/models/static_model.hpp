@@ -55,7 +55,8 @@ class StaticModel {
 /// @brief Build the model `kind` for `scene` (validated first; throws InputError on bad input).
 std::unique_ptr<StaticModel> make_model(ModelKind kind, const Scene& scene);
 
-/// @brief One-shot convenience: build the scene's model (scene.model) and solve it.
+/// @brief One-shot convenience: build the scene's model (scene.model) and solve it, with load
+/// continuation as the fallback when the scene's solver options enable it (continuation.hpp).
 Solution solve(const Scene& scene, const Solution* warm_start = nullptr);
 
 }  // namespace tdcr
