@@ -278,8 +278,13 @@ TEST(VcModel, IntegratorConvergence) {
   EXPECT_LT((cv - fine).norm(), 1e-9);
 }
 
-// 7. The paper code's VC (reference CSV, converged rows with chisq < 1e-12).
+// 7. The paper code's VC (reference CSV, converged rows with chisq < 1e-12). The paper code
+// (Rucker & Webster 2011) applies no kink force where passing tendons change direction at a
+// segment end, so it is compared with that formulation (VcOptions::kink_forces = false); with
+// kink forces the tips of the tip-force cases move by up to ~4e-4 m (see the equilibrium test).
 TEST(VcModel, MatchesPaperCodeReference) {
+  VcOptions paper_formulation;
+  paper_formulation.kink_forces = false;
   std::ifstream in(std::string(TDCR_TEST_DATA_DIR) + "/reference_vc.csv");
   ASSERT_TRUE(in.good());
   std::string line;
@@ -298,7 +303,7 @@ TEST(VcModel, MatchesPaperCodeReference) {
     Scene s = paper_scene(n, {v[2], v[3], v[4], v[5]});
     s.loads.tip_force = Vec3(v[6], v[7], v[8]);
     s.solver.rk4_steps = std::max(4, 160 / n);
-    const Solution sol = solve_vc(s);
+    const Solution sol = solve_vc(s, paper_formulation);
     ASSERT_TRUE(sol.converged()) << line << "\n" << sol.summary.message;
     const Vec3 p_ref(v[10], v[11], v[12]);
     Mat3 R_ref;
@@ -381,7 +386,10 @@ TEST(VcModel, GlobalEquilibriumThreeSegmentsWithGravity) {
   s.loads.tip_force = Vec3(0.1, 0.05, -0.2);
   s.loads.tip_moment = Vec3(0.002, -0.001, 0.003);
   s.solver.rk4_steps = 16;
-  VcModel model(s);
+  for (bool kinks : {true, false}) {
+  VcOptions opt;
+  opt.kink_forces = kinks;
+  VcModel model(s, opt);
   auto ws = model.make_workspace();
   const Solution sol = model.solve(*ws);
   ASSERT_TRUE(sol.converged()) << sol.summary.message;
@@ -426,11 +434,19 @@ TEST(VcModel, GlobalEquilibriumThreeSegmentsWithGravity) {
     F_ext += rhoA * lengths[i] * s.loads.gravity;
     M_ext += integral.cross(rhoA * s.loads.gravity);
   }
-  const double Fs = 8.0;  // ~ sum of tensions (N)
-  EXPECT_LT((F_base - F_ext).norm(), 1e-9 * Fs) << (F_base - F_ext).transpose();
-  EXPECT_LT((M_base - M_ext).norm(), 1e-9 * Fs * 0.01) << (M_base - M_ext).transpose();
+  const double Fs = 12.0;  // ~ sum of tensions (N)
+  if (kinks) {
+    // Holds to the RK4 truncation error (16 steps per disk interval) and Simpson's rule.
+    EXPECT_LT((F_base - F_ext).norm(), 1e-9 * Fs) << (F_base - F_ext).transpose();
+    EXPECT_LT((M_base - M_ext).norm(), 1e-9 * Fs * 0.01) << (M_base - M_ext).transpose();
+  } else {
+    // Without the kink forces of passing tendons at the segment ends (the paper code's
+    // formulation) the balance is off by far more than the numerical error.
+    EXPECT_GT((F_base - F_ext).norm(), 1e-5 * Fs) << (F_base - F_ext).transpose();
+  }
   // Gravity matters here: the backbone and disk weights are not negligible in the balance.
   EXPECT_GT((F_ext - s.loads.tip_force).norm(), 0.1);
+  }
 }
 
 // Input errors are reported, not solved.

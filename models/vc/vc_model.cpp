@@ -24,6 +24,9 @@ namespace tdcr {
 using Vec6 = Eigen::Matrix<double, 6, 1>;
 using Mat6 = Eigen::Matrix<double, 6, 6>;
 
+/// Bound on the scaled Newton step (KINSOL mxnewtstep), see solve().
+constexpr double kMaxNewtonStep = 1.0;
+
 namespace {
 
 /// A tensioned tendon as the right-hand side sees it (body-frame offset, its hat, tension).
@@ -66,6 +69,7 @@ struct VcModel::Impl {
   bool backbone_weight = false;
   bool disk_weight = false;
   bool tip_wrench = false;
+  bool kink_forces = true;
   bool lengths_in_shots = false;  // CVODE: integrate tendon lengths in every shot
   int tendon_count = 0;
   double length = 0.0;
@@ -255,22 +259,60 @@ bool shoot_impl(const VcModel::Impl& M, const LoadCase& L, bvp::Integrator& inte
     const int first = i == 0 ? 1 : rt.segment_end_disk[i - 1] + 1;
     for (int j = first; j <= last; ++j) {
       if (!integ.integrate(rod, rt.disk_s[j - 1], rt.disk_s[j], y)) return false;
-      if (j == last && !seg.terminating.empty()) {
-        // Eq. 40-41: tendon termination forces, with u, v just proximal of the end.
+      const bool terminates = j == last && !seg.terminating.empty();
+      const bool weighted = M.disk_weight && L.disk_weight[j].squaredNorm() > 0.0;
+      if (terminates || weighted) {
+        // Point loads at disk j, with u, v just proximal of it.
         const Mat3 R = cosserat::rotation(static_cast<const double*>(y));
         const Vec3 u = M.section.curvature(R, cosserat::moment(y));
         const Vec3 v = M.section.strain(R, cosserat::force(y));
-        Vec3 dn = Vec3::Zero(), dm = Vec3::Zero();
-        for (const TendonTerm& t : seg.terminating) {
-          const Vec3 q = v + u.cross(t.r);
-          const Vec3 F = -(t.T / q.norm()) * (R * q);
-          dn += F;
-          dm += (R * t.r).cross(F);
+        if (terminates) {
+          // Eq. 40-41: tendon termination forces F_k = -T_k R t_k at p + R r_k.
+          Vec3 dn = Vec3::Zero(), dm = Vec3::Zero();
+          for (const TendonTerm& t : seg.terminating) {
+            const Vec3 q = v + u.cross(t.r);
+            const Vec3 F = -(t.T / q.norm()) * (R * q);
+            dn += F;
+            dm += (R * t.r).cross(F);
+          }
+          cosserat::force(y) -= dn;
+          cosserat::moment(y) -= dm;
         }
-        cosserat::force(y) -= dn;
-        cosserat::moment(y) -= dm;
+        if (weighted) cosserat::force(y) -= L.disk_weight[j];
+        // Kinks: the point loads make u, v jump, so every tensioned tendon continuing past disk j
+        // changes direction there and pulls on the backbone with T_k R (t_k+ - t_k-) at
+        // p + R r_k. t_k+ depends on the wrench after the kink: fixed-point iteration (its
+        // contraction factor is about T r^2 / EI, small for any sane tension).
+        const std::vector<TendonTerm>* cont = nullptr;
+        if (j < last)
+          cont = &seg.tendons;
+        else if (i + 1 < nseg)
+          cont = &L.segments[i + 1].tendons;
+        if (M.kink_forces && cont && !cont->empty()) {
+          const Vec3 n_base = cosserat::force(y), m_base = cosserat::moment(y);
+          Vec3 np = n_base, mp = m_base;
+          bool settled = false;
+          for (int it = 0; it < 100 && !settled; ++it) {
+            const Vec3 up = M.section.curvature(R, mp);
+            const Vec3 vp = M.section.strain(R, np);
+            Vec3 dn = Vec3::Zero(), dm = Vec3::Zero();
+            for (const TendonTerm& t : *cont) {
+              const Vec3 qm = v + u.cross(t.r);
+              const Vec3 qp = vp + up.cross(t.r);
+              const Vec3 K = t.T * (R * (qp / qp.norm() - qm / qm.norm()));
+              dn += K;
+              dm += (R * t.r).cross(K);
+            }
+            const Vec3 n_new = n_base - dn, m_new = m_base - dm;
+            settled = (n_new - np).norm() <= 1e-15 * M.force_scale && (m_new - mp).norm() <= 1e-15 * M.moment_scale;
+            np = n_new;
+            mp = m_new;
+          }
+          if (!settled) return false;
+          cosserat::force(y) = np;
+          cosserat::moment(y) = mp;
+        }
       }
-      if (M.disk_weight) cosserat::force(y) -= L.disk_weight[j];
       if (rec) {
         const Frame f = cosserat::frame_of(y);
         rec->frames->push_back(f);
@@ -352,6 +394,7 @@ VcModel::VcModel(const Scene& scene, VcOptions options) : scene_(scene), options
   M.backbone_weight = e.backbone_weight;
   M.disk_weight = e.disk_weight;
   M.tip_wrench = e.tip_wrench;
+  M.kink_forces = options_.kink_forces;
   M.lengths_in_shots = scene_.solver.integrator == IntegratorKind::Cvode;
   M.tendon_count = static_cast<int>(M.routing.tendons.size());
   M.length = robot.total_length();
@@ -453,17 +496,40 @@ Solution VcModel::solve(ModelWorkspace& workspace, const Solution* warm_start) c
   sum.integrator = W.shot_integrator->name();
 
   Eigen::VectorXd& x = W.x;
-  if (warm_start && warm_start->unknowns.size() == 6 && warm_start->unknowns.allFinite())
+  const bool warm = warm_start && warm_start->unknowns.size() == 6 && warm_start->unknowns.allFinite();
+  if (warm)
     x = warm_start->unknowns;
   else
     x = initial_guess(options_.initial_guess);
 
   ShootingSystem system(M, W);
-  const bvp::NewtonOptions nopt = bvp::NewtonOptions::from(scene_.solver);
+  bvp::NewtonOptions nopt = bvp::NewtonOptions::from(scene_.solver);
+  // By global equilibrium |n(0)| <= F_s and |m(0)| <~ M_s: the solution lies within a scaled
+  // distance of about sqrt(6) of the origin. Longer Newton steps only overshoot into strongly
+  // coiled shapes (where RK4 fails or a wrong equilibrium waits), so bound them.
+  nopt.max_newton_step = kMaxNewtonStep;
   set_lambda(M, W, 1.0);
   const Eigen::VectorXd x0 = x;
   bvp::NewtonResult res = W.newton.solve(system, x, nopt);
   detail::copy_newton_result(res, sum);
+  if (!res.converged() && !warm && nopt.max_iterations > sum.iterations) {
+    // A cold start failed: retry once from the other straight-robot guess (the equilibrium guess
+    // overestimates the lever of tip forces on strongly bent robots, zeros ignore the tendons).
+    const VcInitialGuess other = options_.initial_guess == VcInitialGuess::Equilibrium ? VcInitialGuess::Zero
+                                                                                      : VcInitialGuess::Equilibrium;
+    Eigen::VectorXd xr = initial_guess(other);
+    bvp::NewtonOptions ropt = nopt;
+    ropt.max_iterations = nopt.max_iterations - sum.iterations;
+    const std::string first = sum.message;
+    res = W.newton.solve(system, xr, ropt);
+    detail::copy_newton_result(res, sum);
+    if (res.converged()) {
+      x = xr;
+      sum.message += " (retry from the other initial guess; first attempt: " + first + ")";
+    } else {
+      sum.message += "; first attempt: " + first;
+    }
+  }
 
   if (!res.converged() && scene_.solver.continuation) {
     // Ramp tensions and loads from the unloaded robot (n = m = 0 is exact at lambda = 0), each

@@ -77,6 +77,13 @@ enum class VcInitialGuess {
 /// @brief Options of the VC model beyond the scene's SolverOptions.
 struct VcOptions {
   VcInitialGuess initial_guess = VcInitialGuess::Equilibrium;  ///< Cold-start guess.
+  /// Apply the point force of every tensioned tendon that passes a disk where point loads
+  /// (tendon terminations, disk weights) make the strains jump: its fully constrained path has a
+  /// kink there and pulls with T_k R (t_k+ - t_k-). Without it (the paper code's VC, Rucker &
+  /// Webster 2011 apply only termination forces) the global force and moment balance of the robot
+  /// is violated whenever torsion or shear jumps at a segment end (e.g. 1.5e-3 N of 10 N with
+  /// tip loads on a 3-segment robot). Default on; off reproduces the paper code's formulation.
+  bool kink_forces = true;
 };
 
 /// @brief Mutable memory of VC solves: integrators, the KINSOL workspace and the shooting state.
