@@ -1,0 +1,269 @@
+// Tests of the extended PRB model (paper Eq. 11-12, 30-33, 44-54, Table 1): analytic cases,
+// symmetry, global equilibrium, failure reporting, the paper's own code as reference data, and
+// the case-study accuracy against VCref at n = 1.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "tdcr/core/lie.hpp"
+#include "tdcr/core/metrics.hpp"
+#include "tdcr/core/paper_robot.hpp"
+#include "tdcr/models/prb.hpp"
+#include "tdcr/models/tendon_physics.hpp"
+
+using namespace tdcr;
+
+namespace {
+
+// One row of tests/data/reference_ccsub_prb.csv (outputs of the paper's code).
+struct RefRow {
+  std::string source, model;
+  int id = 0, n = 0;
+  double T[4] = {}, F[3] = {}, residual = 0.0;
+  Frame tip;
+};
+
+std::vector<RefRow> load_reference() {
+  std::ifstream in(std::string(TDCR_TEST_DATA_DIR) + "/reference_ccsub_prb.csv");
+  std::vector<RefRow> rows;
+  std::string line;
+  std::getline(in, line);  // provenance comment
+  std::getline(in, line);  // header
+  while (std::getline(in, line)) {
+    std::stringstream ss(line);
+    std::vector<std::string> c;
+    std::string cell;
+    while (std::getline(ss, cell, ',')) c.push_back(cell);
+    if (c.size() < 24) continue;
+    RefRow r;
+    r.source = c[0];
+    r.id = std::stoi(c[1]);
+    r.model = c[2];
+    r.n = std::stoi(c[3]);
+    for (int k = 0; k < 4; ++k) r.T[k] = std::stod(c[4 + k]);
+    for (int k = 0; k < 3; ++k) r.F[k] = std::stod(c[8 + k]);
+    r.residual = std::stod(c[11]);
+    r.tip.p = Vec3(std::stod(c[12]), std::stod(c[13]), std::stod(c[14]));
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) r.tip.R(i, j) = std::stod(c[15 + 3 * i + j]);
+    rows.push_back(r);
+  }
+  return rows;
+}
+
+Scene paper_scene(int n, const std::vector<double>& T, const Vec3& F = Vec3::Zero()) {
+  Scene s = paper::scene(n, 1, "prb");
+  s.actuation.values = T;
+  s.loads.tip_force = F;
+  return s;
+}
+
+Solution solve_prb(const Scene& s, const Solution* warm = nullptr) {
+  PrbModel model(s);
+  auto ws = model.make_workspace();
+  return model.solve(*ws, warm);
+}
+
+}  // namespace
+
+// 1. No tension, no load: the straight robot.
+TEST(PrbModel, ZeroTensionIsStraight) {
+  const Solution sol = solve_prb(paper_scene(3, {0, 0, 0, 0}));
+  ASSERT_TRUE(sol.converged()) << sol.summary.message;
+  ASSERT_EQ(sol.disk_frames.size(), 7u);
+  for (std::size_t j = 0; j < sol.disk_frames.size(); ++j) {
+    EXPECT_NEAR((sol.disk_frames[j].p - Vec3(0, 0, 0.05 * j / 3.0)).norm(), 0.0, 1e-15);
+    EXPECT_NEAR((sol.disk_frames[j].R - Mat3::Identity()).norm(), 0.0, 1e-15);
+  }
+}
+
+// Antagonistic equal tensions compress the inextensible backbone without bending it (the
+// bending plane is undetermined there: the gauge keeps the solve regular).
+TEST(PrbModel, EqualAntagonisticTensionsStayStraight) {
+  const double TM = paper::max_tension(paper::robot(4));
+  const Solution sol = solve_prb(paper_scene(4, {TM, TM, 0.5 * TM, 0.5 * TM}));
+  ASSERT_TRUE(sol.converged()) << sol.summary.message;
+  EXPECT_NEAR((sol.tip().p - Vec3(0, 0, 0.1)).norm(), 0.0, 1e-12);
+}
+
+// 2. Pure tip moment M: every joint carries M, so theta_q = M l / (K_q EI) and the tip turns by
+// (sum_q 1/K_q) kappa L = 0.99878 kappa L instead of the arc's kappa L (Table 1: 1/3.25 + 1/2.84
+// + 1/2.95). That angle is exact; the position error is the 3R model's (Su 2009): measured
+// 0.076 % of L at 90 deg (4 subsegments), asserted in [0.05 %, 0.1 %].
+TEST(PrbModel, PureTipMomentWithinThreeRAccuracy) {
+  Scene s = paper_scene(4, {0, 0, 0, 0});
+  const double EI = s.robot.backbone.effective_stiffness().EI;
+  const double L = 0.1, theta = M_PI / 2.0, kappa = theta / L;
+  const Vec3 axis = Vec3(1.0, 2.0, 0.0).normalized();
+  s.loads.tip_moment = EI * kappa * axis;
+  const Solution sol = solve_prb(s);
+  ASSERT_TRUE(sol.converged()) << sol.summary.message;
+  const double factor = 1.0 / 3.25 + 1.0 / 2.84 + 1.0 / 2.95;
+  EXPECT_NEAR(lie::rotation_angle(sol.tip().R, Mat3::Identity()), factor * theta, 1e-9);
+  EXPECT_LT(lie::rotation_angle(sol.tip().R, lie::exp_so3(factor * theta * axis)), 1e-9);
+  const Frame arc = lie::exp_se3(kappa * L * axis, Vec3(0, 0, L));
+  const double err = (sol.tip().p - arc.p).norm() / L;
+  std::printf("PRB pure moment 90 deg: tip position error %.4f %% of L\n", 100 * err);
+  EXPECT_LT(err, 1e-3);
+  EXPECT_GT(err, 5e-4);  // the 3R body is not an arc
+}
+
+// 3. Mirror symmetry about the x-z plane.
+TEST(PrbModel, MirrorSymmetry) {
+  const double TM = paper::max_tension(paper::robot(5));
+  const Solution a = solve_prb(paper_scene(5, {TM, 0.2 * TM, 0.5 * TM, 0}, Vec3(0.1, 0.2, 0.05)));
+  const Solution b = solve_prb(paper_scene(5, {0.2 * TM, TM, 0, 0.5 * TM}, Vec3(0.1, -0.2, 0.05)));
+  ASSERT_TRUE(a.converged()) << a.summary.message;
+  ASSERT_TRUE(b.converged()) << b.summary.message;
+  const Mat3 S = Vec3(1, -1, 1).asDiagonal();
+  for (std::size_t j = 0; j < a.disk_frames.size(); ++j) {
+    EXPECT_NEAR((S * a.disk_frames[j].p - b.disk_frames[j].p).norm(), 0.0, 1e-12);
+    EXPECT_NEAR((S * a.disk_frames[j].R * S - b.disk_frames[j].R).norm(), 0.0, 1e-10);
+  }
+  EXPECT_GT(std::abs(a.tip().p.x()), 1e-3);
+}
+
+// 4. The paper's own code (rows with chisq < 1e-12): 0.05 % of 2L and 0.05 deg, twice at n <= 3.
+TEST(PrbModel, MatchesPaperCodeReferenceRows) {
+  const std::vector<RefRow> rows = load_reference();
+  int compared = 0;
+  double worst_p = 0.0, worst_R = 0.0;
+  for (const RefRow& r : rows) {
+    if (r.model != "PRB" || r.residual >= 1e-12) continue;
+    const Solution sol = solve_prb(paper_scene(r.n, {r.T[0], r.T[1], r.T[2], r.T[3]}, Vec3(r.F[0], r.F[1], r.F[2])));
+    ASSERT_TRUE(sol.converged()) << r.source << " " << r.id << " n=" << r.n << ": " << sol.summary.message;
+    const TipError e = tip_error(sol.tip(), r.tip);
+    const double f = r.n <= 3 ? 2.0 : 1.0;
+    EXPECT_LT(e.position, f * 5e-5) << r.source << " " << r.id << " n=" << r.n;
+    EXPECT_LT(e.angle * 180.0 / M_PI, f * 0.05) << r.source << " " << r.id << " n=" << r.n;
+    worst_p = std::max(worst_p, e.position);
+    worst_R = std::max(worst_R, e.angle);
+    ++compared;
+  }
+  EXPECT_GE(compared, 130);
+  std::printf("PRB vs paper code: %d rows, max tip error %.3g m, %.3g deg\n", compared, worst_p, worst_R * 180.0 / M_PI);
+}
+
+// 5. Case-study accuracy at n = 1 against the converged VCref of the paper's code (straight guess
+// where it converged, else its 10-step ramp), paper Eq. 57 over the 16 configurations.
+// The paper's text says "at most 0.47 % and 0.43 deg"; the model as the paper defines (and codes)
+// it gives 1.242 % and 1.047 deg (the paper's code: 1.24223 %, 1.04657 deg, reference/
+// paper_code_fig10.csv), dominated by configurations 8 and 12 (bent ~143 deg: 5.5 %, 4.8 deg).
+// Our solve matches the paper code's PRB rows to 2e-5 m, so the published 0.47 % does not follow
+// from the model against a converged VCref; the value asserted is the model's.
+TEST(PrbModel, CaseStudyAccuracyAgainstVcrefAtOneDisk) {
+  const std::vector<RefRow> rows = load_reference();
+  std::vector<Frame> tips, refs;
+  for (const RefRow& r : rows) {
+    if (r.model != "VCref" || r.n != 1) continue;
+    const Solution sol = solve_prb(paper_scene(1, {r.T[0], r.T[1], r.T[2], r.T[3]}));
+    ASSERT_TRUE(sol.converged()) << sol.summary.message;
+    tips.push_back(sol.tip());
+    refs.push_back(r.tip);
+  }
+  ASSERT_EQ(tips.size(), 16u);
+  const MeanTipError e = mean_tip_error(tips, refs, 0.1);
+  std::printf("PRB vs VCref n=1: e_p %.4f %% (max %.3f), e_R %.4f deg (max %.3f)\n", e.e_p_percent, e.max_p_percent,
+              e.e_R_deg, e.max_R_deg);
+  EXPECT_NEAR(e.e_p_percent, 1.2422, 0.005);
+  EXPECT_NEAR(e.e_R_deg, 1.0465, 0.005);
+  EXPECT_NEAR(e.max_p_percent, 5.50, 0.01);
+}
+
+// 7. Global equilibrium with gravity, tip force and moment, 3 segments x 4 tendons at arbitrary
+// angles. The moments of all loads about the base and about the first joint are summed here
+// directly (tendon forces, disk weights, link weights at link midpoints, tip wrench) and must
+// satisfy the first subsegment's equations: Eq. 48 at joint 1, Eq. 52 (in-plane moment along the
+// joint axis) and Eq. 54 (twist).
+TEST(PrbModel, GlobalEquilibriumWithGravityAndTipForce) {
+  Scene s;
+  s.model = "prb";
+  s.robot.backbone.density = 6450.0;
+  const double angles[3][4] = {{0.1, 1.7, 3.3, 4.6}, {0.5, 2.2, 3.9, 5.5}, {1.0, 2.6, 4.0, 6.0}};
+  for (int i = 0; i < 3; ++i) {
+    Segment seg;
+    seg.length = 0.04 + 0.01 * i;
+    seg.disks = 4 + i;
+    seg.disk_mass = 2e-4;
+    for (double a : angles[i]) seg.tendons.push_back(TendonSpec{0.007 * std::cos(a), 0.007 * std::sin(a)});
+    s.robot.segments.push_back(seg);
+  }
+  s.actuation.values = {2.0, 0.0, 0.5, 0.0, 0.0, 1.0, 0.3, 0.0, 0.0, 0.0, 0.8, 0.2};
+  s.loads.tip_force = Vec3(0.05, -0.1, 0.02);
+  s.loads.tip_moment = Vec3(0.0, 0.002, 0.001);
+  s.loads.gravity = Vec3(0.0, -9.81, 0.0);
+  PrbModel model(s);
+  auto ws = model.make_workspace();
+  const Solution sol = model.solve(*ws);
+  ASSERT_TRUE(sol.converged()) << sol.summary.message;
+  const std::vector<Vec3> pts = model.joint_points(sol.unknowns);
+  const TendonRouting routing = TendonRouting::from(s.robot);
+  const int N = routing.disk_count() - 1;
+  const double gamma[4] = {0.125 / 0.999, 0.35 / 0.999, 0.388 / 0.999, 0.136 / 0.999};
+  const double rhoA = s.robot.backbone.linear_mass();
+
+  Vec3 F = s.loads.tip_force, Mb = s.loads.tip_moment + sol.tip().p.cross(s.loads.tip_force);
+  for (int j = 1; j <= N; ++j) {
+    const tendon::DiskWrench w = tendon::disk_wrench(j, sol.disk_frames.data(), routing, s.actuation.values.data(), true);
+    const Vec3 dw = s.robot.segments[routing.disk_segment[j]].disk_mass * s.loads.gravity;
+    F += w.force + dw;
+    Mb += w.moment + sol.disk_frames[j].p.cross(w.force + dw);
+    const double l = routing.disk_s[j] - routing.disk_s[j - 1];
+    const Vec3 chain[5] = {sol.disk_frames[j - 1].p, pts[4 * (j - 1)], pts[4 * (j - 1) + 1], pts[4 * (j - 1) + 2],
+                           pts[4 * (j - 1) + 3]};
+    for (int i = 0; i < 4; ++i) {
+      const Vec3 W = rhoA * gamma[i] * l * s.loads.gravity;
+      const Vec3 mid = 0.5 * (chain[i] + chain[i + 1]);
+      F += W;
+      Mb += mid.cross(W);
+    }
+  }
+  const BackboneStiffness k = s.robot.backbone.effective_stiffness();
+  const double l1 = routing.disk_s[1];
+  const double th1 = sol.unknowns[0], phi = sol.unknowns[3], eps = sol.unknowns[4];
+  const Vec3 y(-std::sin(phi), std::cos(phi), 0.0), x(std::cos(phi), std::sin(phi), 0.0);
+  // Moment about joint 1 (P_1 = pts[0]) of everything distal of it: all loads but link 0's
+  // weight (at its midpoint P_1 / 2, the base being the origin).
+  const Vec3 W0 = rhoA * gamma[0] * l1 * s.loads.gravity;
+  const Vec3 M_j1 = (Mb - (0.5 * pts[0]).cross(W0)) - pts[0].cross(F - W0);
+  const double scale = 3.25 * k.EI / l1;
+  EXPECT_NEAR(y.dot(M_j1), scale * th1, 1e-9 * Mb.norm());
+  EXPECT_NEAR(x.dot(Mb), 0.0, 1e-9 * Mb.norm());
+  EXPECT_NEAR(sol.disk_frames[1].R.col(2).dot(Mb), k.GJ * eps / l1, 1e-9 * Mb.norm());
+  EXPECT_GT(std::abs(th1), 1e-3);
+  EXPECT_GT(std::abs(eps), 1e-6);
+}
+
+// A solve that cannot converge reports failure with residual and iterations.
+TEST(PrbModel, NonConvergentSolveReportsFailure) {
+  const double TM = paper::max_tension(paper::robot(10));
+  Scene s = paper_scene(10, {6 * TM, 0, 6 * TM, 0}, Vec3(0, 2.0, 0));
+  s.solver.max_iterations = 2;
+  const Solution sol = solve_prb(s);
+  EXPECT_FALSE(sol.converged());
+  EXPECT_EQ(sol.summary.termination, TerminationType::MaxIterations) << sol.summary.message;
+  EXPECT_GT(sol.summary.residual_norm, s.solver.function_tolerance);
+  EXPECT_GT(sol.summary.iterations, 0);
+}
+
+// Warm start from a previous solution; the straight guess puts the joint angles on the positive
+// branch (the paper's one-sided Eq. 52), the plane along the moment.
+TEST(PrbModel, WarmStartAndBranch) {
+  const double TM = paper::max_tension(paper::robot(10));
+  const Scene s = paper_scene(10, {TM, 0, 0.5 * TM, 0});
+  PrbModel model(s);
+  auto ws = model.make_workspace();
+  const Solution cold = model.solve(*ws);
+  ASSERT_TRUE(cold.converged()) << cold.summary.message;
+  for (int j = 0; j < 20; ++j)
+    for (int q = 0; q < 3; ++q) EXPECT_GT(cold.unknowns[5 * j + q], 0.0) << j << " " << q;
+  const Solution warm = model.solve(*ws, &cold);
+  ASSERT_TRUE(warm.converged());
+  EXPECT_LE(warm.summary.iterations, 1);
+  // Both satisfy the tolerance 1e-10 on angle-sized residuals: tips agree to ~N * 1e-10 * L.
+  EXPECT_LT((warm.tip().p - cold.tip().p).norm(), 1e-9);
+}
