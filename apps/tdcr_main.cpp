@@ -190,7 +190,7 @@ void print_human(const Timed& t, int repeat) {
     std::printf("tip position (mm):                   [%.6g, %.6g, %.6g]\n", p[0], p[1], p[2]);
     std::printf("tip angle from base z axis (deg):    %.6g\n", std::acos(c) * 180.0 / M_PI);
   }
-  std::printf("solve time (us):                     median %.4g, min %.4g over %d run%s\n", t.median_us,
+  std::printf("solve time (us):                     median %.1f, min %.1f over %d run%s\n", t.median_us,
               t.min_us, repeat, repeat == 1 ? "" : "s");
 }
 
