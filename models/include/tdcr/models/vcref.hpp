@@ -103,6 +103,8 @@ class VcrefModel final : public StaticModel {
 
   /// @brief Number of unknowns (and residuals): 6 + 12 (N - 1), N = total disks.
   int unknowns() const;
+  /// @brief Structural nonzeros of the block-tridiagonal Jacobian (grows linearly with N).
+  int jacobian_nonzeros() const;
 
   /// @brief Diagnostics: the assembled sparse Jacobian against central differences of the
   /// residual (bvp::check_jacobian), at the initial guess of `at` (a previous Solution, as for a
