@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <limits>
 #include <vector>
 
 #include <Eigen/Cholesky>
@@ -214,7 +213,7 @@ struct VcWorkspace::Impl {
 VcWorkspace::~VcWorkspace() = default;
 
 long VcWorkspace::rhs_evaluations() const {
-  if (!impl) return 0;
+  if (!impl || !impl->shot_integrator) return 0;
   long n = impl->shot_integrator->rhs_evaluations();
   if (impl->final_integrator.get() != nullptr) n += impl->final_integrator->rhs_evaluations();
   return n;
@@ -403,7 +402,6 @@ VcModel::VcModel(const Scene& scene, VcOptions options) : scene_(scene), options
   const int nseg = static_cast<int>(robot.segments.size());
   M.full.segments.resize(nseg);
   double sum_T = 0.0, r_max = 0.0;
-  Vec3 tendon_moment = Vec3::Zero();
   for (const RoutedTendon& t : M.routing.tendons) {
     const double T = M.tensions[t.index];
     TendonTerm term{t.r, lie::hat(t.r), T};
@@ -415,7 +413,6 @@ VcModel::VcModel(const Scene& scene, VcOptions options) : scene_(scene), options
       M.full.segments[t.segment].terminating.push_back(term);
       sum_T += T;
       r_max = std::max(r_max, t.r.norm());
-      tendon_moment += T * Vec3::UnitZ().cross(t.r);
     }
   }
   M.full.disk_weight.assign(M.routing.disk_count(), Vec3::Zero());
@@ -437,7 +434,6 @@ VcModel::VcModel(const Scene& scene, VcOptions options) : scene_(scene), options
   const double ext = M.full.tip_force.norm() + M.weight_total.norm();
   M.force_scale = sum_T + ext + 1e-3;
   M.moment_scale = sum_T * r_max + ext * M.length + M.full.tip_moment.norm() + 1e-3 * M.length;
-  (void)tendon_moment;
   impl_ = std::move(impl);
 }
 
@@ -509,7 +505,6 @@ Solution VcModel::solve(ModelWorkspace& workspace, const Solution* warm_start) c
   // coiled shapes (where RK4 fails or a wrong equilibrium waits), so bound them.
   nopt.max_newton_step = kMaxNewtonStep;
   set_lambda(M, W, 1.0);
-  const Eigen::VectorXd x0 = x;
   bvp::NewtonResult res = W.newton.solve(system, x, nopt);
   detail::copy_newton_result(res, sum);
   if (!res.converged() && !warm && nopt.max_iterations > sum.iterations) {
@@ -576,7 +571,6 @@ Solution VcModel::solve(ModelWorkspace& workspace, const Solution* warm_start) c
       sum.message += "; continuation stopped at load factor " + format_value(lambda);
     }
   }
-  (void)x0;
 
   // Final pass at the returned unknowns: frames, samples, tendon lengths.
   const Vec6 xs = x;
