@@ -39,7 +39,19 @@
 /// M_s = sum T max|r_k| + (|F_tip| + |W|) L + |M_tip| + 1e-3 N * L, so every scaled residual is
 /// O(1). KINSOL (dense, line search) solves it with a forward-difference Jacobian (6 extra shots;
 /// relative step sqrt(eps) with RK4, sqrt(cvode_rtol) with CVODE whose output is only piecewise
-/// smooth in the unknowns).
+/// smooth in the unknowns). By global equilibrium the solution lies within a scaled distance of
+/// about sqrt(6) of the origin, so Newton steps are bounded to scaled length 1 (KINSOL
+/// mxnewtstep): longer steps overshoot into coiled shapes. A failed cold start is retried once
+/// from the other initial guess (VcInitialGuess), then, with `solver.continuation`, by a load
+/// ramp.
+///
+/// **Kinks (VcOptions::kink_forces, default on; an addition to the paper's formulation).** Where
+/// point loads make n or m jump (tendon terminations, disk weights), u and v jump, and every
+/// tensioned tendon continuing past that disk changes direction: it pulls on the backbone with
+/// T_k R (t_k+ - t_k-) at p + R r_k (the integral of f_k over the jump). This point load is
+/// applied (fixed-point iteration, as t_k+ depends on the wrench after the jump). Without it the
+/// robot's global force and moment balance fails whenever torsion or shear jumps at a segment
+/// end; it changes nothing for tendon-only loads (t_k = e_z on both sides).
 ///
 /// **Integration.** Segment by segment and disk interval by disk interval (the rod stops at every
 /// disk to record its frame and apply disk weights), with RK4 (`solver.rk4_steps` steps per disk
