@@ -128,6 +128,9 @@ TEST(PrbModel, MirrorSymmetry) {
 }
 
 // 4. The paper's own code (rows with chisq < 1e-12): 0.05 % of 2L and 0.05 deg, twice at n <= 3.
+// The largest differences (~1e-5 m) are the paper code's: its one-sided plane residual
+// n . M* - |M*| ~ |M*| dphi^2 / 2 leaves phi wrong by ~1e-4 rad at chisq 1e-19 (e.g. its n = 1,
+// T1-only tip has x = 6.7e-6 m out of the bending plane; tdcr's is 0 to rounding).
 TEST(PrbModel, MatchesPaperCodeReferenceRows) {
   const std::vector<RefRow> rows = load_reference();
   int compared = 0;
