@@ -111,7 +111,7 @@ int main(int argc, char** argv) {
   const int steps_b = 2;
   std::printf("\n(b) cost against disks per segment, configuration 2, rk4 %d steps per interval\n", steps_b);
   std::printf("%6s %9s %7s %10s %10s %6s %10s %12s\n", "n", "unknowns", "nnz", "median_ms", "min_ms", "iters",
-              "rss_mb", "tip_vs_VCref_n1000?");
+              "rss_mb", "tip_y_m");
   std::vector<double> logn, logt;
   for (int n : ns) {
     Scene s = paper::scene(n, 2);
@@ -119,7 +119,7 @@ int main(int argc, char** argv) {
     VcrefModel model(s);
     const int r = quick ? 2 : (n <= 30 ? 21 : n <= 100 ? 11 : n <= 300 ? 5 : 3);
     const Timing t = time_solves(s, r);
-    std::printf("%6d %9d %7d %10.2f %10.2f %6d %10.1f   tip y %.6f%s\n", n, model.unknowns(), model.jacobian_nonzeros(),
+    std::printf("%6d %9d %7d %10.2f %10.2f %6d %10.1f %12.6f%s\n", n, model.unknowns(), model.jacobian_nonzeros(),
                 t.median_ms, t.min_ms, t.sol.summary.iterations, peak_rss_mb(), t.sol.tip().p.y(),
                 t.sol.converged() ? "" : "  FAILED");
     char line[512];
