@@ -46,7 +46,7 @@ std::string text_of(const json& j) {
     if (!std::isfinite(v)) return format_value(v);
   }
   constexpr std::size_t kMaxLength = 120;
-  std::string text = j.dump();
+  std::string text = j.dump(-1, ' ', false, json::error_handler_t::replace);
   if (text.size() > kMaxLength) text = text.substr(0, kMaxLength - 3) + "...";
   return text;
 }
