@@ -51,6 +51,14 @@ CcModel::CcModel(const Scene& scene) : scene_(scene) {
                        "the CC model needs at least 2 tendons per segment for displacement input");
   }
   routing_ = TendonRouting::from(scene_.robot);
+  if (scene_.actuation.kind == Actuation::Kind::Displacements) {
+    for (const Segment& seg : scene_.robot.segments) {
+      Eigen::MatrixXd A(seg.tendons.size(), 2);
+      for (std::size_t i = 0; i < seg.tendons.size(); ++i)
+        A.row(i) << seg.length * seg.tendons[i].x, seg.length * seg.tendons[i].y;
+      displacement_to_curvature_.push_back(A.completeOrthogonalDecomposition().pseudoInverse());
+    }
+  }
 }
 
 std::unique_ptr<ModelWorkspace> CcModel::make_workspace() const { return std::make_unique<CcWorkspace>(); }
@@ -84,7 +92,6 @@ std::vector<CcArc> CcModel::arcs(double* misfit) const {
   for (int s = 0; s < nseg; ++s) {
     const Segment& seg = robot.segments[s];
     const int m = static_cast<int>(seg.tendons.size());
-    Eigen::MatrixXd A(m, 2);
     Eigen::VectorXd b(m);
     std::vector<Vec3> r(m);
     for (int i = 0, k = 0; k < static_cast<int>(routing_.tendons.size()); ++k) {
@@ -95,13 +102,11 @@ std::vector<CcArc> CcModel::arcs(double* misfit) const {
         for (int q = 0; q < s; ++q)
           d -= segment_shortening(t.r, robot.segments[q].length, kappa[q], path, robot.segments[q].disks);
       r[i] = t.r;
-      A(i, 0) = seg.length * t.r.x();
-      A(i, 1) = seg.length * t.r.y();
       b(i) = d;
       ++i;
     }
     // Fully constrained: linear least squares, minimum norm when the tendons are collinear.
-    Eigen::Vector2d k = A.completeOrthogonalDecomposition().solve(b);
+    Eigen::Vector2d k = displacement_to_curvature_[s] * b;
     if (path == TendonPath::PartiallyConstrained) {
       // Gauss-Newton from the fully constrained answer, on r_i(k) = shortening_i(k) - b_i, with
       // a forward-difference Jacobian (2 unknowns).
@@ -143,15 +148,17 @@ Solution CcModel::solve(ModelWorkspace&, const Solution*) const {
 
   sol.disk_frames.reserve(routing_.disk_count());
   sol.disk_frames.push_back(Frame{});
-  Frame base;  // frame at the start of the current segment
+  // Disks are equally spaced along a segment, so one SE(3) step per segment, composed n times,
+  // gives every disk frame (the last one lands at the segment end to rounding).
+  Frame current;
   for (std::size_t s = 0; s < robot.segments.size(); ++s) {
     const Segment& seg = robot.segments[s];
-    const double s0 = routing_.segment_start_s[s];
-    for (int j = routing_.segment_end_disk[s] - seg.disks + 1; j <= routing_.segment_end_disk[s]; ++j) {
-      const double ds = routing_.disk_s[j] - s0;
-      sol.disk_frames.push_back(base * lie::exp_se3(a[s].u * ds, a[s].v * ds));
+    const double ds = seg.length / seg.disks;
+    const Frame step = lie::exp_se3(a[s].u * ds, a[s].v * ds);
+    for (int j = 0; j < seg.disks; ++j) {
+      current = current * step;
+      sol.disk_frames.push_back(current);
     }
-    base = sol.disk_frames.back();
   }
 
   // Tendon displacements of the solved shape (what the base actuators see).
@@ -181,8 +188,8 @@ Solution CcModel::solve(ModelWorkspace&, const Solution*) const {
 
   SolverSummary& sum = sol.summary;
   sum.termination = TerminationType::Converged;
-  sum.message = misfit > 0.0 ? "closed form; least-squares displacement misfit " + format_value(misfit) + " m"
-                             : "closed form";
+  // The least-squares misfit of over-determined displacements (m) is the physical residual.
+  sum.message = "closed form";
   sum.physical_residual = misfit;
   sum.residual_norm = 0.0;
   sum.unknowns = static_cast<int>(unknowns.size());

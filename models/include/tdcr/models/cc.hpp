@@ -24,6 +24,8 @@
 #include <memory>
 #include <vector>
 
+#include <Eigen/Core>
+
 #include "tdcr/models/static_model.hpp"
 
 namespace tdcr {
@@ -54,6 +56,9 @@ class CcModel final : public StaticModel {
  private:
   Scene scene_;
   TendonRouting routing_;
+  /// Per segment: the least-squares (minimum-norm) map from the segment's own displacements to
+  /// its curvature vector, factorised once here so that solve() does no decomposition.
+  std::vector<Eigen::Matrix<double, 2, Eigen::Dynamic>> displacement_to_curvature_;
 };
 
 }  // namespace tdcr
