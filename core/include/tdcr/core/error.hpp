@@ -15,6 +15,13 @@ namespace tdcr {
 /// "<field>: <reason> (got <value>)".
 class InputError : public std::runtime_error {
  public:
+  /// @brief An error about `field` holding `value`.
+  /// @param field Path of the offending field (JSON-style, e.g. `robot.segments[1].length`; a
+  ///   file name for unreadable or malformed files; a command-line option such as
+  ///   `--integrator`).
+  /// @param value The offending value as text; empty when the field is missing or the value
+  ///   does not apply (then "(got ...)" is left out of the message).
+  /// @param reason What is wrong, e.g. "must be positive".
   InputError(std::string field, std::string value, const std::string& reason)
       : std::runtime_error(field + ": " + reason + (value.empty() ? "" : " (got " + value + ")")),
         field_(std::move(field)),

@@ -33,8 +33,9 @@ Mat3 exp_so3(const Vec3& w);
 /// R must be a rotation (use nearest_rotation first if it may have drifted).
 Vec3 log_so3(const Mat3& R);
 
-/// @brief Left Jacobian of SO(3) (maps a rotation vector rate to the body-fixed... see docs);
-/// used by the SE(3) exponential. V(w) = I + (1-cos t)/t^2 [w] + (t - sin t)/t^3 [w]^2.
+/// @brief Left Jacobian V(w) of SO(3), t = |w|:
+/// V(w) = I + (1 - cos t)/t^2 [w]x + (t - sin t)/t^3 [w]x^2 (series expansions near t = 0).
+/// It is the translation part of the SE(3) exponential: exp_se3(u, v).p == V(u) v.
 Mat3 left_jacobian_so3(const Vec3& w);
 
 /// @brief Exponential map of SE(3) for a constant twist over unit length: the frame reached

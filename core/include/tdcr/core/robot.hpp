@@ -48,8 +48,8 @@ struct Backbone {
 
 /// @brief A tendon: its position (x, y) in the disk frame (m). The z component is 0.
 struct TendonSpec {
-  double x = 0.0;
-  double y = 0.0;
+  double x = 0.0;  ///< x coordinate of the tendon hole in the disk frame (m).
+  double y = 0.0;  ///< y coordinate of the tendon hole in the disk frame (m).
 };
 
 /// @brief One segment: a length of backbone with equally spaced spacer disks; the tendons
@@ -63,12 +63,15 @@ struct Segment {
 
 /// @brief The robot: a backbone and its segments, base to tip.
 struct Robot {
-  Backbone backbone;
-  std::vector<Segment> segments;
+  Backbone backbone;              ///< Material and cross section, the same along the robot.
+  std::vector<Segment> segments;  ///< Segments from the base (index 0) to the tip.
 
   /// @brief Throws InputError naming the field (e.g. `robot.segments[0].length`) if any value is
-  /// unusable: non-finite, non-positive length or radius or modulus, zero disks, a tendon on the
-  /// backbone axis, a segment without tendons is allowed (passive segment).
+  /// unusable: a non-finite number; a non-positive Young's modulus, outer radius, shear modulus,
+  /// direct stiffness or segment length; an inner radius outside [0, outer radius); a Poisson
+  /// ratio outside (-1, 0.5); a negative density, mass per length or disk mass; no segment; a
+  /// segment with fewer than 1 disk; a tendon within 1e-9 m of the backbone axis. A segment
+  /// without tendons is allowed (a passive segment).
   void validate() const;
 
   double total_length() const;  ///< Sum of segment lengths (m).
