@@ -14,6 +14,7 @@ namespace tdcr {
 
 /// @brief How the tendons are actuated.
 struct Actuation {
+  /// @brief What Actuation::values hold.
   enum class Kind {
     Tensions,      ///< Tendon tensions (N), >= 0, pulling each tendon's end towards the base.
     Displacements  ///< Tendon displacements (m) at the base, positive when the tendon is pulled.
@@ -24,8 +25,10 @@ struct Actuation {
                  ///< contributes (Jones & Walker 2006). Default.
     PerSegment   ///< Only the tendon's own segment (the paper's code convention).
   };
-  Kind kind = Kind::Tensions;
+  Kind kind = Kind::Tensions;  ///< Tensions (every model) or displacements (CC only).
   std::vector<double> values;  ///< One value per tendon, in global tendon order.
+  /// How displacements are referenced: for displacement input (CC) and for the
+  /// Solution::tendon_displacements that every model reports.
   DisplacementConvention convention = DisplacementConvention::AtBase;
 };
 
@@ -61,8 +64,9 @@ struct PrbParameters {
 
 /// @brief What the scene asks to simulate. Defaults are the paper's code.
 struct Effects {
-  bool shear_extension = true;  ///< Cosserat rod with shear and extension (VC, VCref); else
-                                ///< inextensible, unshearable Kirchhoff rod.
+  bool shear_extension = true;  ///< Cosserat rod with shear and extension (VC, VCref; CC with
+                                ///< tension input: axial strain); else inextensible,
+                                ///< unshearable Kirchhoff rod. CCsub and PRB are inextensible.
   DiskNormalForce disk_normal_force = DiskNormalForce::Removed;  ///< Eq. 58 (VCref, CCsub, PRB).
   TendonPath tendon_path = TendonPath::FullyConstrained;         ///< CC only.
   PrbParameters prb;                                             ///< PRB only.
@@ -75,22 +79,23 @@ struct SceneEffects {
   bool gravity = false;          ///< Nonzero gravity and nonzero backbone or disk mass.
   bool backbone_weight = false;  ///< Gravity and nonzero backbone mass per length.
   bool disk_weight = false;      ///< Gravity and nonzero disk mass.
-  bool shear_extension = true;
-  bool disk_normal_force_removed = true;
+  bool shear_extension = true;            ///< Effects::shear_extension (CC, VC, VCref).
+  bool disk_normal_force_removed = true;  ///< Effects::disk_normal_force is Removed (Eq. 58).
 };
 
 /// @brief A complete problem: robot, actuation, loads, effects, model and solver settings.
 struct Scene {
-  Robot robot;
-  Actuation actuation;
-  Loads loads;
-  Effects effects;
+  Robot robot;          ///< The robot (scene-file key `robot`).
+  Actuation actuation;  ///< Tendon tensions or displacements (`actuation`).
+  Loads loads;          ///< Tip wrench and gravity (`loads`); none by default.
+  Effects effects;      ///< Physical effects to simulate (`effects`).
   std::string model = "vc";  ///< "cc", "ccsub", "prb", "vc", "vcref" (or "auto").
-  SolverOptions solver;
+  SolverOptions solver;  ///< Numerical settings (`solver`).
 
   /// @brief Throws InputError naming the field and value for any unusable entry: the robot's
-  /// (Robot::validate), NaN or negative tensions, an actuation list of the wrong length,
-  /// non-finite loads, an invalid solver option.
+  /// (Robot::validate), an actuation list of the wrong length, non-finite actuation values,
+  /// negative tensions, non-finite loads, PRB parameters that are not positive, an unknown
+  /// model name, an invalid solver option (SolverOptions::validate).
   void validate() const;
   /// @brief The effects this scene enables (see SceneEffects).
   SceneEffects active_effects() const;
