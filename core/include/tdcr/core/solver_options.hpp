@@ -15,7 +15,8 @@ enum class IntegratorKind {
 
 /// @brief Linear solver used inside KINSOL's Newton iteration.
 enum class LinearSolverKind {
-  Automatic,  ///< Dense below TDCR_DENSE_SIZE_LIMIT unknowns, KLU sparse above (see docs).
+  Automatic,  ///< Dense LU up to bvp::NewtonOptions::dense_size_limit (200) unknowns; KLU
+              ///< above if the system declares a sparsity pattern (VCref), dense otherwise.
   Dense,      ///< SUNDIALS dense LU.
   SparseKLU   ///< SUNDIALS KLU on a compressed-sparse-column Jacobian.
 };
@@ -27,19 +28,22 @@ struct SolverOptions {
   /// KINSOL scaled step tolerance.
   double step_tolerance = 1e-14;
   int max_iterations = 200;  ///< Newton iterations per solve.
+  /// Integrator of the Cosserat-rod ODEs (VC, VCref; the other models integrate nothing).
   IntegratorKind integrator = IntegratorKind::FixedStepRK4;
   /// RK4 steps per disk interval (one subsegment, length L_i / n_i), for VC and VCref alike.
   int rk4_steps = 8;
   double cvode_rtol = 1e-8;   ///< CVODE relative tolerance.
   double cvode_atol = 1e-10;  ///< CVODE absolute tolerance.
+  /// Linear solver inside Newton (VC, VCref; CCsub and PRB always use dense LU, CC solves no
+  /// system). SparseKLU on a system without a sparsity pattern (VC) factorises a dense pattern.
   LinearSolverKind linear_solver = LinearSolverKind::Automatic;
   /// If a direct solve fails, ramp the actuation and loads in adaptive steps (each warm-started
   /// from the last). Off by default so that failures are visible; the CLI turns it on.
   bool continuation = false;
   int max_continuation_steps = 64;  ///< Bound on continuation work.
 
-  /// @brief Throws InputError (field `solver.<name>`) on a non-positive tolerance, iteration or
-  /// step count.
+  /// @brief Throws InputError (field `solver.<name>`) on a tolerance that is not a positive
+  /// finite number, or an iteration, RK4 step or continuation step count below 1.
   void validate() const;
 };
 
