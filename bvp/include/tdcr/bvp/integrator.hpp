@@ -31,6 +31,9 @@ class Integrator {
  public:
   virtual ~Integrator();
   /// @brief Integrate y from s0 to s1 (s1 < s0 integrates backwards).
+  /// @param system The ODE; its dimension() is the length of y.
+  /// @param s0 Initial value of the independent variable (arc length, m, in tdcr).
+  /// @param s1 Final value of the independent variable.
   /// @param y In: state at s0, out: state at s1 (length system.dimension()).
   /// @return false on failure (non-finite state, too much work, step too small). y is then
   /// unspecified.
@@ -86,7 +89,11 @@ class CvodeIntegrator : public Integrator {
   /// @param max_steps Internal step limit per integrate() call.
   explicit CvodeIntegrator(double rtol = 1e-8, double atol = 1e-10, long max_steps = 100000);
   ~CvodeIntegrator() override;
+  /// @brief Takes over the CVODE memory, tolerances and counters of another integrator. The
+  /// moved-from integrator may only be destroyed or assigned to.
   CvodeIntegrator(CvodeIntegrator&&) noexcept;
+  /// @brief Takes over another integrator's CVODE memory (this one's is freed). The moved-from
+  /// integrator may only be destroyed or assigned to.
   CvodeIntegrator& operator=(CvodeIntegrator&&) noexcept;
   CvodeIntegrator(const CvodeIntegrator&) = delete;
   CvodeIntegrator& operator=(const CvodeIntegrator&) = delete;

@@ -74,14 +74,21 @@ struct NewtonResult {
 /// Not thread-safe: use one NewtonSolver per thread. Movable, not copyable.
 class NewtonSolver {
  public:
+  /// @brief Creates the SUNDIALS context (throws std::runtime_error if that fails); vectors,
+  /// matrix, linear solver and KINSOL memory are built by the first solve().
   NewtonSolver();
   ~NewtonSolver();
+  /// @brief Takes over another solver's SUNDIALS objects. The moved-from solver may only be
+  /// destroyed or assigned to.
   NewtonSolver(NewtonSolver&&) noexcept;
+  /// @brief Takes over another solver's SUNDIALS objects (this one's are freed). The moved-from
+  /// solver may only be destroyed or assigned to.
   NewtonSolver& operator=(NewtonSolver&&) noexcept;
   NewtonSolver(const NewtonSolver&) = delete;
   NewtonSolver& operator=(const NewtonSolver&) = delete;
 
   /// @brief Solve system(x) = 0.
+  /// @param system The residual system (its sparsity(), scales and Jacobian are used if given).
   /// @param x In: initial guess (size system.size()). Out: the last iterate, whatever the
   /// outcome (check the result before using it).
   /// @param options Validated here (throws InputError on bad values).

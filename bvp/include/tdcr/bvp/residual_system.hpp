@@ -92,6 +92,8 @@ class ResidualSystem {
 
   /// @brief Analytic dense Jacobian dF/dx at x, where f = F(x) is supplied for reuse. Override
   /// this when sparsity() returns nullptr.
+  /// @param x Unknowns (length size()).
+  /// @param f F(x), already evaluated (length size()).
   /// @param J Preallocated size() x size() matrix (column-major), to be overwritten.
   /// @return false if it cannot be evaluated (recoverable, like residual()).
   virtual bool jacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
@@ -164,6 +166,8 @@ double finite_difference_step(double x, double uscale,
 ///
 /// Costs size() residual evaluations. Use finite_difference_sparse_jacobian when a sparsity
 /// pattern is known.
+/// @param system The system; its residual() is evaluated at the perturbed points.
+/// @param x Unknowns at which to differentiate (length system.size()).
 /// @param f F(x), already evaluated.
 /// @param J Output, size() x size().
 /// @param workspace Optional reusable scratch memory (allocated locally if null).
@@ -175,6 +179,9 @@ bool finite_difference_jacobian(ResidualSystem& system, const Eigen::Ref<const E
 
 /// @brief Forward-difference sparse Jacobian using column groups: every column of a group is
 /// perturbed at once, so the cost is column_groups() residual evaluations, not size().
+/// @param system The system; its residual() is evaluated at the perturbed points.
+/// @param x Unknowns at which to differentiate (length system.size()).
+/// @param f F(x), already evaluated.
 /// @param pattern Jacobian structure (rows = cols = size()).
 /// @param values Output, pattern.nnz() values in CSC order.
 /// @param workspace Optional scratch memory; if given it must have been prepare()d with this
