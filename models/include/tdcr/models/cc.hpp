@@ -43,6 +43,10 @@ struct CcArc {
 /// segment.
 class CcModel final : public StaticModel {
  public:
+  /// @brief Validates the scene and, for displacement input, factorises each segment's
+  /// displacement-to-curvature map once. Throws InputError if the scene is invalid, has a tip
+  /// force or moment or effective gravity (CC has no statics of external loads), or, for
+  /// displacement input, has a segment with fewer than 2 tendons.
   explicit CcModel(const Scene& scene);
   ModelKind kind() const override { return ModelKind::CC; }
   const Scene& scene() const override { return scene_; }

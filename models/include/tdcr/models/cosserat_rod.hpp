@@ -23,15 +23,27 @@ namespace tdcr::cosserat {
 constexpr int kStateSize = 18;                          ///< p, R, n, m.
 using State = Eigen::Matrix<double, kStateSize, 1>;     ///< Fixed-size rod state.
 
-/// @brief Views of the state's parts (no copies).
+/// @name Views of the state's parts
+/// Eigen maps onto the 18 doubles of a state (no copies): writable for `double*`, read-only
+/// for `const double*`.
+/// @{
+/// @brief Backbone position p (m, base frame): y[0..2].
 inline Eigen::Map<Vec3> position(double* y) { return Eigen::Map<Vec3>(y); }
+/// @brief Backbone position p (m, base frame): y[0..2], read-only.
 inline Eigen::Map<const Vec3> position(const double* y) { return Eigen::Map<const Vec3>(y); }
+/// @brief Material frame orientation R (body to base frame): y[3..11], column-major.
 inline Eigen::Map<Mat3> rotation(double* y) { return Eigen::Map<Mat3>(y + 3); }
+/// @brief Material frame orientation R: y[3..11], column-major, read-only.
 inline Eigen::Map<const Mat3> rotation(const double* y) { return Eigen::Map<const Mat3>(y + 3); }
+/// @brief Internal force n (N, base frame; Eq. 34): y[12..14].
 inline Eigen::Map<Vec3> force(double* y) { return Eigen::Map<Vec3>(y + 12); }
+/// @brief Internal force n (N, base frame): y[12..14], read-only.
 inline Eigen::Map<const Vec3> force(const double* y) { return Eigen::Map<const Vec3>(y + 12); }
+/// @brief Internal moment m (N m, base frame; Eq. 35): y[15..17].
 inline Eigen::Map<Vec3> moment(double* y) { return Eigen::Map<Vec3>(y + 15); }
+/// @brief Internal moment m (N m, base frame): y[15..17], read-only.
 inline Eigen::Map<const Vec3> moment(const double* y) { return Eigen::Map<const Vec3>(y + 15); }
+/// @}
 
 /// @brief Pack a frame and an internal wrench into a state.
 State make_state(const Frame& f, const Vec3& n, const Vec3& m);
@@ -63,8 +75,13 @@ struct Section {
 /// rod portion with no tendon). Allocation-free, fixed-size.
 class FreeRod final : public bvp::OdeSystem {
  public:
+  /// @brief A rod of the given cross section (copied).
   explicit FreeRod(const Section& section) : section_(section) {}
+  /// @brief kStateSize (18).
   int dimension() const override { return kStateSize; }
+  /// @brief p' = R v, R' = R [u]x, n' = -f_e, m' = -p' x n (Eq. 2-3, 38-39 without tendon
+  /// loads), strains from Section::curvature and Section::strain; f_e = Section::weight only
+  /// when Section::gravity is set. `s` is unused (the rod is uniform).
   void rhs(double s, const double* y, double* dyds) const override;
 
  private:
