@@ -27,6 +27,7 @@ using State = Eigen::Matrix<double, kStateSize, 1>;     ///< Fixed-size rod stat
 /// Eigen maps onto the 18 doubles of a state (no copies): writable for `double*`, read-only
 /// for `const double*`.
 /// @{
+
 /// @brief Backbone position p (m, base frame): y[0..2].
 inline Eigen::Map<Vec3> position(double* y) { return Eigen::Map<Vec3>(y); }
 /// @brief Backbone position p (m, base frame): y[0..2], read-only.
