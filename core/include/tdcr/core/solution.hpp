@@ -29,7 +29,7 @@ std::string to_string(TerminationType t);
 
 /// @brief Diagnostics of a solve, in the spirit of ceres::Solver::Summary.
 struct SolverSummary {
-  TerminationType termination = TerminationType::NotSolved;
+  TerminationType termination = TerminationType::NotSolved;  ///< Why the solve ended.
   std::string message;           ///< Human-readable reason (KINSOL's flag and text, etc.).
   int solver_flag = 0;           ///< Raw return flag of the nonlinear solver (KINSOL).
   int iterations = 0;            ///< Nonlinear iterations (summed over continuation steps).
@@ -43,6 +43,8 @@ struct SolverSummary {
   std::string integrator;        ///< "rk4", "cvode", or "none".
   double solve_time_s = 0.0;     ///< Wall time of the solve (s).
 
+  /// @brief True only if termination is Converged: the returned shape is an equilibrium within
+  /// the solver tolerance.
   bool converged() const { return termination == TerminationType::Converged; }
   /// @brief One line: "converged: 7 iterations, |F| = 3.1e-13, 1.2 ms (dense, rk4)".
   std::string brief_report() const;
@@ -66,6 +68,7 @@ struct Solution {
   std::vector<BackboneSample> backbone;   ///< Dense backbone samples (VC, VCref), may be empty.
   Eigen::VectorXd unknowns;               ///< The model's solved unknowns (for warm starts).
 
+  /// @brief Shorthand for summary.converged().
   bool converged() const { return summary.converged(); }
   /// @brief Tip frame (last disk frame). Requires a non-empty disk_frames.
   const Frame& tip() const { return disk_frames.back(); }
