@@ -20,6 +20,7 @@
 
 #include "tdcr/core/error.hpp"
 #include "tdcr/core/scene_io.hpp"
+#include "tdcr/models/model_selection.hpp"
 #include "tdcr/models/static_model.hpp"
 
 #ifndef TDCR_VERSION
@@ -35,7 +36,7 @@ constexpr int kExitInternal = 3;
 constexpr long kMaxRepeat = 1000000;
 
 const char* const kUsage =
-    "usage: tdcr solve SCENE.json [--model NAME] [--json] [--repeat N]\n"
+    "usage: tdcr solve SCENE.json [--model NAME] [--accuracy FRACTION] [--json] [--repeat N]\n"
     "                             [--integrator rk4|cvode] [--continuation]\n"
     "       tdcr --help | --version\n"
     "\n"
@@ -43,7 +44,10 @@ const char* const kUsage =
     "(see examples/ and docs/). SCENE.json may be '-' to read the scene from standard input.\n"
     "\n"
     "options of solve:\n"
-    "  --model NAME          cc, ccsub, prb, vc or vcref; overrides the scene's \"model\"\n"
+    "  --model NAME          cc, ccsub, prb, vc, vcref or auto; overrides the scene's \"model\"\n"
+    "  --accuracy FRACTION   with auto: requested tip position accuracy as a fraction of the\n"
+    "                        robot length (default 0.01); auto picks the cheapest model\n"
+    "                        expected to meet it and prints why\n"
     "  --json                print the result as JSON (model, status, reason, iterations,\n"
     "                        residual_norm, tip, disks, tendon_displacements, timing, summary)\n"
     "  --repeat N            solve N times (N >= 1) from the same initial guess and report the\n"
@@ -66,7 +70,16 @@ struct SolveArgs {
   bool json = false;
   bool continuation = false;
   int repeat = 1;
+  double accuracy = 0.01;
 };
+
+double parse_accuracy(const std::string& text) {
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (text.empty() || *end != '\0' || !std::isfinite(v) || v <= 0.0 || v >= 1.0)
+    throw UsageError("--accuracy: expected a fraction of the robot length in (0, 1) (got '" + text + "')");
+  return v;
+}
 
 int parse_repeat(const std::string& text) {
   errno = 0;
@@ -100,6 +113,8 @@ SolveArgs parse_solve_args(const std::vector<std::string>& args) {
     };
     if (name == "--model") {
       out.model = value();
+    } else if (name == "--accuracy") {
+      out.accuracy = parse_accuracy(value());
     } else if (name == "--integrator") {
       out.integrator = value();
     } else if (name == "--repeat") {
@@ -142,15 +157,14 @@ void apply_overrides(const SolveArgs& args, tdcr::Scene& scene) {
   if (args.continuation) scene.solver.continuation = true;
 }
 
-tdcr::ModelKind model_kind(const std::string& name) {
-  std::string lower = name;
+/// The model to solve with; "auto" chooses from the scene and the requested accuracy and says why.
+tdcr::ModelKind model_kind(const tdcr::Scene& scene, double accuracy, std::string* selection) {
+  std::string lower = scene.model;
   std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return std::tolower(c); });
-  try {
-    return tdcr::parse_model_kind(lower);
-  } catch (const tdcr::InputError&) {
-    if (lower == "auto") throw tdcr::InputError("model", "auto", "model auto is not available yet");
-    throw;
-  }
+  if (lower != "auto") return tdcr::parse_model_kind(lower);
+  const tdcr::ModelChoice choice = tdcr::choose_model(scene, accuracy);
+  *selection = "auto: " + choice.reason;
+  return choice.kind;
 }
 
 struct Timed {
@@ -181,6 +195,7 @@ Timed solve_timed(const tdcr::StaticModel& model, int repeat) {
 void print_human(const Timed& t, int repeat) {
   const tdcr::Solution& s = t.solution;
   std::printf("model:  %s\n", s.model.c_str());
+  if (!s.model_selection.empty()) std::printf("        %s\n", s.model_selection.c_str());
   std::printf("status: %s\n", s.summary.brief_report().c_str());
   if (s.disk_frames.empty()) {
     std::printf("tip:    not available\n");
@@ -198,10 +213,12 @@ int run_solve(const std::vector<std::string>& argv) {
   const SolveArgs args = parse_solve_args(argv);
   tdcr::Scene scene = load(args.scene_path);
   apply_overrides(args, scene);
-  const tdcr::ModelKind kind = model_kind(scene.model);
+  std::string selection;
+  const tdcr::ModelKind kind = model_kind(scene, args.accuracy, &selection);
   scene.model = tdcr::to_string(kind);
   const std::unique_ptr<tdcr::StaticModel> model = tdcr::make_model(kind, scene);
-  const Timed t = solve_timed(*model, args.repeat);
+  Timed t = solve_timed(*model, args.repeat);
+  t.solution.model_selection = selection;
   if (args.json) {
     tdcr::SolutionJsonOptions o;
     o.repeat = args.repeat;

@@ -719,6 +719,7 @@ std::string solution_to_json(const Solution& solution, const SolutionJsonOptions
                  {"median_us", number(options.median_us)},
                  {"min_us", number(options.min_us)}};
   j["summary"] = summary_json(s);
+  if (!solution.model_selection.empty()) j["model_selection"] = solution.model_selection;
   return pretty(j);
 }
 

@@ -67,6 +67,8 @@ struct Solution {
   std::vector<double> tensions;           ///< Tendon tensions used or implied (N), if known.
   std::vector<BackboneSample> backbone;   ///< Dense backbone samples (VC, VCref), may be empty.
   Eigen::VectorXd unknowns;               ///< The model's solved unknowns (for warm starts).
+  /// Why this model was used when the scene asked for "auto" (model_selection.hpp); empty else.
+  std::string model_selection;
 
   /// @brief Shorthand for summary.converged().
   bool converged() const { return summary.converged(); }
