@@ -1,11 +1,6 @@
 # Smoke run of the case-study benchmark (seconds): checks that every table is written, well formed,
 # and its errors finite (tests/check_bench_output.py). The full sweep stays out of ctest.
 if(TARGET bench_case_study)
-  # Debian's interpreter, which has python3-matplotlib, before any other python3 on PATH.
-  find_program(TDCR_PYTHON3 python3 PATHS /usr/bin NO_DEFAULT_PATH)
-  if(NOT TDCR_PYTHON3)
-    find_program(TDCR_PYTHON3 python3 REQUIRED)
-  endif()
   add_test(NAME bench_case_study_smoke
     COMMAND ${CMAKE_COMMAND} -E env
       ${TDCR_PYTHON3} ${CMAKE_CURRENT_SOURCE_DIR}/check_bench_output.py

@@ -1,0 +1,10 @@
+# Every example scene is a regression test with its expected answer (examples/expected/), as the
+# examples of SUNDIALS carry answer files. Regenerate after an intended change with
+#   python3 tests/check_example.py build/bin/tdcr examples/X.json examples/expected/X.json --update
+file(GLOB TDCR_EXAMPLE_SCENES CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/examples/*.json)
+foreach(scene ${TDCR_EXAMPLE_SCENES})
+  get_filename_component(name ${scene} NAME_WE)
+  add_test(NAME example_${name}
+           COMMAND ${TDCR_PYTHON3} ${CMAKE_CURRENT_SOURCE_DIR}/check_example.py $<TARGET_FILE:tdcr_cli> ${scene}
+                   ${PROJECT_SOURCE_DIR}/examples/expected/${name}.json)
+endforeach()
