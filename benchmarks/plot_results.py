@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Draw the benchmark results of bench_case_study (and bench_vcref --csv) as PNG and SVG.
+"""Draw the benchmark results of bench_case_study (and bench_vcref --csv DIR/vcref.csv) as PNG and SVG.
 
 usage: plot_results.py RESULTS_DIR [FIGURES_DIR]
 
@@ -198,19 +198,24 @@ def warmstart(res, out):
 
 
 def vcref_scaling(res, out):
-    rows = read(os.path.join(res, "vcref_scaling.csv"))
+    """Part (b) of bench_vcref --csv RESULTS_DIR/vcref.csv: cost against disks per segment."""
+    rows = read(os.path.join(res, "vcref.csv"))
     if not rows:
         return
+    rows = [r for r in rows if r["part"] == "b"]
     n = [num(r["n"]) for r in rows]
-    t = [num(r["median_us"]) / 1e3 for r in rows]
+    t = [num(r["median_ms"]) for r in rows]
     fig, ax = plt.subplots(figsize=(6, 4.5))
-    ax.loglog(n, t, "o-", color=COLORS["vcref"], label="VCref (KLU)")
+    ax.loglog(n, t, "o-", color=COLORS["vcref"], label="VCref, multiple shooting + KLU")
     sel = [(math.log(a), math.log(b)) for a, b in zip(n, t) if a >= 30 and b > 0]
     if len(sel) >= 2:
         mx = sum(x for x, _ in sel) / len(sel)
         my = sum(y for _, y in sel) / len(sel)
         slope = sum((x - mx) * (y - my) for x, y in sel) / sum((x - mx) ** 2 for x, _ in sel)
-        ax.set_title(f"VCref cost against disk count: slope {slope:.2f} (n >= 30)")
+        ax.set_title(f"VCref cost against disk count: log-log slope {slope:.2f} (n >= 30)")
+        x0 = min(a for a in n if a >= 30)
+        y0 = [b for a, b in zip(n, t) if a == x0][0]
+        ax.loglog([x0, max(n)], [y0, y0 * max(n) / x0], "k:", lw=1, label="linear")
     ax.set_xlabel("disks per segment n")
     ax.set_ylabel("median solve time (ms)")
     ax.grid(True, which="both", alpha=0.3)
