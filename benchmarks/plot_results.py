@@ -133,11 +133,14 @@ def tradeoff(res, out):
     for a, case in zip(ax[0], cases):
         rs = [r for r in rows if r["case"] == case and r["converged"] == "1"]
         pts = [(num(r["median_us"]) / 1e3, max(num(r["e_p_pct"]), 1e-9)) for r in rs]
+        seen = set()
         for r, (t, e) in zip(rs, pts):
             m = r["model"].lower()
-            a.scatter(t, e, color=COLORS.get(m), s=30)
-            a.annotate(f"{LABELS.get(m, m)} {r['setting']} n={r['n']}", (t, e), fontsize=6, alpha=0.8)
+            a.scatter(t, e, color=COLORS.get(m), s=30, label=None if m in seen else LABELS.get(m, m))
+            seen.add(m)
         front = pareto(pts)
+        for i in front:  # name the settings on the front only, the others by colour
+            a.annotate(rs[i]["setting"], pts[i], fontsize=7, xytext=(4, 2), textcoords="offset points")
         a.plot([pts[i][0] for i in front], [pts[i][1] for i in front], "k--", lw=1, label="Pareto front")
         a.set_xscale("log")
         a.set_yscale("log")

@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# Regenerate every benchmark table and figure of docs/benchmarks.md.
+#
+#   bash benchmarks/run_all.sh [--quick] [BUILD_DIR] [OUT_DIR]
+#
+# BUILD_DIR defaults to build (configured and built already), OUT_DIR to docs/benchmark-results.
+# --quick runs the short sweep (seconds to a minute) instead of the full one.
+set -euo pipefail
+quick=""
+if [ "${1:-}" = "--quick" ]; then quick="--quick"; shift; fi
+build=${1:-build}
+out=${2:-docs/benchmark-results}
+mkdir -p "$out"
+py=/usr/bin/python3; [ -x "$py" ] || py=python3
+{
+  echo "# machine: $(uname -m), $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //')"
+  echo "# date: $(date -u +%Y-%m-%dT%H:%MZ)   commit: $(git rev-parse --short HEAD 2>/dev/null || echo unknown)"
+} > "$out/machine.txt"
+"$build/bin/bench_case_study" $quick --out "$out"
+"$build/bin/bench_vcref" $quick --csv "$out/vcref.csv" | tee "$out/bench_vcref.txt"
+"$build/bin/bench_vc" $quick | tee "$out/bench_vc.txt"
+"$build/bin/bench_lumped" $quick | tee "$out/bench_lumped.txt"
+"$py" benchmarks/plot_results.py "$out" "$out"
+echo "results and figures in $out"
