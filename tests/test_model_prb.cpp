@@ -246,6 +246,7 @@ TEST(PrbModel, NonConvergentSolveReportsFailure) {
   const double TM = paper::max_tension(paper::robot(10));
   Scene s = paper_scene(10, {6 * TM, 0, 6 * TM, 0}, Vec3(0, 2.0, 0));
   s.solver.max_iterations = 2;
+  s.solver.continuation = false;  // a direct failure, not rescued by continuation
   const Solution sol = solve_prb(s);
   EXPECT_FALSE(sol.converged());
   EXPECT_EQ(sol.summary.termination, TerminationType::MaxIterations) << sol.summary.message;

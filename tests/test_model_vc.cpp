@@ -327,6 +327,7 @@ TEST(VcModel, NonConvergentSolveReportsFailure) {
   Scene s = paper_scene(10, {2 * T, 0, 2 * T, 0});
   s.loads.tip_force = Vec3(1.0, -1.0, 0.5);
   s.solver.max_iterations = 1;
+  s.solver.continuation = false;  // a direct failure, not rescued by continuation
   const Solution sol = solve_vc(s);
   EXPECT_FALSE(sol.converged());
   EXPECT_NE(sol.summary.termination, TerminationType::Converged);

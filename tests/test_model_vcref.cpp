@@ -317,6 +317,7 @@ TEST(Vcref, MirrorSymmetry) {
 TEST(Vcref, NonConvergenceIsReported) {
   Scene s = paper::scene(5, 8);  // T1, T2, T3: 143 deg
   s.solver.max_iterations = 1;
+  s.solver.continuation = false;  // a direct failure, not rescued by continuation
   const Solution sol = run(s);
   EXPECT_FALSE(sol.converged());
   EXPECT_EQ(sol.summary.termination, TerminationType::MaxIterations) << sol.summary.message;
@@ -421,6 +422,7 @@ TEST(Vcref, RejectsDisplacementInput) {
 TEST(Vcref, ContinuationSolvesOneDiskPerSegmentAt143Degrees) {
   Scene s = paper::scene(1, 8);
   s.solver.rk4_steps = 64;
+  s.solver.continuation = false;
   const Solution direct = run(s);
   EXPECT_FALSE(direct.converged());
   EXPECT_NE(direct.summary.termination, TerminationType::Converged);

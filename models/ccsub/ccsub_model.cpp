@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "common/load_continuation.hpp"
 #include "common/model_factories.hpp"
 #include "common/newton_summary.hpp"
 #include "common/subsegment_statics.hpp"
@@ -100,8 +101,10 @@ class CcsubWorkspace final : public ModelWorkspace {
   std::vector<Vec3> centroids, F, M;
 };
 
-// The 3J residuals of Eq. 43 with the recursive balance Eq. 44-47 (see ccsub.hpp).
-class CcsubSystem final : public bvp::ResidualSystem {
+// The 3J residuals of Eq. 43 with the recursive balance Eq. 44-47 (see ccsub.hpp). Its
+// parameter is the load factor (continuation): the balance is linear in the loads, so scaling
+// every load by lambda scales the moments M_j by lambda.
+class CcsubSystem final : public bvp::ParameterizedSystem {
  public:
   CcsubSystem(const CcsubModel::Impl& m, CcsubWorkspace& ws) : m_(m), ws_(ws) {
     ws_.frames.resize(m.N + 1);
@@ -110,6 +113,7 @@ class CcsubSystem final : public bvp::ResidualSystem {
     ws_.M.assign(m.N + 1, Vec3::Zero());
   }
   int size() const override { return 3 * m_.J; }
+  void set_parameter(double lambda) override { load_ = lambda; }
   bool residual(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> f) override {
     const bool bb = m_.statics.has_backbone_weight();
     Frame* fr = ws_.frames.data();
@@ -121,7 +125,7 @@ class CcsubSystem final : public bvp::ResidualSystem {
       // Moment about O_{j-1} of everything distal of disk j-1 (Eq. 45, 47).
       Vec3 Mb = ws_.M[j] + (fr[j].p - a.p).cross(ws_.F[j]);
       if (bb) Mb += (ws_.centroids[j] - a.p).cross(m_.statics.backbone_weight(j));
-      const Vec3 m_loc = a.R.transpose() * Mb;
+      const Vec3 m_loc = load_ * (a.R.transpose() * Mb);
       const Vec3 z_loc = a.R.transpose() * fr[j].R.col(2);
       const double s = m_.statics.length(j) / m_.EI;
       const int i = 3 * (j - 1);
@@ -136,6 +140,7 @@ class CcsubSystem final : public bvp::ResidualSystem {
  private:
   const CcsubModel::Impl& m_;
   CcsubWorkspace& ws_;
+  double load_ = 1.0;
 };
 
 }  // namespace
@@ -186,6 +191,10 @@ Solution CcsubModel::solve(ModelWorkspace& workspace, const Solution* warm_start
     opt.linear_solver = LinearSolverKind::Dense;
     const bvp::NewtonResult r = ws->newton.solve(system, x, opt);
     detail::copy_newton_result(r, sum);
+    if (!r.converged() && scene_.solver.continuation) {
+      x.setZero();  // the straight robot, exact at load factor 0
+      detail::continue_loads(ws->newton, system, x, opt, scene_.solver, sum);
+    }
     full.head(3 * m.J) = x;
   }
 

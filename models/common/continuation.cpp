@@ -1,68 +1,40 @@
-#include "tdcr/models/continuation.hpp"
-
-#include <chrono>
 #include <cstdio>
-#include <optional>
 
-namespace tdcr {
+#include "common/load_continuation.hpp"
 
-Scene scale_loads(const Scene& scene, double lambda) {
-  Scene s = scene;
-  for (double& v : s.actuation.values) v *= lambda;
-  s.loads.tip_force *= lambda;
-  s.loads.tip_moment *= lambda;
-  s.loads.gravity *= lambda;
-  return s;
-}
+namespace tdcr::detail {
 
-Solution solve_with_continuation(const StaticModel& model, ModelWorkspace& workspace, const Solution* warm_start) {
-  const auto t0 = std::chrono::steady_clock::now();
-  Solution direct = model.solve(workspace, warm_start);
-  const SolverOptions& opt = model.scene().solver;
-  if (direct.converged() || !opt.continuation) return direct;
-
-  SolverSummary total = direct.summary;
-  std::optional<Solution> last;  // last converged step
-  double lambda = 0.0, step = 0.25;
-  int steps = 0;
-  std::string last_failure = direct.summary.message;
-  while (lambda < 1.0 && steps < opt.max_continuation_steps && step >= 1.0 / 4096) {
-    const double next = std::min(1.0, lambda + step);
-    // One model per load level; the workspace is shared (same robot, same unknowns).
-    const auto scaled = make_model(model.kind(), scale_loads(model.scene(), next));
-    Solution s = scaled->solve(workspace, last ? &*last : nullptr);
-    ++steps;
-    total.iterations += s.summary.iterations;
-    total.residual_evaluations += s.summary.residual_evaluations;
-    total.jacobian_evaluations += s.summary.jacobian_evaluations;
-    if (s.converged()) {
-      lambda = next;
-      last = std::move(s);
-      step *= 2.0;
-    } else {
-      last_failure = s.summary.message;
-      step *= 0.5;
-    }
+bvp::ContinuationResult continue_loads(bvp::NewtonSolver& newton, bvp::ParameterizedSystem& system,
+                                       Eigen::VectorXd& x, const bvp::NewtonOptions& newton_options,
+                                       const SolverOptions& options, SolverSummary& sum) {
+  const std::string direct = sum.message;
+  const bvp::ContinuationResult c =
+      bvp::continuation(newton, system, x, newton_options, bvp::ContinuationOptions::from(options));
+  sum.iterations += c.iterations;
+  sum.residual_evaluations += c.residual_evaluations;
+  sum.jacobian_evaluations += c.jacobian_evaluations;
+  sum.continuation_steps = c.steps;
+  const bvp::NewtonResult& r = c.last;
+  if (c.steps > 0) {
+    sum.solver_flag = r.flag;
+    sum.residual_norm = r.residual_norm;
+    sum.physical_residual = r.physical_residual;
+    if (!r.linear_solver.empty()) sum.linear_solver = r.linear_solver;
   }
-
-  Solution out;
-  if (lambda >= 1.0 && last) {
-    out = std::move(*last);
-    out.summary.message = "converged by load continuation";
+  char buf[160];
+  if (c.converged()) {
+    sum.termination = TerminationType::Converged;
+    std::snprintf(buf, sizeof buf, " (by load continuation: %d steps, %d converged; direct solve failed: ", c.steps,
+                  c.accepted_steps);
+    sum.message = r.message + buf + direct + ")";
   } else {
-    out = last ? std::move(*last) : std::move(direct);
-    char buf[160];
-    std::snprintf(buf, sizeof buf, "load continuation stopped at %.1f %% of the load after %d steps; last failure: ",
-                  100.0 * lambda, steps);
-    out.summary.termination = last ? TerminationType::NoConvergence : direct.summary.termination;
-    out.summary.message = buf + last_failure;
+    sum.termination = r.converged() || c.steps == 0 ? TerminationType::NoConvergence : r.termination;
+    std::snprintf(buf, sizeof buf,
+                  "load continuation stopped at %.1f %% of the load (returned shape: the equilibrium there): ",
+                  100.0 * c.fraction);
+    sum.message = buf + c.message + "; direct solve: " + direct;
   }
-  out.summary.iterations = total.iterations;
-  out.summary.residual_evaluations = total.residual_evaluations;
-  out.summary.jacobian_evaluations = total.jacobian_evaluations;
-  out.summary.continuation_steps = steps;
-  out.summary.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  return out;
+  return c;
 }
 
-}  // namespace tdcr
+}  // namespace tdcr::detail

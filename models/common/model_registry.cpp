@@ -3,7 +3,6 @@
 
 #include "common/model_factories.hpp"
 #include "tdcr/core/error.hpp"
-#include "tdcr/models/continuation.hpp"
 #include "tdcr/models/static_model.hpp"
 
 namespace tdcr {
@@ -45,7 +44,7 @@ std::unique_ptr<StaticModel> make_model(ModelKind kind, const Scene& scene) {
 Solution solve(const Scene& scene, const Solution* warm_start) {
   auto model = make_model(parse_model_kind(scene.model), scene);
   auto ws = model->make_workspace();
-  return solve_with_continuation(*model, *ws, warm_start);
+  return model->solve(*ws, warm_start);
 }
 
 }  // namespace tdcr

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <string>
 
+#include "common/load_continuation.hpp"
 #include "common/model_factories.hpp"
 #include "common/newton_summary.hpp"
 #include "common/subsegment_statics.hpp"
@@ -125,7 +126,8 @@ class PrbWorkspace final : public ModelWorkspace {
   std::vector<double> phi_ref;
 };
 
-class PrbSystem final : public bvp::ResidualSystem {
+// Its parameter is the load factor (continuation): the distal wrenches are linear in the loads.
+class PrbSystem final : public bvp::ParameterizedSystem {
  public:
   PrbSystem(const PrbModel::Impl& m, PrbWorkspace& ws) : m_(m), ws_(ws) {
     ws_.frames.resize(m.N + 1);
@@ -136,6 +138,7 @@ class PrbSystem final : public bvp::ResidualSystem {
     ws_.phi_ref.assign(m.N + 1, 0.0);
   }
   int size() const override { return kU * m_.J; }
+  void set_parameter(double lambda) override { load_ = lambda; }
   void unknown_scale(Eigen::Ref<Eigen::VectorXd> s) const override {
     s.setOnes();
     for (int j = 0; j < m_.J; ++j) s[kU * j + 3] = kPhiScale;
@@ -168,10 +171,10 @@ class PrbSystem final : public bvp::ResidualSystem {
       const double s = m_.statics.length(j) / m_.EI;
       const double cp = std::cos(xj[3]), sp = std::sin(xj[3]);
       // Distal wrench in the frame of disk j-1 (only relative geometry from here on).
-      const Vec3 F = a.R.transpose() * ws_.F[j];
-      const Vec3 Mj = a.R.transpose() * ws_.M[j];  // about O_j
+      const Vec3 F = load_ * (a.R.transpose() * ws_.F[j]);
+      const Vec3 Mj = load_ * (a.R.transpose() * ws_.M[j]);  // about O_j
       Vec3 W = Vec3::Zero();
-      if (bb) W = a.R.transpose() * m_.statics.backbone_weight(j) / m_.gamma_sum;
+      if (bb) W = (load_ / m_.gamma_sum) * (a.R.transpose() * m_.statics.backbone_weight(j));
       const Vec3 y(-sp, cp, 0.0);
       // Eq. 48-51: joint q balances the moment of everything distal of it.
       for (int q = 0; q < 3; ++q) {
@@ -197,6 +200,7 @@ class PrbSystem final : public bvp::ResidualSystem {
  private:
   const PrbModel::Impl& m_;
   PrbWorkspace& ws_;
+  double load_ = 1.0;
 };
 
 }  // namespace
@@ -265,18 +269,22 @@ Solution PrbModel::solve(ModelWorkspace& workspace, const Solution* warm_start) 
     sum.linear_solver = "none";
   } else {
     const bool warm = warm_start && warm_start->unknowns.size() == full.size() && warm_start->unknowns.allFinite();
-    if (warm) {
-      full.head(kU * m.J) = warm_start->unknowns.head(kU * m.J);
-    } else {
-      // Straight guess (all joint angles and twists zero); each bending plane is put where the
-      // moment at the straight state points (y_phi along M*), see prb.hpp.
-      system.evaluate(full.data());
+    // Straight guess (all joint angles and twists zero); each bending plane is put where the
+    // moment at the straight state points (y_phi along M*), see prb.hpp. With phi_ref = phi it
+    // is the exact solution at load factor 0 (the start of load continuation).
+    auto straight_guess = [&](Eigen::VectorXd& v) {
+      v.setZero();
+      system.evaluate(v.data());
       for (int j = 1; j <= m.J; ++j) {
         const Vec3 a = ws->frames[j - 1].R.transpose() * system.base_moment(j);
         const double scale = m.statics.length(j) / m.EI;
-        full[kU * (j - 1) + 3] = scale * std::hypot(a.x(), a.y()) > 1e-14 ? std::atan2(-a.x(), a.y()) : 0.0;
+        v[kU * (j - 1) + 3] = scale * std::hypot(a.x(), a.y()) > 1e-14 ? std::atan2(-a.x(), a.y()) : 0.0;
       }
-    }
+    };
+    if (warm)
+      full.head(kU * m.J) = warm_start->unknowns.head(kU * m.J);
+    else
+      straight_guess(full);
     for (int j = 1; j <= m.J; ++j) ws->phi_ref[j] = full[kU * (j - 1) + 3];
     Eigen::VectorXd x = full.head(kU * m.J);
     bvp::NewtonOptions opt = bvp::NewtonOptions::from(scene_.solver);
@@ -288,6 +296,12 @@ Solution PrbModel::solve(ModelWorkspace& workspace, const Solution* warm_start) 
     opt.max_newton_step = kMaxNewtonStep;
     const bvp::NewtonResult r = ws->newton.solve(system, x, opt);
     detail::copy_newton_result(r, sum);
+    if (!r.converged() && scene_.solver.continuation) {
+      straight_guess(full);
+      for (int j = 1; j <= m.J; ++j) ws->phi_ref[j] = full[kU * (j - 1) + 3];
+      x = full.head(kU * m.J);
+      detail::continue_loads(ws->newton, system, x, opt, scene_.solver, sum);
+    }
     full.head(kU * m.J) = x;
   }
 

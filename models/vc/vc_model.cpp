@@ -9,6 +9,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Dense>
 
+#include "common/load_continuation.hpp"
 #include "common/model_factories.hpp"
 #include "common/newton_summary.hpp"
 #include "tdcr/bvp/integrator.hpp"
@@ -332,8 +333,10 @@ bool shoot_impl(const VcModel::Impl& M, const LoadCase& L, bvp::Integrator& inte
   return res.allFinite();
 }
 
-/// The shooting problem as KINSOL sees it.
-class ShootingSystem final : public bvp::ResidualSystem {
+void set_lambda(const VcModel::Impl& M, VcWorkspace::Impl& W, double lambda);
+
+/// The shooting problem as KINSOL sees it; its parameter is the load factor (continuation).
+class ShootingSystem final : public bvp::ParameterizedSystem {
  public:
   ShootingSystem(const VcModel::Impl& M, VcWorkspace::Impl& W) : M_(M), W_(W) {}
   int size() const override { return 6; }
@@ -352,6 +355,7 @@ class ShootingSystem final : public bvp::ResidualSystem {
     s.tail<3>().setConstant(1.0 / M_.moment_scale);
   }
   void unknown_scale(Eigen::Ref<Eigen::VectorXd> s) const override { residual_scale(s); }
+  void set_parameter(double lambda) override { set_lambda(M_, W_, lambda); }
 
  private:
   const VcModel::Impl& M_;
@@ -527,49 +531,9 @@ Solution VcModel::solve(ModelWorkspace& workspace, const Solution* warm_start) c
   }
 
   if (!res.converged() && scene_.solver.continuation) {
-    // Ramp tensions and loads from the unloaded robot (n = m = 0 is exact at lambda = 0), each
-    // step warm-started from the last converged one; halve the step on failure.
-    Eigen::VectorXd xc = Eigen::VectorXd::Zero(6);
-    double lambda = 0.0, step = 0.25;
-    int steps = 0;
-    bool ok = false;
-    while (steps < scene_.solver.max_continuation_steps && step > 1e-6) {
-      const double target = std::min(1.0, lambda + step);
-      set_lambda(M, W, target);
-      Eigen::VectorXd xt = xc;
-      res = W.newton.solve(system, xt, nopt);
-      ++steps;
-      sum.iterations += res.iterations;
-      sum.residual_evaluations += res.residual_evaluations;
-      sum.jacobian_evaluations += res.jacobian_evaluations;
-      if (res.converged()) {
-        lambda = target;
-        xc = xt;
-        step *= 1.5;
-        if (lambda == 1.0) {
-          ok = true;
-          break;
-        }
-      } else {
-        step *= 0.5;
-      }
-    }
-    sum.continuation_steps = steps;
-    set_lambda(M, W, 1.0);
-    if (ok) {
-      x = xc;
-      const int it = sum.iterations, re = sum.residual_evaluations, je = sum.jacobian_evaluations;
-      sum.iterations = 0;
-      sum.residual_evaluations = 0;
-      sum.jacobian_evaluations = 0;
-      detail::copy_newton_result(res, sum);
-      sum.iterations = it;
-      sum.residual_evaluations = re;
-      sum.jacobian_evaluations = je;
-      sum.message += " (after " + std::to_string(steps) + " continuation steps)";
-    } else {
-      sum.message += "; continuation stopped at load factor " + format_value(lambda);
-    }
+    // Load continuation from the unloaded robot, where n = m = 0 is exact (load_continuation.hpp).
+    x.setZero();
+    detail::continue_loads(W.newton, system, x, nopt, scene_.solver, sum);
   }
 
   // Final pass at the returned unknowns: frames, samples, tendon lengths.

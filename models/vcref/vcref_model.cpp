@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "common/load_continuation.hpp"
 #include "common/model_factories.hpp"
 #include "common/newton_summary.hpp"
 #include "tdcr/bvp/integrator.hpp"
@@ -56,8 +57,9 @@ namespace {
 
 constexpr double kFdStep = 1e-7;  // forward-difference step, relative to the unknown's scale
 
-// The multiple-shooting residual system; owns the mutable memory of a solve.
-class VcrefSystem final : public bvp::ResidualSystem {
+// The multiple-shooting residual system; owns the mutable memory of a solve. Its parameter is
+// the load factor (continuation).
+class VcrefSystem final : public bvp::ParameterizedSystem {
  public:
   VcrefSystem(const VcrefModel::Data& d, const Scene& scene)
       : d_(d),
@@ -213,6 +215,10 @@ class VcrefSystem final : public bvp::ResidualSystem {
       o1 = M;
     }
   }
+
+  void set_parameter(double lambda) override { set_load_factor(lambda); }
+  // A converged step: fold its rotation increments into the reference rotations.
+  void accept_step(Eigen::VectorXd& x) override { rebase(x); }
 
   // Scale every load (tensions, tip wrench, weights) by `factor` (continuation).
   void set_load_factor(double factor) {
@@ -455,41 +461,10 @@ Solution VcrefModel::solve(ModelWorkspace& workspace, const Solution* warm_start
   detail::copy_newton_result(r, sum);
 
   if (!r.converged() && scene_.solver.continuation) {
-    // Ramp all loads from the straight, unloaded robot (exact at factor 0) in adaptive steps.
-    double lambda = 0.0, dl = 0.25;
+    // Load continuation from the straight, unloaded robot (exact at factor 0).
     sys.set_load_factor(0.0);
     sys.straight_guess(x);
-    Eigen::VectorXd x_ok = x;
-    int steps = 0;
-    while (lambda < 1.0 && steps < scene_.solver.max_continuation_steps && dl > 1e-4) {
-      const double next = std::min(1.0, lambda + dl);
-      sys.set_load_factor(next);
-      sys.rebase(x);
-      x_ok = x;
-      r = ws->newton.solve(sys, x, opts);
-      ++steps;
-      sum.iterations += r.iterations;
-      sum.residual_evaluations += r.residual_evaluations;
-      sum.jacobian_evaluations += r.jacobian_evaluations;
-      if (r.converged()) {
-        lambda = next;
-        dl *= 1.5;
-      } else {
-        x = x_ok;
-        dl *= 0.5;
-      }
-    }
-    sum.continuation_steps = steps;
-    const int its = sum.iterations, res = sum.residual_evaluations, jac = sum.jacobian_evaluations;
-    detail::copy_newton_result(r, sum);
-    sum.iterations = its;
-    sum.residual_evaluations = res;
-    sum.jacobian_evaluations = jac;
-    if (lambda < 1.0 || !r.converged()) {
-      sys.set_load_factor(lambda);
-      sum.termination = r.converged() ? TerminationType::NoConvergence : r.termination;
-      sum.message = "continuation stopped at load factor " + format_value(lambda) + "; last: " + r.message;
-    }
+    detail::continue_loads(ws->newton, sys, x, opts, scene_.solver, sum);
   }
 
   // Final state at the returned iterate (frames, interval ends).

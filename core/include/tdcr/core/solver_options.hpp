@@ -37,10 +37,15 @@ struct SolverOptions {
   /// Linear solver inside Newton (VC, VCref; CCsub and PRB always use dense LU, CC solves no
   /// system). SparseKLU on a system without a sparsity pattern (VC) factorises a dense pattern.
   LinearSolverKind linear_solver = LinearSolverKind::Automatic;
-  /// If a direct solve fails, ramp the actuation and loads in adaptive steps (each warm-started
-  /// from the last). Off by default so that failures are visible; the CLI turns it on.
-  bool continuation = false;
-  int max_continuation_steps = 64;  ///< Bound on continuation work.
+  /// Automatic load continuation: if a direct solve fails, every static model (CCsub, PRB, VC,
+  /// VCref) solves again from the unloaded robot, raising a load factor on all tensions, the tip
+  /// wrench and gravity from 0 to 1 in adaptive steps (bvp::continuation), each warm-started
+  /// from the last converged one. The summary reports continuation_steps; the solve is reported
+  /// converged only if the full load converged, otherwise the message gives the load fraction
+  /// reached. On by default (set false to see direct failures); CC has no iteration and ignores it.
+  bool continuation = true;
+  /// Bound on continuation work: at most this many Newton solves (converged or failed steps).
+  int max_continuation_steps = 64;
 
   /// @brief Throws InputError (field `solver.<name>`) on a tolerance that is not a positive
   /// finite number, or an iteration, RK4 step or continuation step count below 1.
