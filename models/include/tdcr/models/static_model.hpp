@@ -47,8 +47,10 @@ class StaticModel {
   /// @brief A fresh workspace for this model.
   virtual std::unique_ptr<ModelWorkspace> make_workspace() const = 0;
   /// @brief Solve the model. `warm_start`, if given, is a previous Solution of the same model and
-  /// robot (e.g. the previous configuration of a trajectory); otherwise the straight robot is the
-  /// initial guess. Never throws for a non-convergent solve: the Solution's summary says so.
+  /// robot (e.g. the previous configuration of a trajectory); otherwise the model's cold-start
+  /// guess is used (CCsub, PRB: the straight robot; VC: VcInitialGuess; VCref:
+  /// VcrefOptions::InitialGuess; CC needs none). Never throws for a non-convergent solve: the
+  /// Solution's summary says so.
   virtual Solution solve(ModelWorkspace& workspace, const Solution* warm_start = nullptr) const = 0;
 };
 
