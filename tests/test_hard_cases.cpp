@@ -104,7 +104,7 @@ void check_planar(Context& c, double tol = 1e-9) {
   double worst = 0.0;
   for (const Frame& f : c.sol.disk_frames) worst = std::max(worst, std::abs(f.p.x()));
   EXPECT_LT(worst, tol);
-  *c.property += fmt("; planar: max|x| %.1e m", worst);
+  *c.property += fmt("; planar: max abs(x) %.1e m", worst);
 }
 
 Solution solve_kind(ModelKind k, const Scene& s) {
@@ -179,7 +179,7 @@ std::vector<HardCase> cases() {
   // 8: one disk per segment at 143 deg (T1 = T2 = T3 = T_M, configuration 8): planar.
   v.push_back({"OneDiskPerSegment", [] { return paper_scene(1, {TM(), TM(), TM(), 0}); },
                [](Context& c) {
-                 *c.property = "";
+                 *c.property = "143 deg";
                  check_planar(c);
                },
                all()});
@@ -206,7 +206,7 @@ std::vector<HardCase> cases() {
                  EXPECT_LT(std::hypot(tip.x(), tip.y()), 1e-12);
                  EXPECT_LT(lie::rotation_angle(c.sol.tip().R, Mat3::Identity()), 1e-10);
                  EXPECT_NEAR(tip.z(), 2 * kL - dz, 1e-3 * dz + 1e-13);
-                 *c.property = fmt("straight (|x,y| %.1e m); shortening %.4g um (theory ", std::hypot(tip.x(), tip.y()),
+                 *c.property = fmt("straight (max abs(x, y) %.1e m); shortening %.4g um (theory ", std::hypot(tip.x(), tip.y()),
                                    (2 * kL - tip.z()) * 1e6) + fmt("%.4g um)", dz * 1e6);
                },
                all()});
@@ -376,5 +376,44 @@ TEST_P(HardCases, ConvergesWithVerifiedEquilibriumOrFailsClearly) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Suite, HardCases, testing::ValuesIn(params()), param_name);
+
+}  // namespace
+
+namespace {
+
+// verify_equilibrium can fail: the VCref answer of one scene is checked against a scene with a
+// tip force 1 % of the tensions larger, and against a solution with a perturbed base moment.
+TEST(VerifyEquilibrium, DetectsAnImbalance) {
+  Scene s = paper_scene(10, {TM(), 0, TM(), 0});
+  s.loads.tip_force = Vec3(0.1, 0.2, 0.0);
+  const Solution sol = solve_kind(ModelKind::VCref, s);
+  ASSERT_TRUE(sol.converged());
+  const EquilibriumCheck ok = verify_equilibrium(s, sol);
+  ASSERT_TRUE(ok.evaluated) << ok.reason;
+  EXPECT_LT(ok.relative_error(), 1e-8);
+  EXPECT_GT(ok.eq58_force.norm(), 0.0);  // the tip force makes the curvature non-uniform
+
+  Scene other = s;
+  other.loads.tip_force.x() += 0.01 * 2 * TM();
+  const EquilibriumCheck bad = verify_equilibrium(other, sol);
+  ASSERT_TRUE(bad.evaluated);
+  EXPECT_NEAR(bad.force.x(), 0.01 * 2 * TM(), 1e-8);
+  EXPECT_GT(bad.relative_error(), 1e-3);
+
+  Solution moved = sol;
+  moved.backbone[0].m.y() += 1e-4;  // N m
+  EXPECT_NEAR(verify_equilibrium(s, moved).moment.y(), -1e-4, 1e-10);
+}
+
+TEST(VerifyEquilibrium, SaysWhenItDoesNotApply) {
+  const Scene s = paper_scene(5, {TM(), 0, 0, 0});
+  const EquilibriumCheck c = verify_equilibrium(s, solve_kind(ModelKind::CCsub, s));
+  EXPECT_FALSE(c.evaluated);
+  EXPECT_FALSE(c.reason.empty());
+  EXPECT_TRUE(std::isinf(c.relative_error()));
+  Solution empty;
+  empty.model = "vcref";
+  EXPECT_FALSE(verify_equilibrium(s, empty).evaluated);
+}
 
 }  // namespace
