@@ -105,6 +105,8 @@ struct ContinuationResult {
 /// @param system The parameterised system.
 /// @param x In: a solution at options.start (not re-checked). Out: the solution at
 ///        result.parameter (the last converged step; the input x if no step converged).
+/// @param newton_options Settings of every Newton solve (validated by NewtonSolver::solve).
+/// @param options Step control (validated here: throws InputError on inconsistent values).
 /// @return Work counters, the parameter reached and the last Newton result. The system's
 ///         parameter is left at result.parameter.
 ContinuationResult continuation(NewtonSolver& newton, ParameterizedSystem& system, Eigen::VectorXd& x,
