@@ -2,7 +2,8 @@
 /// @brief Scene files (JSON) in and solutions (JSON) out. Every key and value is validated; an
 /// error names the JSON path and the value (InputError).
 ///
-/// Keys (docs/scene-file.md lists every key with unit and default):
+/// Keys (docs/scene-file.md lists every key with unit, default, constraints and the models that
+/// honour it, the error messages and the CLI's JSON output):
 /// @code{.json}
 /// {"robot": {"backbone": {"youngs_modulus": 2.11e11, "poisson_ratio": 0.3, "outer_radius": 0.0004},
 ///            "segments": [{"length": 0.05, "disks": 10,
@@ -80,7 +81,8 @@ struct SolutionJsonOptions {
 /// - `timing`: {`repeat`, `median_us`, `min_us`};
 /// - `summary`: every SolverSummary field (`termination`, `message`, `solver_flag`, `iterations`,
 ///   `residual_evaluations`, `jacobian_evaluations`, `residual_norm`, `physical_residual`,
-///   `unknowns`, `continuation_steps`, `linear_solver`, `integrator`, `solve_time_s`).
+///   `unknowns`, `continuation_steps`, `linear_solver`, `integrator`, `solve_time_s`);
+/// - `model_selection` (string): only if Solution::model_selection is not empty (model "auto").
 /// Non-finite numbers are written as null: the text is always valid JSON.
 std::string solution_to_json(const Solution& solution, const SolutionJsonOptions& options = {});
 
