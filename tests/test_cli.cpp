@@ -321,7 +321,7 @@ TEST(Cli, IntegratorOverride) {
 /// unloaded initial guess is not the answer) exits 1 and still prints the result, "failed".
 TEST(Cli, NonConvergedSolveExitsOne) {
   json j = json::parse(read_file(kExamples + "/paper_robot_tip_force.json"));
-  j["solver"] = {{"max_iterations", 1}};
+  j["solver"] = {{"max_iterations", 1}, {"continuation", false}};  // a direct failure
   TempDir tmp;
   const std::string path = tmp.write("vc_one_iteration.json", j.dump());
   const CliRun r = run_tdcr("solve " + quote(path) + " --json");
