@@ -166,7 +166,7 @@ INSTANTIATE_TEST_SUITE_P(
                       BadArgs{"RepeatEqualsEmpty", "--repeat=", "--repeat"},
                       BadArgs{"ModelMissing", "--model", "--model: missing argument"},
                       BadArgs{"ModelUnknown", "--model cosserat", "cosserat"},
-                      BadArgs{"ModelAuto", "--model auto", "auto"},
+                      BadArgs{"AccuracyOutOfRange", "--model auto --accuracy 1.5", "--accuracy"},
                       BadArgs{"IntegratorUnknown", "--integrator euler", "euler"},
                       BadArgs{"JsonWithValue", "--json=yes", "--json takes no argument"}),
     [](const ::testing::TestParamInfo<BadArgs>& info) { return info.param.name; });
@@ -285,6 +285,19 @@ TEST(Cli, ModelOverrideIsCaseInsensitive) {
   const CliRun r = run_tdcr("solve " + example("paper_robot_cc.json") + " --model CC --json");
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_EQ(json::parse(r.out)["model"], "cc");
+}
+
+TEST(Cli, ModelAutoPicksAndSaysWhy) {
+  // No external load, 10 disks per segment: CC is within 0.15 % of VCref (docs/models.md).
+  const CliRun r = run_tdcr("solve " + example("paper_robot_vc.json") + " --model auto --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const json j = json::parse(r.out);
+  EXPECT_EQ(j["model"], "cc");
+  EXPECT_NE(j["model_selection"].get<std::string>().find("requested 1 %"), std::string::npos);
+  // A tip force rules CC out.
+  const CliRun f = run_tdcr("solve " + example("paper_robot_tip_force.json") + " --model auto --json");
+  ASSERT_EQ(f.status, 0) << f.err;
+  EXPECT_EQ(json::parse(f.out)["model"], "vc");
 }
 
 /// Every example either solves (exit 0 or 1, with the JSON contract on stdout) or, for a model
