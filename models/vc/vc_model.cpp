@@ -2,7 +2,9 @@
 #include "tdcr/models/vc.hpp"
 
 #include <algorithm>
+#include <limits>
 #include <chrono>
+#include <cstdio>
 #include <cmath>
 #include <vector>
 
@@ -12,9 +14,11 @@
 #include "common/load_continuation.hpp"
 #include "common/model_factories.hpp"
 #include "common/newton_summary.hpp"
+#include "tdcr/bvp/continuation.hpp"
 #include "tdcr/bvp/integrator.hpp"
 #include "tdcr/bvp/newton_solver.hpp"
 #include "tdcr/bvp/residual_system.hpp"
+#include "tdcr/bvp/shooting.hpp"
 #include "tdcr/core/error.hpp"
 #include "tdcr/core/lie.hpp"
 #include "tdcr/models/cosserat_rod.hpp"
@@ -79,6 +83,9 @@ struct VcModel::Impl {
   std::vector<double> tensions;
   Vec3 weight_total = Vec3::Zero();
   Vec3 weight_moment = Vec3::Zero();  // sum over weights of p x W for the straight robot
+  double tension_parameter = 0.0;     // L^2 (|W| + |F_tip|) / EI, see vc.hpp
+  bool multiple_shooting = false;     // formulation chosen once in the constructor
+  std::vector<int> interval_segment;  // segment of disk interval k (disk k to disk k+1)
 };
 
 namespace {
@@ -209,6 +216,13 @@ struct VcWorkspace::Impl {
   Eigen::VectorXd y;
   Eigen::VectorXd x;
   double lambda = -1.0;
+  // The model this workspace was prepared for (its ODEs and loads refer to it).
+  std::shared_ptr<const VcModel::Impl> owner;
+  // Multiple shooting (built on first use).
+  std::vector<std::unique_ptr<bvp::OdeSystem>> ms_rods;  // one RodOde per segment
+  std::unique_ptr<bvp::ShootingProblem> ms_problem;
+  std::unique_ptr<bvp::ShootingSystem> ms_shooting;
+  std::unique_ptr<bvp::ParameterizedSystem> ms_system;
 };
 
 VcWorkspace::~VcWorkspace() = default;
@@ -237,6 +251,71 @@ void scale_loads(const LoadCase& full, double lambda, LoadCase& out) {
   out.tip_moment = lambda * full.tip_moment;
 }
 
+/// Point loads at disk j (the end of an interval of segment i), applied to the rod state y
+/// (18 values, first): tendon terminations (Eq. 40-41), the disk's weight and the kink forces of
+/// passing tendons. False if the kink fixed-point iteration did not settle.
+bool disk_point_loads(const VcModel::Impl& M, const LoadCase& L, int i, int j, double* y) {
+  const TendonRouting& rt = M.routing;
+  const int nseg = static_cast<int>(L.segments.size());
+  const SegmentLoads& seg = L.segments[i];
+  const int last = rt.segment_end_disk[i];
+  const bool terminates = j == last && !seg.terminating.empty();
+  const bool weighted = M.disk_weight && L.disk_weight[j].squaredNorm() > 0.0;
+  if (terminates || weighted) {
+    // Point loads at disk j, with u, v just proximal of it.
+    const Mat3 R = cosserat::rotation(static_cast<const double*>(y));
+    const Vec3 u = M.section.curvature(R, cosserat::moment(y));
+    const Vec3 v = M.section.strain(R, cosserat::force(y));
+    if (terminates) {
+      // Eq. 40-41: tendon termination forces F_k = -T_k R t_k at p + R r_k.
+      Vec3 dn = Vec3::Zero(), dm = Vec3::Zero();
+      for (const TendonTerm& t : seg.terminating) {
+        const Vec3 q = v + u.cross(t.r);
+        const Vec3 F = -(t.T / q.norm()) * (R * q);
+        dn += F;
+        dm += (R * t.r).cross(F);
+      }
+      cosserat::force(y) -= dn;
+      cosserat::moment(y) -= dm;
+    }
+    if (weighted) cosserat::force(y) -= L.disk_weight[j];
+    // Kinks: the point loads make u, v jump, so every tensioned tendon continuing past disk j
+    // changes direction there and pulls on the backbone with T_k R (t_k+ - t_k-) at
+    // p + R r_k. t_k+ depends on the wrench after the kink: fixed-point iteration (its
+    // contraction factor is about T r^2 / EI, small for any sane tension).
+    const std::vector<TendonTerm>* cont = nullptr;
+    if (j < last)
+      cont = &seg.tendons;
+    else if (i + 1 < nseg)
+      cont = &L.segments[i + 1].tendons;
+    if (M.kink_forces && cont && !cont->empty()) {
+      const Vec3 n_base = cosserat::force(y), m_base = cosserat::moment(y);
+      Vec3 np = n_base, mp = m_base;
+      bool settled = false;
+      for (int it = 0; it < 100 && !settled; ++it) {
+        const Vec3 up = M.section.curvature(R, mp);
+        const Vec3 vp = M.section.strain(R, np);
+        Vec3 dn = Vec3::Zero(), dm = Vec3::Zero();
+        for (const TendonTerm& t : *cont) {
+          const Vec3 qm = v + u.cross(t.r);
+          const Vec3 qp = vp + up.cross(t.r);
+          const Vec3 K = t.T * (R * (qp / qp.norm() - qm / qm.norm()));
+          dn += K;
+          dm += (R * t.r).cross(K);
+        }
+        const Vec3 n_new = n_base - dn, m_new = m_base - dm;
+        settled = (n_new - np).norm() <= 1e-15 * M.force_scale && (m_new - mp).norm() <= 1e-15 * M.moment_scale;
+        np = n_new;
+        mp = m_new;
+      }
+      if (!settled) return false;
+      cosserat::force(y) = np;
+      cosserat::moment(y) = mp;
+    }
+  }
+  return true;
+}
+
 /// One shot from the base. `y` has room for the rod's dimension. Returns false if integration
 /// failed; otherwise `res` = (n(L+) - F_tip, m(L+) - M_tip).
 bool shoot_impl(const VcModel::Impl& M, const LoadCase& L, bvp::Integrator& integ, RodOde& rod, double* y,
@@ -259,60 +338,7 @@ bool shoot_impl(const VcModel::Impl& M, const LoadCase& L, bvp::Integrator& inte
     const int first = i == 0 ? 1 : rt.segment_end_disk[i - 1] + 1;
     for (int j = first; j <= last; ++j) {
       if (!integ.integrate(rod, rt.disk_s[j - 1], rt.disk_s[j], y)) return false;
-      const bool terminates = j == last && !seg.terminating.empty();
-      const bool weighted = M.disk_weight && L.disk_weight[j].squaredNorm() > 0.0;
-      if (terminates || weighted) {
-        // Point loads at disk j, with u, v just proximal of it.
-        const Mat3 R = cosserat::rotation(static_cast<const double*>(y));
-        const Vec3 u = M.section.curvature(R, cosserat::moment(y));
-        const Vec3 v = M.section.strain(R, cosserat::force(y));
-        if (terminates) {
-          // Eq. 40-41: tendon termination forces F_k = -T_k R t_k at p + R r_k.
-          Vec3 dn = Vec3::Zero(), dm = Vec3::Zero();
-          for (const TendonTerm& t : seg.terminating) {
-            const Vec3 q = v + u.cross(t.r);
-            const Vec3 F = -(t.T / q.norm()) * (R * q);
-            dn += F;
-            dm += (R * t.r).cross(F);
-          }
-          cosserat::force(y) -= dn;
-          cosserat::moment(y) -= dm;
-        }
-        if (weighted) cosserat::force(y) -= L.disk_weight[j];
-        // Kinks: the point loads make u, v jump, so every tensioned tendon continuing past disk j
-        // changes direction there and pulls on the backbone with T_k R (t_k+ - t_k-) at
-        // p + R r_k. t_k+ depends on the wrench after the kink: fixed-point iteration (its
-        // contraction factor is about T r^2 / EI, small for any sane tension).
-        const std::vector<TendonTerm>* cont = nullptr;
-        if (j < last)
-          cont = &seg.tendons;
-        else if (i + 1 < nseg)
-          cont = &L.segments[i + 1].tendons;
-        if (M.kink_forces && cont && !cont->empty()) {
-          const Vec3 n_base = cosserat::force(y), m_base = cosserat::moment(y);
-          Vec3 np = n_base, mp = m_base;
-          bool settled = false;
-          for (int it = 0; it < 100 && !settled; ++it) {
-            const Vec3 up = M.section.curvature(R, mp);
-            const Vec3 vp = M.section.strain(R, np);
-            Vec3 dn = Vec3::Zero(), dm = Vec3::Zero();
-            for (const TendonTerm& t : *cont) {
-              const Vec3 qm = v + u.cross(t.r);
-              const Vec3 qp = vp + up.cross(t.r);
-              const Vec3 K = t.T * (R * (qp / qp.norm() - qm / qm.norm()));
-              dn += K;
-              dm += (R * t.r).cross(K);
-            }
-            const Vec3 n_new = n_base - dn, m_new = m_base - dm;
-            settled = (n_new - np).norm() <= 1e-15 * M.force_scale && (m_new - mp).norm() <= 1e-15 * M.moment_scale;
-            np = n_new;
-            mp = m_new;
-          }
-          if (!settled) return false;
-          cosserat::force(y) = np;
-          cosserat::moment(y) = mp;
-        }
-      }
+      if (!disk_point_loads(M, L, i, j, y)) return false;
       if (rec) {
         const Frame f = cosserat::frame_of(y);
         rec->frames->push_back(f);
@@ -362,7 +388,23 @@ class ShootingSystem final : public bvp::ParameterizedSystem {
   VcWorkspace::Impl& W_;
 };
 
-void prepare_workspace(const VcModel::Impl& M, const SolverOptions& opt, VcWorkspace::Impl& W) {
+void prepare_workspace(const std::shared_ptr<const VcModel::Impl>& model, const SolverOptions& opt,
+                       VcWorkspace::Impl& W) {
+  if (W.owner != model) {
+    // A workspace used by another model: its loads, ODEs and integrators describe that model.
+    // Keep only the Newton workspace (KINSOL memory is rebuilt by size anyway).
+    W.ms_system.reset();
+    W.ms_shooting.reset();
+    W.ms_problem.reset();
+    W.ms_rods.clear();
+    W.shot_rod.reset();
+    W.final_rod.reset();
+    W.shot_integrator.reset();
+    W.final_integrator.reset();
+    W.lambda = -1.0;
+    W.owner = model;
+  }
+  const VcModel::Impl& M = *model;
   if (W.shot_integrator) return;
   W.shot_integrator = bvp::make_integrator(opt);
   W.shot_rod = std::make_unique<RodOde>(M, M.lengths_in_shots);
@@ -376,6 +418,117 @@ void set_lambda(const VcModel::Impl& M, VcWorkspace::Impl& W, double lambda) {
   if (W.lambda == lambda) return;
   scale_loads(M.full, lambda, W.loads);
   W.lambda = lambda;
+}
+
+
+/// Multiple shooting: one interval per disk interval, unknowns = the 18 rod states (p, R, n, m)
+/// at every interval start (just distal of the disk's point loads). Junction at disk i:
+/// y_i^+ - J_i(y_{i-1}^-), J_i = the point loads of disk i; boundary: p(0) = 0, R(0) = I and
+/// the tip wrench after the tip disk's point loads.
+class MsProblem final : public bvp::ShootingProblem {
+ public:
+  MsProblem(const VcModel::Impl& M, VcWorkspace::Impl& W) : M_(M), W_(W) {}
+  int state_dimension() const override { return cosserat::kStateSize; }
+  int intervals() const override { return static_cast<int>(M_.interval_segment.size()); }
+  double node(int k) const override { return M_.routing.disk_s[k]; }
+  const bvp::OdeSystem& ode(int k) const override { return *W_.ms_rods[M_.interval_segment[k]]; }
+  void boundary(const bvp::ShootingNodes& nodes, double* r) const override {
+    const double* y0 = nodes.start(0);
+    for (int i = 0; i < 3; ++i) r[i] = y0[i];
+    Eigen::Map<Mat3>(r + 3) = cosserat::rotation(y0) - Mat3::Identity();
+    const int N = intervals();
+    std::copy(nodes.end(N - 1), nodes.end(N - 1) + cosserat::kStateSize, buf_);
+    if (!disk_point_loads(M_, W_.loads, M_.interval_segment[N - 1], N, buf_)) {
+      for (int i = 12; i < 18; ++i) r[i] = std::numeric_limits<double>::quiet_NaN();
+      return;
+    }
+    Eigen::Map<Vec3>(r + 12) = cosserat::force(static_cast<const double*>(buf_)) - W_.loads.tip_force;
+    Eigen::Map<Vec3>(r + 15) = cosserat::moment(static_cast<const double*>(buf_)) - W_.loads.tip_moment;
+  }
+  void junction(int i, const bvp::ShootingNodes& nodes, double* r) const override {
+    std::copy(nodes.end(i - 1), nodes.end(i - 1) + cosserat::kStateSize, buf_);
+    const bool ok = disk_point_loads(M_, W_.loads, M_.interval_segment[i - 1], i, buf_);
+    const double* yi = nodes.start(i);
+    for (int k = 0; k < cosserat::kStateSize; ++k)
+      r[k] = ok ? yi[k] - buf_[k] : std::numeric_limits<double>::quiet_NaN();
+  }
+  void state_scale(double* s) const override {
+    for (int k = 0; k < 3; ++k) s[k] = 1.0 / M_.length;
+    for (int k = 3; k < 12; ++k) s[k] = 1.0;
+    for (int k = 12; k < 15; ++k) s[k] = 1.0 / M_.force_scale;
+    for (int k = 15; k < 18; ++k) s[k] = 1.0 / M_.moment_scale;
+  }
+
+ private:
+  const VcModel::Impl& M_;
+  VcWorkspace::Impl& W_;
+  mutable double buf_[cosserat::kStateSize] = {};
+};
+
+/// The multiple-shooting system with the load factor as its parameter (continuation).
+class MsSystem final : public bvp::ParameterizedSystem {
+ public:
+  MsSystem(const VcModel::Impl& M, VcWorkspace::Impl& W, bvp::ShootingSystem& sys) : M_(M), W_(W), sys_(sys) {}
+  int size() const override { return sys_.size(); }
+  bool residual(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> f) override {
+    return sys_.residual(x, f) && f.allFinite();
+  }
+  const bvp::SparsityPattern* sparsity() const override { return sys_.sparsity(); }
+  bool has_jacobian() const override { return true; }
+  bool sparse_jacobian(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& f,
+                       double* values) override {
+    return sys_.sparse_jacobian(x, f, values);
+  }
+  void residual_scale(Eigen::Ref<Eigen::VectorXd> s) const override { sys_.residual_scale(s); }
+  void unknown_scale(Eigen::Ref<Eigen::VectorXd> s) const override { sys_.unknown_scale(s); }
+  double relative_noise() const override { return sys_.relative_noise(); }
+  void set_parameter(double lambda) override { set_lambda(M_, W_, lambda); }
+
+ private:
+  const VcModel::Impl& M_;
+  VcWorkspace::Impl& W_;
+  bvp::ShootingSystem& sys_;
+};
+
+void prepare_multiple_shooting(const VcModel::Impl& M, VcWorkspace::Impl& W) {
+  if (W.ms_system) return;
+  for (std::size_t i = 0; i < M.full.segments.size(); ++i) {
+    auto rod = std::make_unique<RodOde>(M, false);
+    rod->set(&W.loads.segments[i], &W.loads.weight);
+    W.ms_rods.push_back(std::move(rod));
+  }
+  W.ms_problem = std::make_unique<MsProblem>(M, W);
+  W.ms_shooting = std::make_unique<bvp::ShootingSystem>(*W.ms_problem, *W.shot_integrator);
+  W.ms_system = std::make_unique<MsSystem>(M, W, *W.ms_shooting);
+}
+
+/// Node states of the straight robot under the loads at factor `lambda` (the straight-robot
+/// statics of every cut: the multiple-shooting analogue of VcInitialGuess::Equilibrium).
+void straight_node_states(const VcModel::Impl& M, double lambda, Eigen::VectorXd& x) {
+  const int N = static_cast<int>(M.interval_segment.size());
+  const TendonRouting& rt = M.routing;
+  const double L = M.length;
+  for (int k = 0; k < N; ++k) {
+    double* y = x.data() + static_cast<long>(k) * cosserat::kStateSize;
+    const double s = rt.disk_s[k];
+    Vec3 n = M.full.tip_force + (L - s) * M.full.weight;
+    Vec3 m = M.full.tip_moment + ((L - s) * Vec3::UnitZ()).cross(M.full.tip_force) +
+             (0.5 * (L - s) * (L - s) * Vec3::UnitZ()).cross(M.full.weight);
+    for (int j = k + 1; j < rt.disk_count(); ++j) {
+      n += M.full.disk_weight[j];
+      m += ((rt.disk_s[j] - s) * Vec3::UnitZ()).cross(M.full.disk_weight[j]);
+    }
+    for (const RoutedTendon& t : rt.tendons)
+      if (t.end_disk > k) {
+        const double T = M.tensions[t.index];
+        n -= T * Vec3::UnitZ();
+        m += T * Vec3::UnitZ().cross(t.r);
+      }
+    cosserat::position(y) = s * Vec3::UnitZ();
+    cosserat::rotation(y) = Mat3::Identity();
+    cosserat::force(y) = lambda * n;
+    cosserat::moment(y) = lambda * m;
+  }
 }
 
 }  // namespace
@@ -438,6 +591,15 @@ VcModel::VcModel(const Scene& scene, VcOptions options) : scene_(scene), options
   const double ext = M.full.tip_force.norm() + M.weight_total.norm();
   M.force_scale = sum_T + ext + 1e-3;
   M.moment_scale = sum_T * r_max + ext * M.length + M.full.tip_moment.norm() + 1e-3 * M.length;
+  M.interval_segment.assign(M.routing.disk_segment.begin() + 1, M.routing.disk_segment.end());
+  M.tension_parameter = M.length * M.length * ext / k.EI;
+  switch (options_.formulation) {
+    case VcFormulation::SingleShooting: M.multiple_shooting = false; break;
+    case VcFormulation::MultipleShooting: M.multiple_shooting = true; break;
+    case VcFormulation::Automatic:
+      M.multiple_shooting = M.tension_parameter > options_.multiple_shooting_threshold;
+      break;
+  }
   impl_ = std::move(impl);
 }
 
@@ -472,12 +634,54 @@ Vec6 VcModel::residual_scale() const {
   return s;
 }
 
+double VcModel::tension_parameter() const { return impl_->tension_parameter; }
+bool VcModel::uses_multiple_shooting() const { return impl_->multiple_shooting; }
+
 bool VcModel::shoot(VcWorkspace& ws, const Vec6& x, Vec6& residual) const {
   if (!ws.impl) ws.impl = std::make_unique<VcWorkspace::Impl>();
-  prepare_workspace(*impl_, scene_.solver, *ws.impl);
+  prepare_workspace(impl_, scene_.solver, *ws.impl);
   set_lambda(*impl_, *ws.impl, 1.0);
   VcWorkspace::Impl& W = *ws.impl;
   return shoot_impl(*impl_, W.loads, *W.shot_integrator, *W.shot_rod, W.y.data(), x, residual, nullptr);
+}
+
+bool VcModel::warm_reaction(const Solution& previous, Vec6& x) const {
+  const Impl& M = *impl_;
+  const int nd = M.routing.disk_count();
+  if (static_cast<int>(previous.disk_frames.size()) != nd || static_cast<int>(previous.backbone.size()) != nd)
+    return false;
+  // Tendon directions at the base from the previous strains (R(0) = I).
+  const Vec3 u0 = M.section.curvature(Mat3::Identity(), previous.backbone[0].m);
+  const Vec3 v0 = M.section.strain(Mat3::Identity(), previous.backbone[0].n);
+  Vec3 n = M.full.tip_force, m = M.full.tip_moment + previous.disk_frames.back().p.cross(M.full.tip_force);
+  for (const RoutedTendon& t : M.routing.tendons) {
+    const double T = M.tensions[t.index];
+    if (T <= 0.0) continue;
+    const Vec3 pull = T * (v0 + u0.cross(t.r)).normalized();  // the tendon's pull on the robot at the base
+    n -= pull;
+    m -= t.r.cross(pull);
+  }
+  if (M.disk_weight)
+    for (int j = 1; j < nd; ++j) {
+      n += M.full.disk_weight[j];
+      m += previous.disk_frames[j].p.cross(M.full.disk_weight[j]);
+    }
+  if (M.backbone_weight) {
+    // Integral of p over the backbone: trapezoid between disks with the end correction
+    // h^2/12 (p'(a) - p'(b)), p' ~ R e_z (fourth order, Euler-Maclaurin).
+    Vec3 integral = Vec3::Zero();
+    for (int j = 1; j < nd; ++j) {
+      const Frame& a = previous.disk_frames[j - 1];
+      const Frame& b = previous.disk_frames[j];
+      const double h = M.routing.disk_s[j] - M.routing.disk_s[j - 1];
+      integral += 0.5 * h * (a.p + b.p) + (h * h / 12.0) * (a.R.col(2) - b.R.col(2));
+    }
+    n += M.length * M.full.weight;
+    m += integral.cross(M.full.weight);
+  }
+  x.head<3>() = n;
+  x.tail<3>() = m;
+  return x.allFinite();
 }
 
 Solution VcModel::solve(ModelWorkspace& workspace, const Solution* warm_start) const {
@@ -487,7 +691,8 @@ Solution VcModel::solve(ModelWorkspace& workspace, const Solution* warm_start) c
   if (!ws->impl) ws->impl = std::make_unique<VcWorkspace::Impl>();
   const Impl& M = *impl_;
   VcWorkspace::Impl& W = *ws->impl;
-  prepare_workspace(M, scene_.solver, W);
+  prepare_workspace(impl_, scene_.solver, W);
+  if (M.multiple_shooting) return solve_multiple(*ws, warm_start);
 
   Solution sol;
   sol.model = "vc";
@@ -496,11 +701,17 @@ Solution VcModel::solve(ModelWorkspace& workspace, const Solution* warm_start) c
   sum.integrator = W.shot_integrator->name();
 
   Eigen::VectorXd& x = W.x;
-  const bool warm = warm_start && warm_start->unknowns.size() == 6 && warm_start->unknowns.allFinite();
-  if (warm)
+  Vec6 guess;
+  bool warm = false;
+  if (warm_start && warm_reaction(*warm_start, guess)) {
+    x = guess;
+    warm = true;
+  } else if (warm_start && warm_start->unknowns.size() == 6 && warm_start->unknowns.allFinite()) {
     x = warm_start->unknowns;
-  else
+    warm = true;
+  } else {
     x = initial_guess(options_.initial_guess);
+  }
 
   ShootingSystem system(M, W);
   bvp::NewtonOptions nopt = bvp::NewtonOptions::from(scene_.solver);
@@ -579,6 +790,168 @@ Solution VcModel::solve(ModelWorkspace& workspace, const Solution* warm_start) c
         sum.message += "; final pass residual " + format_value(scaled) + " above tolerance";
         sum.residual_norm = scaled;
         sum.physical_residual = r.norm();
+      }
+    }
+  }
+  sum.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return sol;
+}
+
+/// Load continuation from the unloaded robot (x: its exact solution at load factor 0), the
+/// first step bounded so that its tension parameter (vc.hpp) stays below the threshold: the
+/// cold solve of multiple shooting, which follows the equilibrium branch connected to the
+/// unloaded robot. Maps the outcome into `sum` (never converged unless the full load is).
+void continue_from_rest(bvp::NewtonSolver& newton, bvp::ParameterizedSystem& system, Eigen::VectorXd& x,
+                        const bvp::NewtonOptions& nopt, const SolverOptions& options, double first_step,
+                        SolverSummary& sum) {
+  bvp::ContinuationOptions copt = bvp::ContinuationOptions::from(options);
+  copt.initial_step = std::clamp(first_step, copt.min_step, copt.initial_step);
+  const bvp::ContinuationResult c = bvp::continuation(newton, system, x, nopt, copt);
+  sum.iterations += c.iterations;
+  sum.residual_evaluations += c.residual_evaluations;
+  sum.jacobian_evaluations += c.jacobian_evaluations;
+  sum.continuation_steps += c.steps;
+  const bvp::NewtonResult& r = c.last;
+  if (c.steps > 0) {
+    sum.solver_flag = r.flag;
+    sum.residual_norm = r.residual_norm;
+    sum.physical_residual = r.physical_residual;
+    if (!r.linear_solver.empty()) sum.linear_solver = r.linear_solver;
+  }
+  char buf[200];
+  if (c.converged()) {
+    sum.termination = TerminationType::Converged;
+    std::snprintf(buf, sizeof buf, " (multiple shooting, loaded from rest: %d continuation steps, %d converged)",
+                  c.steps, c.accepted_steps);
+    sum.message = r.message + buf;
+  } else {
+    sum.termination = r.converged() || c.steps == 0 ? TerminationType::NoConvergence : r.termination;
+    std::snprintf(buf, sizeof buf,
+                  "multiple shooting: load continuation from rest stopped at %.1f %% of the load "
+                  "(returned shape: the equilibrium there): ",
+                  100.0 * c.fraction);
+    sum.message = buf + c.message;
+  }
+}
+
+Solution VcModel::solve_multiple(VcWorkspace& ws, const Solution* warm_start) const {
+  const auto t0 = std::chrono::steady_clock::now();
+  const Impl& M = *impl_;
+  VcWorkspace::Impl& W = *ws.impl;
+  set_lambda(M, W, 1.0);  // sizes W.loads, which the interval ODEs point into
+  prepare_multiple_shooting(M, W);
+  bvp::ParameterizedSystem& system = *W.ms_system;
+  const int N = static_cast<int>(M.interval_segment.size());
+  const int dim = cosserat::kStateSize;
+  const int size = dim * N;
+
+  Solution sol;
+  sol.model = "vc";
+  SolverSummary& sum = sol.summary;
+  sum.unknowns = size;
+  sum.integrator = W.shot_integrator->name();
+
+  // Initial guess: a previous multiple-shooting solution, else the disk states of any previous
+  // solution (its backbone samples, also those of a single-shooting solve), else the straight
+  // robot's statics.
+  Eigen::VectorXd x(size);
+  bool warm = false;
+  if (warm_start && warm_start->unknowns.size() == size && warm_start->unknowns.allFinite()) {
+    x = warm_start->unknowns;
+    warm = true;
+  } else if (warm_start && static_cast<int>(warm_start->backbone.size()) == M.routing.disk_count()) {
+    for (int k = 0; k < N; ++k) {
+      const BackboneSample& b = warm_start->backbone[k];
+      double* y = x.data() + static_cast<long>(k) * dim;
+      cosserat::position(y) = b.frame.p;
+      cosserat::rotation(y) = b.frame.R;
+      cosserat::force(y) = b.n;
+      cosserat::moment(y) = b.m;
+    }
+    warm = x.allFinite();
+  }
+  if (!warm) straight_node_states(M, 1.0, x);
+
+  set_lambda(M, W, 1.0);
+  const bvp::NewtonOptions nopt = bvp::NewtonOptions::from(scene_.solver);
+  const double first_step = options_.multiple_shooting_threshold / std::max(M.tension_parameter, 1e-300);
+  if (!warm && scene_.solver.continuation) {
+    // Cold: load the robot from rest. A direct Newton solve from the straight robot lands on
+    // other (coiled, buckled) equilibria when the loads bend it strongly (vc.hpp).
+    straight_node_states(M, 0.0, x);
+    continue_from_rest(W.newton, system, x, nopt, scene_.solver, first_step, sum);
+  } else {
+    bvp::NewtonResult res = W.newton.solve(system, x, nopt);
+    detail::copy_newton_result(res, sum);
+    if (!res.converged() && scene_.solver.continuation) {
+      const std::string direct = sum.message;
+      straight_node_states(M, 0.0, x);
+      continue_from_rest(W.newton, system, x, nopt, scene_.solver, first_step, sum);
+      sum.message += "; the warm-started direct solve failed: " + direct;
+    }
+  }
+  set_lambda(M, W, 1.0);  // the final pass reports the full load's residual
+
+  // Final pass: every interval from its own start state (a sweep from the base would amplify
+  // the errors multiple shooting avoids), recording frames, samples and tendon lengths.
+  sol.unknowns = x;
+  sol.tensions = M.tensions;
+  sol.disk_frames.reserve(M.routing.disk_count());
+  sol.backbone.reserve(M.routing.disk_count());
+  sol.disk_frames.push_back(Frame{});
+  sol.backbone.push_back(BackboneSample{0.0, Frame{}, Vec3(x.segment<3>(12)), Vec3(x.segment<3>(15))});
+  const int nseg = static_cast<int>(scene_.robot.segments.size());
+  const int K = M.tendon_count;
+  std::vector<double> seg_lengths(static_cast<std::size_t>(nseg) * K, 0.0), cum(K, 0.0);
+  bvp::Integrator& fin = M.lengths_in_shots ? *W.shot_integrator : *W.final_integrator;
+  RodOde& rod = *W.final_rod;
+  double* y = W.y.data();
+  bool integrated = true;
+  for (int k = 0; k < N && integrated; ++k) {
+    const int i = M.interval_segment[k];
+    std::copy(x.data() + static_cast<long>(k) * dim, x.data() + static_cast<long>(k + 1) * dim, y);
+    for (int t = 0; t < K; ++t) y[dim + t] = 0.0;
+    rod.set(&W.loads.segments[i], &W.loads.weight);
+    integrated = fin.integrate(rod, M.routing.disk_s[k], M.routing.disk_s[k + 1], y) &&
+                 disk_point_loads(M, W.loads, i, k + 1, y) && Eigen::Map<const Eigen::VectorXd>(y, dim + K).allFinite();
+    if (!integrated) break;
+    for (int t = 0; t < K; ++t) cum[t] += y[dim + t];
+    const Frame f = cosserat::frame_of(y);
+    sol.disk_frames.push_back(f);
+    sol.backbone.push_back(
+        BackboneSample{M.routing.disk_s[k + 1], f, Vec3(cosserat::force(y)), Vec3(cosserat::moment(y))});
+    if (k + 1 == M.routing.segment_end_disk[i])
+      for (int t = 0; t < K; ++t) seg_lengths[static_cast<std::size_t>(i) * K + t] = cum[t];
+  }
+  if (!integrated) {
+    sol.disk_frames.clear();
+    sol.backbone.clear();
+    if (sum.converged()) {
+      sum.termination = TerminationType::IntegrationFailed;
+      sum.message += "; the final pass at the solution failed to integrate";
+    }
+  } else {
+    const bool per_segment = scene_.actuation.convention == Actuation::DisplacementConvention::PerSegment;
+    sol.tendon_displacements.assign(K, 0.0);
+    for (const RoutedTendon& t : M.routing.tendons) {
+      double straight = M.routing.disk_s[t.end_disk];
+      double len = seg_lengths[t.segment * K + t.index];
+      if (per_segment && t.segment > 0) {
+        straight -= M.routing.segment_end_s[t.segment - 1];
+        len -= seg_lengths[(t.segment - 1) * K + t.index];
+      }
+      sol.tendon_displacements[t.index] = straight - len;
+    }
+    if (sum.converged()) {
+      // The converged flag must describe the reported unknowns: recheck their residual.
+      Eigen::VectorXd f(size), sc(size);
+      system.residual_scale(sc);
+      const bool ok = system.residual(x, f);
+      const double scaled = ok ? f.cwiseProduct(sc).cwiseAbs().maxCoeff() : std::numeric_limits<double>::infinity();
+      if (!(scaled <= scene_.solver.function_tolerance)) {
+        sum.termination = TerminationType::NoConvergence;
+        sum.message += "; final residual " + format_value(scaled) + " above tolerance";
+        sum.residual_norm = scaled;
       }
     }
   }

@@ -86,6 +86,17 @@ enum class VcInitialGuess {
   Zero
 };
 
+/// @brief How the VC boundary value problem is discretised.
+enum class VcFormulation {
+  /// Single shooting unless the robot is long and soft for its loads (see VcModel::tension_parameter):
+  /// multiple shooting when L^2 (|W| + |F_tip|) / EI > VcOptions::multiple_shooting_threshold.
+  Automatic,
+  /// Single shooting: 6 unknowns n(0), m(0) (the paper code's formulation).
+  SingleShooting,
+  /// Multiple shooting: one interval per disk interval, 18 unknowns (p, R, n, m) per interval.
+  MultipleShooting
+};
+
 /// @brief Options of the VC model beyond the scene's SolverOptions.
 struct VcOptions {
   VcInitialGuess initial_guess = VcInitialGuess::Equilibrium;  ///< Cold-start guess.
@@ -96,6 +107,9 @@ struct VcOptions {
   /// is violated whenever torsion or shear jumps at a segment end (e.g. 1.5e-3 N of 10 N with
   /// tip loads on a 3-segment robot). Default on; off reproduces the paper code's formulation.
   bool kink_forces = true;
+  VcFormulation formulation = VcFormulation::Automatic;  ///< Single or multiple shooting.
+  /// Automatic formulation: multiple shooting when VcModel::tension_parameter() exceeds this.
+  double multiple_shooting_threshold = 10.0;
 };
 
 /// @brief Mutable memory of VC solves: integrators, the KINSOL workspace and the shooting state.
@@ -136,10 +150,18 @@ class VcModel final : public StaticModel {
              Eigen::Matrix<double, 6, 1>& residual) const;
   /// @brief Residual scale factors (1/F_s for the force rows, 1/M_s for the moment rows).
   Eigen::Matrix<double, 6, 1> residual_scale() const;
+  /// @brief The dimensionless load L^2 (|W| + |F_tip|) / EI (L: robot length, W: total weight
+  /// of backbone and disks, F_tip: tip force, EI: bending stiffness) that decides the automatic
+  /// formulation (see the file comment).
+  double tension_parameter() const;
+  /// @brief True if solve() uses multiple shooting (decided once, in the constructor).
+  bool uses_multiple_shooting() const;
 
   struct Impl;  ///< Private (defined in models/vc).
 
  private:
+  Solution solve_multiple(VcWorkspace& workspace, const Solution* warm_start) const;
+  bool warm_reaction(const Solution& previous, Eigen::Matrix<double, 6, 1>& x) const;
   Scene scene_;
   VcOptions options_;
   std::shared_ptr<const Impl> impl_;
