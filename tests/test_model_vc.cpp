@@ -14,6 +14,7 @@
 #include "tdcr/core/lie.hpp"
 #include "tdcr/core/paper_robot.hpp"
 #include "tdcr/models/cc.hpp"
+#include "tdcr/models/static_model.hpp"
 #include "tdcr/models/vc.hpp"
 
 using namespace tdcr;
@@ -455,4 +456,111 @@ TEST(VcModel, RejectsDisplacementInput) {
   Scene s = paper_scene(5, {0, 0, 0, 0});
   s.actuation.kind = Actuation::Kind::Displacements;
   EXPECT_THROW(VcModel m(s), InputError);
+}
+
+namespace {
+// Hard case 14: 3 x 0.2 m, E = 1e9 Pa, steel density, 0.1 g disks, gravity -y, T1 = 0.01 N:
+// w L^3 / (8 EI) ~ 40, the robot hangs from its base.
+Scene long_soft_robot(int disks) {
+  Scene s;
+  s.model = "vc";
+  s.robot = paper::robot(disks);
+  s.robot.segments.push_back(s.robot.segments.back());
+  s.robot.backbone.youngs_modulus = 1e9;
+  s.robot.backbone.density = 6450;
+  for (Segment& g : s.robot.segments) {
+    g.length = 0.2;
+    g.disk_mass = 1e-4;
+  }
+  s.actuation.values = {0.01, 0, 0, 0, 0, 0};
+  s.loads.gravity = Vec3(0, -9.81, 0);
+  return s;
+}
+}  // namespace
+
+// 11. Regression: single shooting over this long soft robot converged to a coiled equilibrium
+// (tip y = -0.085 m, a wrong answer marked converged). VC now chooses multiple shooting
+// (L^2 (|W| + |F|) / EI = 1400 > 10) and loads the robot from rest: it hangs like VCref, the
+// discrete-disk model that tends to VC as n grows. Measured VC - VCref tip distance: 8e-5 m at
+// n = 10, 2e-5 m at n = 20 (the model difference; the coiled answer was 0.5 m away). Bound 2e-4 m.
+TEST(VcModel, LongSoftRobotUnderGravityHangsLikeVcref) {
+  const Scene s = long_soft_robot(20);
+  VcModel vc(s);
+  EXPECT_TRUE(vc.uses_multiple_shooting());
+  EXPECT_GT(vc.tension_parameter(), 1000.0);
+  auto ws = vc.make_workspace();
+  const Solution a = vc.solve(*ws);
+  ASSERT_TRUE(a.converged()) << a.summary.message;
+  EXPECT_LE(a.summary.residual_norm, s.solver.function_tolerance);
+  EXPECT_EQ(a.unknowns.size(), 18 * 60);
+  Scene r = s;
+  r.model = "vcref";
+  auto ref = make_model(ModelKind::VCref, r);
+  auto rws = ref->make_workspace();
+  const Solution b = ref->solve(*rws);
+  ASSERT_TRUE(b.converged()) << b.summary.message;
+  EXPECT_LT(a.tip().p.y(), -0.5);
+  EXPECT_LT(b.tip().p.y(), -0.5);
+  EXPECT_LT((a.tip().p - b.tip().p).norm(), 2e-4) << a.tip().p.transpose() << " vs " << b.tip().p.transpose();
+  // Planar (all loads in the y-z plane) and the tendon displacements are finite.
+  for (const Frame& f : a.disk_frames) EXPECT_LT(std::abs(f.p.x()), 1e-12);
+  for (double d : a.tendon_displacements) EXPECT_TRUE(std::isfinite(d));
+  // A warm re-solve from the answer stays on it, in one or two iterations.
+  const Solution again = vc.solve(*ws, &a);
+  ASSERT_TRUE(again.converged());
+  EXPECT_LE(again.summary.iterations, 2);
+  EXPECT_LT((again.tip().p - a.tip().p).norm(), 1e-10);
+}
+
+// 12. Multiple and single shooting solve the same equations: on a moderate case (paper robot,
+// T1 = T_M, 1 N transverse tip force, L^2 F / EI = 2.4) both give the same shape, base wrench and
+// tendon displacements to solver tolerance; the automatic choice keeps single shooting there.
+TEST(VcModel, MultipleShootingMatchesSingleShooting) {
+  Scene s = paper_scene(10, {T_M(), 0, 0, 0});
+  s.loads.tip_force = Vec3(1.0, 0, -0.3);
+  s.loads.gravity = Vec3(0, -9.81, 0);
+  s.robot.backbone.density = 7800;
+  VcOptions ss, ms;
+  ss.formulation = VcFormulation::SingleShooting;
+  ms.formulation = VcFormulation::MultipleShooting;
+  EXPECT_FALSE(VcModel(s).uses_multiple_shooting());
+  const Solution a = solve_vc(s, ss), b = solve_vc(s, ms);
+  ASSERT_TRUE(a.converged() && b.converged()) << a.summary.message << " / " << b.summary.message;
+  EXPECT_EQ(a.unknowns.size(), 6);
+  EXPECT_EQ(b.unknowns.size(), 18 * 20);
+  expect_frames_near(a.disk_frames, b.disk_frames, 1e-9);
+  EXPECT_LT((a.backbone[0].n - b.backbone[0].n).norm(), 1e-9);
+  EXPECT_LT((a.backbone[0].m - b.backbone[0].m).norm(), 1e-9 * 0.01);
+  for (std::size_t k = 0; k < 4; ++k) EXPECT_NEAR(a.tendon_displacements[k], b.tendon_displacements[k], 1e-12);
+  // Cross warm starts: a single-shooting answer seeds multiple shooting (from its disk states)
+  // and the other way round (from its base reaction); both converge at once.
+  VcModel mm(s, ms), sm(s, ss);
+  auto w1 = mm.make_workspace(), w2 = sm.make_workspace();
+  const Solution c = mm.solve(*w1, &a), d = sm.solve(*w2, &b);
+  ASSERT_TRUE(c.converged() && d.converged());
+  EXPECT_LE(c.summary.iterations, 1);
+  EXPECT_LE(d.summary.iterations, 1);
+}
+
+// 13. Along a trajectory (T1 ramped 0..T_M in 10 steps with a 0.05 N transverse tip force, the
+// bench_case_study warm-start scenario), warm starts from the previous Solution need no more
+// Newton iterations than cold solves: the warm guess is the base reaction of the previous shape
+// under the new loads (exact up to the shape change).
+TEST(VcModel, WarmStartAlongTrajectoryBeatsColdGuess) {
+  int warm_its = 0, cold_its = 0;
+  Solution prev;
+  for (int i = 1; i <= 10; ++i) {
+    Scene s = paper_scene(10, {T_M() * i / 10, 0, 0, 0});
+    s.loads.tip_force = Vec3(0.05, 0, 0);
+    VcModel m(s);
+    auto ws = m.make_workspace();
+    const Solution cold = m.solve(*ws);
+    const Solution warm = m.solve(*ws, i > 1 ? &prev : nullptr);
+    ASSERT_TRUE(cold.converged() && warm.converged());
+    EXPECT_LT((cold.tip().p - warm.tip().p).norm(), 1e-10);
+    cold_its += cold.summary.iterations;
+    warm_its += warm.summary.iterations;
+    prev = warm;
+  }
+  EXPECT_LE(warm_its, cold_its);
 }
