@@ -103,6 +103,23 @@ TEST(BvpIntegrator, Rk4NonAutonomousOrderAndCounts) {
   EXPECT_LT(ratio, 20.0);
 }
 
+TEST(BvpIntegrator, Rk4MaxStepBoundsTheStepLength) {
+  // 2 steps minimum, 0.1 longest: [0, 2] takes 20 steps and is as accurate as Rk4Integrator(20);
+  // [0, 0.1] keeps the minimum of 2 steps.
+  Oscillator osc(3.0);
+  Rk4Integrator bounded(2, 0.1), fixed(20);
+  double a[2] = {1.0, 0.0}, b[2] = {1.0, 0.0};
+  ASSERT_TRUE(bounded.integrate(osc, 0.0, 2.0, a));
+  ASSERT_TRUE(fixed.integrate(osc, 0.0, 2.0, b));
+  EXPECT_EQ(bounded.rhs_evaluations(), 4 * 20);
+  EXPECT_EQ(a[0], b[0]);
+  EXPECT_EQ(a[1], b[1]);
+  double c[2] = {1.0, 0.0};
+  ASSERT_TRUE(bounded.integrate(osc, 0.0, 0.1, c));
+  EXPECT_EQ(bounded.rhs_evaluations(), 4 * 22);
+  EXPECT_THROW(Rk4Integrator(2, 0.0), tdcr::InputError);
+}
+
 TEST(BvpIntegrator, Rk4AllocatesNothingOnceWarm) {
   Rotation sys;
   Rk4Integrator rk(16);

@@ -3,6 +3,7 @@
 // equilibrium) and against the paper code's own VC results.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -262,6 +263,7 @@ TEST(VcModel, IntegratorConvergence) {
     Scene t = s;
     t.solver.integrator = kind;
     t.solver.rk4_steps = steps;
+    t.solver.rk4_max_step = std::numeric_limits<double>::infinity();  // exactly `steps` steps
     t.solver.cvode_rtol = 1e-10;
     t.solver.cvode_atol = 1e-12;
     const Solution sol = solve_vc(t);

@@ -7,6 +7,7 @@
 #include <sundials/sundials_context.h>
 #include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <exception>
@@ -60,8 +61,9 @@ double Integrator::relative_noise() const { return std::numeric_limits<double>::
 // ---------------------------------------------------------------------------------------------
 // RK4
 
-Rk4Integrator::Rk4Integrator(int steps) : steps_(steps) {
+Rk4Integrator::Rk4Integrator(int steps, double max_step) : steps_(steps), max_step_(max_step) {
   if (steps < 1) throw InputError("solver.rk4_steps", std::to_string(steps), "must be >= 1");
+  if (!(max_step > 0.0)) throw InputError("solver.rk4_max_step", number(max_step), "must be positive");
 }
 
 void Rk4Integrator::ensure_size(int n) {
@@ -78,17 +80,20 @@ bool Rk4Integrator::integrate(const OdeSystem& system, double s0, double s1, dou
   const int n = system.dimension();
   ensure_size(n);
   last_error_.clear();
-  const double h = (s1 - s0) / steps_;
+  int steps = steps_;
+  if (std::isfinite(max_step_))
+    steps = std::max(steps, static_cast<int>(std::ceil(std::abs(s1 - s0) / max_step_ - 1e-9)));
+  const double h = (s1 - s0) / steps;
   double* k1 = k1_.data();
   double* k2 = k2_.data();
   double* k3 = k3_.data();
   double* k4 = k4_.data();
   double* t = tmp_.data();
-  for (int step = 0; step < steps_; ++step) {
+  for (int step = 0; step < steps; ++step) {
     // s from the step index, not by accumulation, so the last stage lands exactly on s1.
     const double s = s0 + step * h;
     const double s_mid = s + 0.5 * h;
-    const double s_end = (step + 1 == steps_) ? s1 : s0 + (step + 1) * h;
+    const double s_end = (step + 1 == steps) ? s1 : s0 + (step + 1) * h;
     system.rhs(s, y, k1);
     for (int i = 0; i < n; ++i) t[i] = y[i] + 0.5 * h * k1[i];
     system.rhs(s_mid, t, k2);
@@ -98,7 +103,7 @@ bool Rk4Integrator::integrate(const OdeSystem& system, double s0, double s1, dou
     system.rhs(s_end, t, k4);
     for (int i = 0; i < n; ++i) y[i] += (h / 6.0) * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i]);
   }
-  rhs_evaluations_ += 4 * steps_;
+  rhs_evaluations_ += 4 * steps;
   for (int i = 0; i < n; ++i)
     if (!std::isfinite(y[i])) {
       last_error_ = "rk4: non-finite state at s = " + number(s1) + " (component " +
@@ -286,7 +291,7 @@ std::unique_ptr<Integrator> make_integrator(const SolverOptions& options) {
       return std::make_unique<CvodeIntegrator>(options.cvode_rtol, options.cvode_atol);
     case IntegratorKind::FixedStepRK4:
     default:
-      return std::make_unique<Rk4Integrator>(options.rk4_steps);
+      return std::make_unique<Rk4Integrator>(options.rk4_steps, options.rk4_max_step);
   }
 }
 

@@ -369,11 +369,12 @@ Effects parse_effects(const json& j, const std::string& path) {
 SolverOptions parse_solver(const json& j, const std::string& path) {
   const Object o(
       j, path,
-      {"integrator", "rk4_steps", "cvode_rtol", "cvode_atol", "function_tolerance", "step_tolerance",
+      {"integrator", "rk4_steps", "rk4_max_step", "cvode_rtol", "cvode_atol", "function_tolerance", "step_tolerance",
        "max_iterations", "linear_solver", "continuation", "max_continuation_steps"});
   SolverOptions s;
   o.get("integrator", s.integrator, kIntegrators);
   o.get("rk4_steps", s.rk4_steps);
+  o.get("rk4_max_step", s.rk4_max_step);
   o.get("cvode_rtol", s.cvode_rtol);
   o.get("cvode_atol", s.cvode_atol);
   o.get("function_tolerance", s.function_tolerance);
@@ -647,6 +648,7 @@ ojson effects_to_json(const Effects& e) {
 ojson solver_to_json(const SolverOptions& s) {
   return ojson{{"integrator", name_of(s.integrator, kIntegrators)},
                {"rk4_steps", s.rk4_steps},
+               {"rk4_max_step", s.rk4_max_step},
                {"cvode_rtol", s.cvode_rtol},
                {"cvode_atol", s.cvode_atol},
                {"function_tolerance", s.function_tolerance},

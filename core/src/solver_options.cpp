@@ -15,6 +15,8 @@ void SolverOptions::validate() const {
   positive("step_tolerance", step_tolerance);
   positive("cvode_rtol", cvode_rtol);
   positive("cvode_atol", cvode_atol);
+  if (!(rk4_max_step > 0.0))  // +infinity allowed: exactly rk4_steps steps per interval
+    throw InputError("solver.rk4_max_step", format_value(rk4_max_step), "must be positive");
   if (max_iterations < 1)
     throw InputError("solver.max_iterations", std::to_string(max_iterations), "must be at least 1");
   if (rk4_steps < 1) throw InputError("solver.rk4_steps", std::to_string(rk4_steps), "must be at least 1");

@@ -3,6 +3,7 @@
 /// (the fast, allocation-free path) and SUNDIALS CVODE (Adams, error controlled: the reference).
 #pragma once
 
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -55,23 +56,30 @@ class Integrator {
   std::string last_error_;   ///< Set by derived classes when integrate() fails.
 };
 
-/// @brief Classical 4th-order Runge-Kutta with a fixed number of equal steps per integrate().
+/// @brief Classical 4th-order Runge-Kutta with fixed, equal steps per integrate().
 ///
-/// Global error O(h^4): halving the step divides it by ~16. Stage buffers are sized on the
-/// first call for a given dimension and reused, so integrate() allocates nothing once warm.
-/// No error control: choose the step count from a convergence study (SolverOptions::rk4_steps).
+/// Global error O(h^4): halving the step divides it by ~16. Each integrate() call takes
+/// max(steps, ceil(|s1 - s0| / max_step)) equal steps: at least `steps` per shooting interval,
+/// and never a step longer than `max_step`, so that long intervals (one disk per segment) are as
+/// accurate as short ones. Stage buffers are sized on the first call for a given dimension and
+/// reused, so integrate() allocates nothing once warm. No error control: choose the settings from
+/// a convergence study (SolverOptions::rk4_steps, SolverOptions::rk4_max_step).
 class Rk4Integrator : public Integrator {
  public:
-  /// @param steps Steps per integrate() call (>= 1; throws InputError otherwise).
-  explicit Rk4Integrator(int steps);
+  /// @param steps Minimum steps per integrate() call (>= 1; throws InputError otherwise).
+  /// @param max_step Longest step (> 0, in the units of s; infinity: exactly `steps` steps).
+  explicit Rk4Integrator(int steps, double max_step = std::numeric_limits<double>::infinity());
   bool integrate(const OdeSystem& system, double s0, double s1, double* y) override;
   std::string name() const override { return "rk4"; }
-  /// @brief Steps per integrate() call.
+  /// @brief Minimum steps per integrate() call.
   int steps() const { return steps_; }
+  /// @brief Longest step.
+  double max_step() const { return max_step_; }
 
  private:
   void ensure_size(int n);
   int steps_;
+  double max_step_;
   int dim_ = -1;
   std::vector<double> k1_, k2_, k3_, k4_, tmp_;
 };
