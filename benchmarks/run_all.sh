@@ -3,7 +3,8 @@
 #
 #   bash benchmarks/run_all.sh [--quick] [BUILD_DIR] [OUT_DIR]
 #
-# BUILD_DIR defaults to build (configured and built already), OUT_DIR to docs/benchmark-results.
+# BUILD_DIR defaults to build (configured and built already), OUT_DIR to docs/benchmark-results
+# (then docs/benchmarks.md is regenerated from the tables too).
 # --quick runs the short sweep (seconds to a minute) instead of the full one.
 set -euo pipefail
 quick=""
@@ -21,4 +22,7 @@ py=/usr/bin/python3; [ -x "$py" ] || py=python3
 "$build/bin/bench_vc" $quick | tee "$out/bench_vc.txt"
 "$build/bin/bench_lumped" $quick | tee "$out/bench_lumped.txt"
 "$py" benchmarks/plot_results.py "$out" "$out"
+if [ "$out" = docs/benchmark-results ]; then
+  "$py" benchmarks/make_report.py "$out" benchmarks/report_template.md docs/benchmarks.md
+fi
 echo "results and figures in $out"

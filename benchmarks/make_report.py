@@ -1,0 +1,178 @@
+#!/usr/bin/env python3
+"""Write docs/benchmarks.md from the benchmark tables (benchmarks/run_all.sh output) and the
+narrative template benchmarks/report_template.md, so that every number in the page comes from a
+measured table and none is copied by hand.
+
+usage: make_report.py RESULTS_DIR TEMPLATE OUTPUT
+"""
+import csv
+import math
+import os
+import sys
+
+res, template, output = sys.argv[1:4]
+HERE = os.path.dirname(os.path.abspath(__file__))
+LABEL = {"cc": "CC", "ccsub": "CCsub", "prb": "PRB", "vc": "VC", "vcref": "VCref"}
+
+
+def read(name, base=res):
+    path = os.path.join(base, name)
+    if not os.path.exists(path):
+        return []
+    with open(path) as f:
+        return list(csv.DictReader(line for line in f if not line.startswith("#")))
+
+
+def f(x, digits=3):
+    try:
+        v = float(x)
+    except (TypeError, ValueError):
+        return "-"
+    if math.isnan(v):
+        return "-"
+    if v == 0:
+        return "0"
+    if abs(v) >= 1000:
+        return f"{v:,.0f}"
+    return f"{v:.{digits}g}"
+
+
+def time_us(x):
+    v = float(x)
+    if v >= 1000:
+        return f"{v / 1000:.3g} ms"
+    return f"{v:.3g} us"
+
+
+s1 = read("scenario1.csv")
+s2 = read("scenario2.csv")
+paper = read("paper_code_fig10.csv", os.path.join(HERE, "data"))
+vcref = read("vcref.csv")
+effects = read("effects.csv")
+warm = read("warmstart.csv")
+
+
+def s1_row(n, model):
+    for r in s1:
+        if r["n"] == str(n) and r["model"] == model:
+            return r
+    return None
+
+
+def paper_row(n, model):
+    for r in paper:
+        if r["n"] == str(n) and r["model"].lower() == model and r["initial_guess"] == "straight":
+            return r
+    return None
+
+
+tables = {}
+
+# Published text values, the paper's own code, tdcr.
+rows = ["| quantity | paper (text) | paper's code (ref. data) | tdcr |", "| --- | --- | --- | --- |"]
+for n, model, pub in [(1, "vc", "9.12 %"), (10, "vc", "0.16 %")]:
+    t, p = s1_row(n, model), paper_row(n, model)
+    rows.append(f"| {LABEL[model]} vs VCref, n = {n}, e_p | {pub} | "
+                f"{f(p['e_p_pct_vs_VCref_straight'])} % (vs its straight-guess VCref) / "
+                f"{f(p['e_p_pct_vs_VCref_best'])} % (vs converged VCref) | {f(t['e_p_pct'])} % |")
+t, p = s1_row(1, "prb"), paper_row(1, "prb")
+rows.append(f"| PRB vs VCref, n = 1, e_p / e_R | at most 0.47 % / 0.43 deg | {f(p['e_p_pct_vs_VCref_best'])} % / "
+            f"{f(p['e_R_deg_vs_VCref_best'])} deg | {f(t['e_p_pct'])} % / {f(t['e_R_deg'])} deg |")
+tables["published"] = "\n".join(rows)
+
+# Speed at n = 10.
+rows = ["| model | tdcr median | tdcr min | paper's code median | speed-up |", "| --- | --- | --- | --- | --- |"]
+for m in ["cc", "ccsub", "prb", "vc", "vcref"]:
+    r = s1_row(10, m)
+    if r:
+        rows.append(f"| {LABEL[m]} | {time_us(r['median_us'])} | {time_us(r['min_us'])} | "
+                    f"{time_us(r['paper_code_median_us'])} | {f(r['speedup'])}x |")
+tables["speed10"] = "\n".join(rows)
+
+# Scenario 1 errors and times.
+ns = [r["n"] for r in s1 if r["model"] == "vc"]
+rows = ["| n | " + " | ".join(f"{LABEL[m]} e_p (%)" for m in ["cc", "ccsub", "prb", "vc"]) + " | "
+        + " | ".join(f"{LABEL[m]} time" for m in ["cc", "ccsub", "prb", "vc", "vcref"]) + " |",
+        "| --- " * 10 + "|"]
+for n in ns:
+    e = [f(s1_row(n, m)["e_p_pct"]) for m in ["cc", "ccsub", "prb", "vc"]]
+    t = [time_us(s1_row(n, m)["median_us"]) for m in ["cc", "ccsub", "prb", "vc", "vcref"]]
+    rows.append(f"| {n} | " + " | ".join(e) + " | " + " | ".join(t) + " |")
+tables["scenario1"] = "\n".join(rows)
+
+# Scenario 2.
+rows = ["| stiffness factor | force | CCsub e_p / e_R | PRB e_p / e_R | VC e_p / e_R | failures (CCsub, PRB, VC) | "
+        "time at half load: CCsub, PRB, VC, VCref |", "| --- | --- | --- | --- | --- | --- | --- |"]
+keys = []
+for r in s2:
+    k = (r["stiffness_factor"], r["force_case"])
+    if k not in keys:
+        keys.append(k)
+for sf, fc in keys:
+    by = {r["model"]: r for r in s2 if r["stiffness_factor"] == sf and r["force_case"] == fc}
+    cell = lambda m: f"{f(by[m]['e_p_pct'])} % / {f(by[m]['e_R_deg'])} deg" if m in by else "-"
+    fails = ", ".join(by[m]["failures"] if m in by else "-" for m in ["ccsub", "prb", "vc"])
+    times = ", ".join(time_us(by[m]["median_us"]) if m in by else "-" for m in ["ccsub", "prb", "vc", "vcref"])
+    rows.append(f"| {f(sf)} | {fc} | {cell('ccsub')} | {cell('prb')} | {cell('vc')} | {fails} | {times} |")
+tables["scenario2"] = "\n".join(rows)
+
+# VCref: accuracy and time at n = 10, and scaling.
+rows = ["| initial guess | RK4 steps per interval | median | tip error vs CVODE 1e-12 | speed-up vs paper's code |",
+        "| --- | --- | --- | --- | --- |"]
+for r in vcref:
+    if r["part"] == "a":
+        rows.append(f"| {r['initial_guess']} | {r['rk4_steps']} | {f(r['median_ms'])} ms | {f(r['tip_error_m'])} m | "
+                    f"{f(r['speedup_vs_paper'])}x |")
+tables["vcref_a"] = "\n".join(rows)
+rows = ["| disks per segment | unknowns | Jacobian nonzeros | Newton iterations | median | peak RSS |",
+        "| --- | --- | --- | --- | --- | --- |"]
+pts = []
+for r in vcref:
+    if r["part"] == "b":
+        rows.append(f"| {r['n']} | {r['unknowns']} | {r['nnz']} | {r['iterations']} | {f(r['median_ms'])} ms | "
+                    f"{f(r['peak_rss_mb'])} MB |")
+        if int(r["n"]) >= 30:
+            pts.append((math.log(float(r["n"])), math.log(float(r["median_ms"]))))
+tables["vcref_b"] = "\n".join(rows)
+if len(pts) >= 2:
+    mx = sum(x for x, _ in pts) / len(pts)
+    my = sum(y for _, y in pts) / len(pts)
+    slope = sum((x - mx) * (y - my) for x, y in pts) / sum((x - mx) ** 2 for x, _ in pts)
+    tables["vcref_slope"] = f"{slope:.2f}"
+else:
+    tables["vcref_slope"] = "-"
+
+# Effects.
+names = []
+for r in effects:
+    if r["effect"] not in names:
+        names.append(r["effect"])
+rows = ["| model | " + " | ".join(names) + " |", "| --- " * (len(names) + 1) + "|"]
+for m in ["ccsub", "prb", "vc", "vcref"]:
+    cells = []
+    for n in names:
+        r = [x for x in effects if x["model"] == m and x["effect"] == n]
+        cells.append(f"{time_us(r[0]['median_us'])} ({r[0]['iterations']} it.)" if r else "-")
+    rows.append(f"| {LABEL[m]} | " + " | ".join(cells) + " |")
+tables["effects"] = "\n".join(rows)
+
+# Warm start.
+rows = ["| model | cold: total | cold: iterations per step | warm: total | warm: iterations per step |",
+        "| --- | --- | --- | --- | --- |"]
+for m in ["ccsub", "prb", "vc", "vcref"]:
+    c = [r for r in warm if r["model"] == m and r["mode"] == "cold"]
+    w = [r for r in warm if r["model"] == m and r["mode"] == "warm"]
+    if c and w:
+        rows.append(f"| {LABEL[m]} | {f(c[0]['total_ms'])} ms | {f(c[0]['mean_iterations'])} | {f(w[0]['total_ms'])} ms | "
+                    f"{f(w[0]['mean_iterations'])} |")
+tables["warmstart"] = "\n".join(rows)
+
+with open(os.path.join(res, "machine.txt")) as fh:
+    tables["machine"] = "; ".join(line.lstrip("# ").rstrip() for line in fh if line.strip())
+
+text = open(template).read()
+for k, v in tables.items():
+    text = text.replace("{{" + k + "}}", v)
+with open(output, "w") as fh:
+    fh.write(text)
+print(f"wrote {output}")
