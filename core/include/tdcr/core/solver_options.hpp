@@ -30,7 +30,8 @@ struct SolverOptions {
   int max_iterations = 200;  ///< Newton iterations per solve.
   /// Integrator of the Cosserat-rod ODEs (VC, VCref; the other models integrate nothing).
   IntegratorKind integrator = IntegratorKind::FixedStepRK4;
-  /// RK4 steps per disk interval (one subsegment, length L_i / n_i), for VC and VCref alike.
+  /// Minimum RK4 steps per disk interval (one subsegment, length L_i / n_i), for VC and VCref
+  /// alike; rk4_max_step may ask for more.
   int rk4_steps = 8;
   /// Longest RK4 step (m): a disk interval longer than rk4_steps * rk4_max_step takes more steps.
   /// Keeps the integration error of long intervals (few disks) small: with 1 mm the VCref tip of
