@@ -3,6 +3,8 @@
 // its result into the model's SolverSummary.
 #pragma once
 
+#include <string>
+
 #include <Eigen/Core>
 
 #include "tdcr/bvp/continuation.hpp"
@@ -12,19 +14,25 @@
 
 namespace tdcr::detail {
 
-/// @brief Load continuation after a failed direct solve: the system's parameter is the load
-/// factor (every tension, the tip wrench and gravity scale with it), raised from 0 to 1.
+/// @brief Load continuation: the system's parameter is the load factor (every tension, the tip
+/// wrench and gravity scale with it), raised from 0 to 1 by bvp::continuation().
+///
+/// Used after a failed direct solve, and by models that load a robot from rest on purpose (VC's
+/// multiple shooting under large loads follows the branch connected to the unloaded robot).
 ///
 /// @param x In: the exact solution of the unloaded system (load factor 0). Out: the solution at
 ///        the load factor reached (1 on success).
-/// @param sum The summary of the failed direct solve. Work counters are added to it,
-///        continuation_steps is set; on success the termination, flag and residual of the final
-///        Newton solve are copied and the message says that continuation was used; on failure
-///        the termination is that of the last failed step and the message gives the load
-///        fraction reached (the returned shape is the equilibrium at that fraction) and the
-///        direct solve's message. Never converged unless the full load converged.
+/// @param sum The summary so far. Work counters are added to it, continuation_steps too; on
+///        success the termination, flag and residual of the final Newton solve are copied and the
+///        message says that continuation was used and why; on failure the termination is that of
+///        the last failed step and the message gives the load fraction reached (the returned shape
+///        is the equilibrium at that fraction). Never converged unless the full load converged.
+/// @param first_step First load step (0: SolverOptions' default).
+/// @param purpose Why continuation runs, for the message; empty: "direct solve failed: <the
+///        message in sum>".
 bvp::ContinuationResult continue_loads(bvp::NewtonSolver& newton, bvp::ParameterizedSystem& system,
                                        Eigen::VectorXd& x, const bvp::NewtonOptions& newton_options,
-                                       const SolverOptions& options, SolverSummary& sum);
+                                       const SolverOptions& options, SolverSummary& sum, double first_step = 0.0,
+                                       const std::string& purpose = "");
 
 }  // namespace tdcr::detail

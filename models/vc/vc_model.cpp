@@ -797,43 +797,6 @@ Solution VcModel::solve(ModelWorkspace& workspace, const Solution* warm_start) c
   return sol;
 }
 
-/// Load continuation from the unloaded robot (x: its exact solution at load factor 0), the
-/// first step bounded so that its tension parameter (vc.hpp) stays below the threshold: the
-/// cold solve of multiple shooting, which follows the equilibrium branch connected to the
-/// unloaded robot. Maps the outcome into `sum` (never converged unless the full load is).
-void continue_from_rest(bvp::NewtonSolver& newton, bvp::ParameterizedSystem& system, Eigen::VectorXd& x,
-                        const bvp::NewtonOptions& nopt, const SolverOptions& options, double first_step,
-                        SolverSummary& sum) {
-  bvp::ContinuationOptions copt = bvp::ContinuationOptions::from(options);
-  copt.initial_step = std::clamp(first_step, copt.min_step, copt.initial_step);
-  const bvp::ContinuationResult c = bvp::continuation(newton, system, x, nopt, copt);
-  sum.iterations += c.iterations;
-  sum.residual_evaluations += c.residual_evaluations;
-  sum.jacobian_evaluations += c.jacobian_evaluations;
-  sum.continuation_steps += c.steps;
-  const bvp::NewtonResult& r = c.last;
-  if (c.steps > 0) {
-    sum.solver_flag = r.flag;
-    sum.residual_norm = r.residual_norm;
-    sum.physical_residual = r.physical_residual;
-    if (!r.linear_solver.empty()) sum.linear_solver = r.linear_solver;
-  }
-  char buf[200];
-  if (c.converged()) {
-    sum.termination = TerminationType::Converged;
-    std::snprintf(buf, sizeof buf, " (multiple shooting, loaded from rest: %d continuation steps, %d converged)",
-                  c.steps, c.accepted_steps);
-    sum.message = r.message + buf;
-  } else {
-    sum.termination = r.converged() || c.steps == 0 ? TerminationType::NoConvergence : r.termination;
-    std::snprintf(buf, sizeof buf,
-                  "multiple shooting: load continuation from rest stopped at %.1f %% of the load "
-                  "(returned shape: the equilibrium there): ",
-                  100.0 * c.fraction);
-    sum.message = buf + c.message;
-  }
-}
-
 Solution VcModel::solve_multiple(VcWorkspace& ws, const Solution* warm_start) const {
   const auto t0 = std::chrono::steady_clock::now();
   const Impl& M = *impl_;
@@ -879,14 +842,16 @@ Solution VcModel::solve_multiple(VcWorkspace& ws, const Solution* warm_start) co
     // Cold: load the robot from rest. A direct Newton solve from the straight robot lands on
     // other (coiled, buckled) equilibria when the loads bend it strongly (vc.hpp).
     straight_node_states(M, 0.0, x);
-    continue_from_rest(W.newton, system, x, nopt, scene_.solver, first_step, sum);
+    detail::continue_loads(W.newton, system, x, nopt, scene_.solver, sum, first_step,
+                           "multiple shooting, loaded from rest");
   } else {
     bvp::NewtonResult res = W.newton.solve(system, x, nopt);
     detail::copy_newton_result(res, sum);
     if (!res.converged() && scene_.solver.continuation) {
       const std::string direct = sum.message;
       straight_node_states(M, 0.0, x);
-      continue_from_rest(W.newton, system, x, nopt, scene_.solver, first_step, sum);
+      detail::continue_loads(W.newton, system, x, nopt, scene_.solver, sum, first_step,
+                           "multiple shooting, loaded from rest");
       sum.message += "; the warm-started direct solve failed: " + direct;
     }
   }
