@@ -134,8 +134,23 @@ TEST(CcModel, TensionsGiveTheLoadFreeCosseratArc) {
   EXPECT_NEAR(lie::rotation_angle(sol2.tip().R, Mat3::Identity()), M_PI / 2, 1e-12);
 }
 
-TEST(CcModel, RefusesExternalLoads) {
+TEST(CcModel, RefusesExternalLoadsNamingTheField) {
+  auto field_of = [](const Scene& s) {
+    try {
+      CcModel m{s};
+    } catch (const InputError& e) {
+      return e.field() + " " + e.value();
+    }
+    return std::string("accepted");
+  };
   Scene s = paper::scene(5, 2, "cc");
   s.loads.tip_force = Vec3(0, 0.5, 0);
-  EXPECT_THROW(CcModel{s}, InputError);
+  EXPECT_EQ(field_of(s), "loads.tip_force [0, 0.5, 0]");
+  s.loads.tip_force.setZero();
+  s.loads.tip_moment = Vec3(0.01, 0, 0);
+  EXPECT_EQ(field_of(s), "loads.tip_moment [0.01, 0, 0]");
+  s.loads.tip_moment.setZero();
+  s.loads.gravity = Vec3(0, 0, -9.81);
+  s.robot.backbone.density = 6450;
+  EXPECT_EQ(field_of(s), "loads.gravity [0, 0, -9.81]");
 }

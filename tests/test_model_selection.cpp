@@ -65,3 +65,10 @@ TEST(ModelSelection, ThePromiseHoldsAgainstVcref) {
     }
   }
 }
+
+TEST(ModelSelection, SolveAcceptsAuto) {
+  const Solution sol = solve(paper::scene(10, 6, "auto"));
+  ASSERT_TRUE(sol.converged());
+  EXPECT_EQ(sol.model, "cc");
+  EXPECT_FALSE(sol.model_selection.empty());
+}

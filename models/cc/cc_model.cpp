@@ -39,11 +39,18 @@ CcModel::CcModel(const Scene& scene) : scene_(scene) {
   scene_.validate();
   const SceneEffects e = scene_.active_effects();
   // CC is kinematic or load-free: external loads would be silently ignored, so refuse them.
-  if (e.tip_wrench)
-    throw InputError("loads.tip_force", "nonzero",
+  if (e.tip_wrench) {
+    const bool force = scene_.loads.tip_force.squaredNorm() > 0.0;
+    const Vec3& v = force ? scene_.loads.tip_force : scene_.loads.tip_moment;
+    throw InputError(force ? "loads.tip_force" : "loads.tip_moment",
+                     "[" + format_value(v.x()) + ", " + format_value(v.y()) + ", " + format_value(v.z()) + "]",
                      "the CC model cannot account for a tip wrench; use ccsub, prb, vc or vcref");
+  }
   if (e.gravity)
-    throw InputError("loads.gravity", "nonzero", "the CC model cannot account for gravity; use ccsub, prb, vc or vcref");
+    throw InputError("loads.gravity",
+                     "[" + format_value(scene_.loads.gravity.x()) + ", " + format_value(scene_.loads.gravity.y()) + ", " +
+                         format_value(scene_.loads.gravity.z()) + "]",
+                     "the CC model cannot account for gravity; use ccsub, prb, vc or vcref");
   for (std::size_t i = 0; i < scene_.robot.segments.size(); ++i) {
     const auto& seg = scene_.robot.segments[i];
     if (scene_.actuation.kind == Actuation::Kind::Displacements && seg.tendons.size() < 2)

@@ -3,6 +3,7 @@
 
 #include "common/model_factories.hpp"
 #include "tdcr/core/error.hpp"
+#include "tdcr/models/model_selection.hpp"
 #include "tdcr/models/static_model.hpp"
 
 namespace tdcr {
@@ -42,6 +43,7 @@ std::unique_ptr<StaticModel> make_model(ModelKind kind, const Scene& scene) {
 }
 
 Solution solve(const Scene& scene, const Solution* warm_start) {
+  if (scene.model == "auto") return solve_auto(scene, 0.01, warm_start);  // default accuracy: 1 %
   auto model = make_model(parse_model_kind(scene.model), scene);
   auto ws = model->make_workspace();
   return model->solve(*ws, warm_start);

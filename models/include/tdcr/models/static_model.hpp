@@ -57,8 +57,9 @@ class StaticModel {
 /// @brief Build the model `kind` for `scene` (validated first; throws InputError on bad input).
 std::unique_ptr<StaticModel> make_model(ModelKind kind, const Scene& scene);
 
-/// @brief One-shot convenience: build the scene's model (scene.model, one of the five names;
-/// "auto" is solve_auto's, model_selection.hpp) with a fresh workspace and solve it. Load
+/// @brief One-shot convenience: build the scene's model (scene.model: one of the five names, or
+/// "auto", which chooses with solve_auto at 1 % accuracy, model_selection.hpp) with a fresh
+/// workspace and solve it. Load
 /// continuation, when SolverOptions::continuation is on, is part of every model's solve().
 Solution solve(const Scene& scene, const Solution* warm_start = nullptr);
 
