@@ -15,6 +15,8 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "bad_scene_inputs.hpp"
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -196,6 +198,27 @@ std::string scene_with(const std::string& ptr, const json& v) {
   j[json::json_pointer(ptr)] = v;
   return j.dump();
 }
+
+/// Every bad scene of the shared table (bad_scene_inputs.hpp, the same table test_scene_io.cpp runs
+/// through the C++ API) through the command line: exit 2, nothing on stdout, and a message on
+/// stderr that names the field and contains the value.
+class CliBadSceneTable : public ::testing::TestWithParam<bad_scenes::BadInput> {};
+
+TEST_P(CliBadSceneTable, ExitTwoNamingFieldAndValue) {
+  const bad_scenes::BadInput& b = GetParam();
+  TempDir tmp;
+  const std::string path = tmp.write("scene.json", b.text);
+  const CliRun r = run_tdcr("solve " + quote(path));
+  EXPECT_EQ(r.status, 2) << r.out << r.err;
+  EXPECT_TRUE(r.out.empty()) << r.out;
+  // Errors about the file as a whole name the file: the API test calls it scene.json.
+  const std::string field = b.field == "scene.json" ? path : b.field;
+  EXPECT_TRUE(contains(r.err, "error: " + field + ": ")) << r.err;
+  EXPECT_TRUE(contains(r.err, b.in_what)) << r.err;
+}
+
+INSTANTIATE_TEST_SUITE_P(SharedTable, CliBadSceneTable, ::testing::ValuesIn(bad_scenes::bad_inputs()),
+                         [](const ::testing::TestParamInfo<bad_scenes::BadInput>& info) { return info.param.name; });
 
 class CliBadScene : public ::testing::TestWithParam<BadScene> {};
 
