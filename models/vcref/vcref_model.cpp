@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <stdexcept>
 #include <vector>
@@ -46,6 +47,11 @@ struct VcrefModel::Data {
   Eigen::VectorXd fscale, uscale;  // residual and unknown scales
   Eigen::VectorXd fd_scale;        // finite-difference step scale per unknown
   bvp::SparsityPattern pattern;
+  // Cold-start rule (vcref.hpp, VcrefOptions::load_threshold): decided once.
+  double load_parameter = 0.0;         // L^2 (|W| + |F_tip|) / EI
+  double compression_parameter = 0.0;  // L^2 max(0, -e_z . (F_tip + W)) / EI
+  bool from_rest = false;              // a cold solve loads the robot from rest
+  double first_step = 0.0;             // its first load step (0: the continuation default)
 
   // Index of component k (0..11: p, w, n, m) of unknown block b (block 0 holds n, m only).
   int col(int b, int k) const { return b == 0 ? k - 6 : 6 + 12 * (b - 1) + k; }
@@ -349,6 +355,10 @@ VcrefModel::VcrefModel(const Scene& scene, const VcrefOptions& options) : scene_
   scene_.validate();
   if (scene_.actuation.kind != Actuation::Kind::Tensions)
     throw InputError("actuation.kind", "displacements", "the VCref model takes tendon tensions");
+  if (!(options_.load_threshold > 0.0))
+    throw InputError("vcref.load_threshold", format_value(options_.load_threshold), "must be positive");
+  if (!(options_.compression_threshold > 0.0))
+    throw InputError("vcref.compression_threshold", format_value(options_.compression_threshold), "must be positive");
   auto d = std::make_shared<Data>();
   const Robot& robot = scene_.robot;
   const SceneEffects e = scene_.active_effects();
@@ -384,6 +394,24 @@ VcrefModel::VcrefModel(const Scene& scene, const VcrefOptions& options) : scene_
       weight += d->disk_weight[j].norm();
     }
   if (e.backbone_weight) weight += d->section.weight.norm() * d->length;
+  Vec3 weight_vec = Vec3::Zero();  // total weight (N, base frame)
+  for (int j = 1; j <= N; ++j) weight_vec += d->disk_weight[j];
+  if (e.backbone_weight) weight_vec += d->section.weight * d->length;
+
+  // Cold-start rule (see vcref.hpp): load parameters of the external loads only (tensions do
+  // not buckle the backbone: the tendon chords follow the disks).
+  {
+    const double EI = robot.backbone.effective_stiffness().EI;
+    const double L2 = d->length * d->length;
+    const Vec3 F = e.tip_wrench ? scene_.loads.tip_force : Vec3::Zero();
+    d->load_parameter = L2 * (weight_vec.norm() + F.norm()) / EI;
+    d->compression_parameter = L2 * std::max(0.0, -(F + weight_vec).z()) / EI;
+    const double a = d->load_parameter / options_.load_threshold;
+    const double b = d->compression_parameter / options_.compression_threshold;
+    const double worst = std::max(a, b);  // > 1: beyond a threshold
+    d->from_rest = worst > 1.0;
+    d->first_step = d->from_rest ? 1.0 / worst : 0.0;
+  }
 
   // Scales (see header).
   double tsum = 0.0;
@@ -433,6 +461,9 @@ VcrefModel::VcrefModel(const Scene& scene, const VcrefOptions& options) : scene_
 }
 
 int VcrefModel::unknowns() const { return data_->size; }
+double VcrefModel::load_parameter() const { return data_->load_parameter; }
+double VcrefModel::compression_parameter() const { return data_->compression_parameter; }
+bool VcrefModel::loads_from_rest() const { return data_->from_rest; }
 int VcrefModel::jacobian_nonzeros() const { return data_->pattern.nnz(); }
 
 std::unique_ptr<ModelWorkspace> VcrefModel::make_workspace() const {
@@ -455,16 +486,28 @@ Solution VcrefModel::solve(ModelWorkspace& workspace, const Solution* warm_start
 
   Eigen::VectorXd x;
   sys.set_load_factor(1.0);
-  if (!(warm_start && sys.warm_guess(*warm_start, x))) sys.straight_guess(x);
-
-  bvp::NewtonResult r = ws->newton.solve(sys, x, opts);
-  detail::copy_newton_result(r, sum);
-
-  if (!r.converged() && scene_.solver.continuation) {
-    // Load continuation from the straight, unloaded robot (exact at factor 0).
+  const bool warm = warm_start && sys.warm_guess(*warm_start, x);
+  if (!warm && d.from_rest && scene_.solver.continuation) {
+    // Cold solve under large external loads: load the robot from rest (exact at factor 0), the
+    // first step within the thresholds. A direct Newton solve can converge to another
+    // equilibrium (vcref.hpp).
+    char why[160];
+    std::snprintf(why, sizeof why,
+                  "loaded from rest: L^2 (|W| + |F_tip|) / EI = %.3g, compression parameter %.3g (thresholds %g, %g)",
+                  d.load_parameter, d.compression_parameter, options_.load_threshold, options_.compression_threshold);
     sys.set_load_factor(0.0);
-    sys.straight_guess(x);
-    detail::continue_loads(ws->newton, sys, x, opts, scene_.solver, sum);
+    sys.shape_guess(x, false);
+    detail::continue_loads(ws->newton, sys, x, opts, scene_.solver, sum, d.first_step, why);
+  } else {
+    if (!warm) sys.straight_guess(x);
+    bvp::NewtonResult r = ws->newton.solve(sys, x, opts);
+    detail::copy_newton_result(r, sum);
+    if (!r.converged() && scene_.solver.continuation) {
+      // Load continuation from the straight, unloaded robot (exact at factor 0).
+      sys.set_load_factor(0.0);
+      sys.shape_guess(x, false);
+      detail::continue_loads(ws->newton, sys, x, opts, scene_.solver, sum, d.first_step);
+    }
   }
 
   // Final state at the returned iterate (frames, interval ends).

@@ -46,6 +46,48 @@
 /// **Initial guess.** Cold solves start from the constant-curvature arcs of the tendon moments
 /// (VcrefOptions; the straight robot on request), warm starts from a previous Solution.
 ///
+/// **Large external loads: cold solves load the robot from rest.** A soft robot under a large
+/// tip force or its weight has several equilibria. A direct Newton solve from the cold guess can
+/// converge, with a residual far below tolerance, to an equilibrium that is not the one reached
+/// by loading the robot from rest. Two dimensionless loads, decided once in the constructor:
+///   P   = L^2 (|W| + |F_tip|) / EI                     (load_parameter()),
+///   P_c = L^2 max(0, -e_z . (F_tip + W)) / EI         (compression_parameter()),
+/// L robot length, W total weight of backbone and disks, EI bending stiffness, e_z the base
+/// axis (P_c: compression of the straight robot; a cantilever with a tip load buckles at
+/// pi^2 / 4 = 2.47). If P > VcrefOptions::load_threshold (2) or P_c >
+/// VcrefOptions::compression_threshold (2), a cold solve does no direct solve: it loads the robot
+/// from rest by load continuation (every load scaled by lambda from 0, the first step
+/// min(threshold / parameter), at most the continuation's default 0.25), each step warm-started.
+/// Only with SolverOptions::continuation (off: the direct solve, as before). A warm start always
+/// solves directly first (falling back on loading from rest if it fails). Tensions do not count:
+/// the tendon chords are attached to the disks, so they can buckle the backbone only between
+/// two disks, at ~pi^2 EI / h^2 (h disk spacing; 1.7 kN = 300 T_M on the paper robot); 4 x 30 T_M
+/// leave the cold solve on the loading path (tests).
+/// Measured (cold direct solve vs a 100-200-step warm-started loading path, tip
+/// difference > 1e-4 m = "another branch"; the wrong answers are 0.04-0.92 m away):
+///  - paper robot (n = 10), transverse tip forces 0.5-8 N in x or y, configurations 1, 2, 6
+///    (P up to 19): all right; opposing tendons (T2, T4 at -y vs +y force, the case study's
+///    configurations 6, 11): right up to P = 5.2, wrong from 5.9 (F = 2.5 N); T2 alone at 3 T_M
+///    (270 deg) against +y: right at P = 3, wrong at 4;
+///  - tip force (2, 0, -2) N (P = 6.7, P_c = 4.7): wrong for configurations 1, 2, 8, 16 (0.15-0.16
+///    m off); x 0.5 (P = 3.3, P_c = 2.4): right; pure compression -e_z with a 1 mN imperfection:
+///    right at P_c = 2.36, wrong from 2.59 (just past Euler buckling);
+///  - case study scenario 2 (0.5 N planar or transverse, 16 configurations): f = 0.1 (P = 11.8):
+///    7 of 32 wrong; f = 0.178 (P = 6.6): 1 of 32 (configuration 11 planar); f >= 0.316 (P <= 3.7):
+///    all right;
+///  - long soft robot under gravity (hard case 14): right up to 0.025 g (P = 21.7; from 13 on only
+///    because the direct solve failed and continuation took over), wrong from 0.03 g (P = 26):
+///    0.92 m off.
+/// The thresholds keep a margin of 2 below the lowest wrong transverse case (4) and sit below
+/// Euler's load for compression. With the rule every case above agrees with the loading path,
+/// except: near-perfect columns beyond Euler's load (pure compression with a 1 mN imperfection,
+/// or 0.5 T_M of tension against P_c = 4-5), where the continuation's coarse steps jump across
+/// the bifurcation to the other (near-straight or mirrored) branch; and loading paths with a
+/// fold (snap-through: tendons at 2-3 T_M against P = 4-5), where the fine path fails as well and
+/// the solve reports non-convergence. Cost: 3-9 continuation steps (paper robot ~6 ms instead
+/// of ~2 ms; hard case 14 at full gravity 84 ms); the paper case study without tip force and
+/// scenario 2 for f >= 1 (P <= 1.2) keep the direct solve.
+///
 /// **Outputs.** disk_frames: base, every disk, tip last (the interior disk poses are the solved
 /// unknowns; the tip pose is the end of the last interval, its rotation projected onto SO(3)).
 /// backbone: one sample per disk: sample 0 is the base with (n_0, m_0) just distal of the base;
@@ -80,6 +122,12 @@ struct VcrefOptions {
     Straight
   };
   InitialGuess initial_guess = InitialGuess::ConstantCurvature;  ///< See InitialGuess.
+  /// Cold solves load the robot from rest when VcrefModel::load_parameter() exceeds this (see
+  /// the file comment, "Large external loads"). Infinity: never for this reason.
+  double load_threshold = 2.0;
+  /// Cold solves load the robot from rest when VcrefModel::compression_parameter() exceeds this
+  /// (Euler buckling of a cantilever under a tip load: pi^2 / 4 = 2.47). Infinity: never.
+  double compression_threshold = 2.0;
 };
 
 /// @brief The VCref model of one scene: immutable, built from a validated tension-driven scene.
@@ -97,10 +145,24 @@ class VcrefModel final : public StaticModel {
   std::unique_ptr<ModelWorkspace> make_workspace() const override;
   /// @brief Solve by multiple shooting. `warm_start`: a previous VCref Solution of a robot with
   /// the same disks (its unknowns and disk rotations are the initial guess); otherwise (or if
-  /// the sizes do not match) VcrefOptions::initial_guess. With SolverOptions::continuation, a failed direct solve is retried by ramping the
-  /// tensions and loads. Never throws for a non-convergent solve.
+  /// the sizes do not match) VcrefOptions::initial_guess. With SolverOptions::continuation, a
+  /// cold solve under large external loads (loads_from_rest()) loads the robot from rest instead of
+  /// solving directly, and a failed direct solve is retried by ramping the tensions and loads
+  /// from rest. Never throws for a non-convergent solve.
   Solution solve(ModelWorkspace& workspace, const Solution* warm_start = nullptr) const override;
 
+  /// @brief The dimensionless external load L^2 (|W| + |F_tip|) / EI (L: robot length, W: total
+  /// weight of backbone and disks, F_tip: tip force, EI: bending stiffness; tensions do not
+  /// count). Decides, with compression_parameter(), whether a cold solve loads from rest.
+  double load_parameter() const;
+  /// @brief The axial compression of the straight robot by its external loads,
+  /// L^2 max(0, -e_z . (F_tip + W)) / EI (e_z: the base axis); Euler buckling of the cantilever
+  /// under a tip force at pi^2 / 4.
+  double compression_parameter() const;
+  /// @brief True if a cold solve (no warm start) loads the robot from rest (decided once in the
+  /// constructor: load_parameter() > VcrefOptions::load_threshold or compression_parameter() >
+  /// VcrefOptions::compression_threshold; only with SolverOptions::continuation).
+  bool loads_from_rest() const;
   /// @brief Number of unknowns (and residuals): 6 + 12 (N - 1), N = total disks.
   int unknowns() const;
   /// @brief Structural nonzeros of the block-tridiagonal Jacobian (grows linearly with N).
