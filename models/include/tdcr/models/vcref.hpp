@@ -84,7 +84,9 @@
 /// or 0.5 T_M of tension against P_c = 4-5), where the continuation's coarse steps jump across
 /// the bifurcation to the other (near-straight or mirrored) branch; and loading paths with a
 /// fold (snap-through: tendons at 2-3 T_M against P = 4-5), where the fine path fails as well and
-/// the solve reports non-convergence. Cost: 3-9 continuation steps (paper robot ~6 ms instead
+/// the solve reports non-convergence. Scenario 2 with the rule: all 288 solves on the loading
+/// path (8 wrong before), median cold solve per stiffness 3-15 ms (before 4-30 ms: failed direct
+/// solves cost more than loading from rest). Cost: 3-9 continuation steps (paper robot ~6 ms instead
 /// of ~2 ms; hard case 14 at full gravity 84 ms); the paper case study without tip force and
 /// scenario 2 for f >= 1 (P <= 1.2) keep the direct solve.
 ///
