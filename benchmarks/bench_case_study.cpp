@@ -11,6 +11,7 @@
 // and cold). benchmarks/plot_results.py draws them. --quick runs a small sweep in seconds (the
 // ctest smoke run); the full sweep takes minutes.
 #include <cmath>
+#include <limits>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -283,6 +284,7 @@ void tradeoff(const Settings& cfg) {
     for (int steps : {1, 2, 4, 8, 16}) {
       Scene s = paper::scene(10, 2);
       s.solver.rk4_steps = steps;
+      s.solver.rk4_max_step = std::numeric_limits<double>::infinity();  // exactly rk4_steps per interval
       run(ModelKind::VC, s, "rk4_" + std::to_string(steps));
       run(ModelKind::VCref, s, "rk4_" + std::to_string(steps));
     }

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -82,6 +83,7 @@ int main(int argc, char** argv) {
     for (int steps : {1, 2, 4, 8}) {
       Scene s = base;
       s.solver.rk4_steps = steps;
+      s.solver.rk4_max_step = std::numeric_limits<double>::infinity();  // exactly rk4_steps per interval
       rows.push_back(run(std::string(guess == VcInitialGuess::Zero ? "zero" : "equil") + " rk4 x" +
                              std::to_string(steps),
                          s, VcOptions{guess}, repeat, ref));

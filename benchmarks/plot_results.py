@@ -109,6 +109,7 @@ def scenario2(res, out):
             a.set_xlabel("stiffness factor (EI / EI_paper)")
             a.grid(True, which="both", alpha=0.3)
         ax[i][0].legend(fontsize=8)
+        ax[i][2].legend(fontsize=8)
     fig.suptitle("Scenario 2 (paper Fig. 11): tip force 0.5 N, n = 10")
     save(fig, out, "fig11_scenario2")
 

@@ -19,11 +19,12 @@ struct ErrorRow {
   double prb;
 };
 constexpr ErrorRow kScenario1[] = {
-    {1, 25.7, 1.22}, {2, 4.27, 0.231}, {5, 0.605, 0.0165}, {10, 0.151, 0.0345},
+    {1, 25.7, 1.21}, {2, 4.27, 0.231}, {5, 0.605, 0.0165}, {10, 0.151, 0.0345},
 };
 // With tip forces (scenario 2, n = 10, stiffness 0.1x to 10x, planar and transverse), VC's mean
-// error stays below twice its load-free value; the factor below is that measured bound.
-constexpr double kLoadedVcFactor = 2.5;
+// error stays below 3.2 times its load-free value (0.469 % against 0.148 % at stiffness 0.178x,
+// transverse); the factor below is that measured bound.
+constexpr double kLoadedVcFactor = 3.2;
 
 double table_error(int n, double ErrorRow::*field) {
   const int rows = static_cast<int>(sizeof kScenario1 / sizeof kScenario1[0]);
