@@ -20,11 +20,6 @@
 namespace tdcr::bvp {
 
 namespace {
-std::string number(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  return buf;
-}
 /// CVODE's flag names, without CVodeGetReturnFlagName (which returns malloc'd memory).
 const char* cvode_flag_name(int flag) {
   switch (flag) {
@@ -63,7 +58,7 @@ double Integrator::relative_noise() const { return std::numeric_limits<double>::
 
 Rk4Integrator::Rk4Integrator(int steps, double max_step) : steps_(steps), max_step_(max_step) {
   if (steps < 1) throw InputError("solver.rk4_steps", std::to_string(steps), "must be >= 1");
-  if (!(max_step > 0.0)) throw InputError("solver.rk4_max_step", number(max_step), "must be positive");
+  if (!(max_step > 0.0)) throw InputError("solver.rk4_max_step", format_value(max_step), "must be positive");
 }
 
 void Rk4Integrator::ensure_size(int n) {
@@ -106,7 +101,7 @@ bool Rk4Integrator::integrate(const OdeSystem& system, double s0, double s1, dou
   rhs_evaluations_ += 4 * steps;
   for (int i = 0; i < n; ++i)
     if (!std::isfinite(y[i])) {
-      last_error_ = "rk4: non-finite state at s = " + number(s1) + " (component " +
+      last_error_ = "rk4: non-finite state at s = " + format_value(s1) + " (component " +
                     std::to_string(i) + ")";
       return false;
     }
@@ -198,9 +193,9 @@ struct CvodeIntegrator::Impl {
 
 CvodeIntegrator::CvodeIntegrator(double rtol, double atol, long max_steps) {
   if (!(rtol > 0.0) || !std::isfinite(rtol))
-    throw InputError("solver.cvode_rtol", number(rtol), "must be positive and finite");
+    throw InputError("solver.cvode_rtol", format_value(rtol), "must be positive and finite");
   if (!(atol > 0.0) || !std::isfinite(atol))
-    throw InputError("solver.cvode_atol", number(atol), "must be positive and finite");
+    throw InputError("solver.cvode_atol", format_value(atol), "must be positive and finite");
   if (max_steps < 1)
     throw InputError("cvode.max_steps", std::to_string(max_steps), "must be >= 1");
   impl_ = std::make_unique<Impl>(rtol, atol, max_steps);
@@ -271,13 +266,13 @@ bool CvodeIntegrator::integrate(const OdeSystem& system, double s0, double s1, d
     std::rethrow_exception(e);
   }
   if (ret < 0) {
-    last_error_ = std::string(cvode_flag_name(ret)) + " at s = " + number(s_reached) + ": " +
+    last_error_ = std::string(cvode_flag_name(ret)) + " at s = " + format_value(s_reached) + ": " +
                   m.message;
     return false;
   }
   for (int i = 0; i < n; ++i) {
     if (!std::isfinite(yv[i])) {
-      last_error_ = "cvode: non-finite state at s = " + number(s_reached);
+      last_error_ = "cvode: non-finite state at s = " + format_value(s_reached);
       return false;
     }
     y[i] = yv[i];

@@ -24,11 +24,6 @@ namespace tdcr::bvp {
 
 namespace {
 
-std::string number(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  return buf;
-}
 
 /// KINSOL's flag names, without KINGetReturnFlagName (which returns malloc'd memory).
 const char* kinsol_flag_name(int flag) {
@@ -269,14 +264,14 @@ NewtonOptions NewtonOptions::from(const SolverOptions& options) {
 void NewtonOptions::validate() const {
   auto positive = [](double v, const char* field) {
     if (!(v > 0.0) || !std::isfinite(v))
-      throw InputError(std::string("newton.") + field, number(v), "must be positive and finite");
+      throw InputError(std::string("newton.") + field, format_value(v), "must be positive and finite");
   };
   positive(function_tolerance, "function_tolerance");
   positive(step_tolerance, "step_tolerance");
   if (max_iterations < 1)
     throw InputError("newton.max_iterations", std::to_string(max_iterations), "must be >= 1");
   if (!(max_newton_step >= 0.0) || !std::isfinite(max_newton_step))
-    throw InputError("newton.max_newton_step", number(max_newton_step),
+    throw InputError("newton.max_newton_step", format_value(max_newton_step),
                      "must be >= 0 (0 = automatic)");
   if (max_setup_calls < 1)
     throw InputError("newton.max_setup_calls", std::to_string(max_setup_calls), "must be >= 1");
