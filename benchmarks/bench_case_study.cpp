@@ -58,7 +58,7 @@ std::map<std::pair<std::string, int>, double> paper_code_times() {
   return t;
 }
 
-// Build and solve; nullopt if the model is not available in this build.
+// Build and solve; nullopt if the model refuses the scene (InputError, e.g. CC with a tip force).
 std::optional<Solution> try_solve(ModelKind kind, const Scene& scene, const Solution* warm = nullptr) {
   try {
     auto m = make_model(kind, scene);
