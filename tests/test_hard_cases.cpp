@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "test_scenes.hpp"
 #include "tdcr/core/lie.hpp"
 #include "tdcr/core/paper_robot.hpp"
 #include "tdcr/models/static_model.hpp"
@@ -264,20 +265,7 @@ std::vector<HardCase> cases() {
   // gravity along -y (w L^3 / 8 EI ~ 40: it hangs), a light pull T1 = 0.01 N. All loads lie in
   // the y-z plane: planar.
   v.push_back({"GravityLongSoftRobot",
-               [] {
-                 Scene s;
-                 s.robot = paper::robot(10);
-                 s.robot.segments.push_back(s.robot.segments.back());
-                 s.robot.backbone.youngs_modulus = 1e9;
-                 s.robot.backbone.density = 6450;
-                 for (Segment& g : s.robot.segments) {
-                   g.length = 0.2;
-                   g.disk_mass = 1e-4;
-                 }
-                 s.actuation.values = {0.01, 0, 0, 0, 0, 0};
-                 s.loads.gravity = Vec3(0, -9.81, 0);
-                 return s;
-               },
+               [] { return test_scenes::long_soft_robot(); },
                [](Context& c) {
                  // The robot hanging from its base has its tip far below: y < -0.4 m (CCsub,
                  // PRB, VCref: -0.59 m). Newton finds an equilibrium, not necessarily the one

@@ -11,6 +11,7 @@
 
 #include <gtest/gtest.h>
 
+#include "test_scenes.hpp"
 #include "tdcr/core/error.hpp"
 #include "tdcr/core/lie.hpp"
 #include "tdcr/core/paper_robot.hpp"
@@ -464,18 +465,8 @@ namespace {
 // Hard case 14: 3 x 0.2 m, E = 1e9 Pa, steel density, 0.1 g disks, gravity -y, T1 = 0.01 N:
 // w L^3 / (8 EI) ~ 40, the robot hangs from its base.
 Scene long_soft_robot(int disks) {
-  Scene s;
+  Scene s = test_scenes::long_soft_robot(disks);
   s.model = "vc";
-  s.robot = paper::robot(disks);
-  s.robot.segments.push_back(s.robot.segments.back());
-  s.robot.backbone.youngs_modulus = 1e9;
-  s.robot.backbone.density = 6450;
-  for (Segment& g : s.robot.segments) {
-    g.length = 0.2;
-    g.disk_mass = 1e-4;
-  }
-  s.actuation.values = {0.01, 0, 0, 0, 0, 0};
-  s.loads.gravity = Vec3(0, -9.81, 0);
   return s;
 }
 }  // namespace

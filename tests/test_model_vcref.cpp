@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "test_scenes.hpp"
 #include "tdcr/core/error.hpp"
 #include "tdcr/core/lie.hpp"
 #include "tdcr/core/metrics.hpp"
@@ -500,20 +501,7 @@ Solution direct_cold(const Scene& s) {
 // warm-started loading path to solver tolerance (same model, same discretisation: the
 // difference is Newton's tolerance, ~1e-10 of the scales, far below 1e-8 m; another branch
 // is > 0.1 m away).
-Scene long_soft_robot(double gravity_fraction) {
-  Scene s;
-  s.robot = paper::robot(10);
-  s.robot.segments.push_back(s.robot.segments.back());
-  s.robot.backbone.youngs_modulus = 1e9;
-  s.robot.backbone.density = 6450;
-  for (Segment& g : s.robot.segments) {
-    g.length = 0.2;
-    g.disk_mass = 1e-4;
-  }
-  s.actuation.values = {0.01, 0, 0, 0, 0, 0};
-  s.loads.gravity = Vec3(0, -9.81 * gravity_fraction, 0);
-  return s;
-}
+Scene long_soft_robot(double gravity_fraction) { return test_scenes::long_soft_robot(10, gravity_fraction); }
 
 TEST(VcrefLargeLoads, LongSoftRobotUnderGravityFollowsTheLoadingPath) {
   const Scene s = long_soft_robot(0.03);
