@@ -7,21 +7,14 @@
 #include <limits>
 #include <new>
 
+#include "allocation_counter.hpp"
 #include "tdcr/bvp/integrator.hpp"
 #include "tdcr/core/error.hpp"
 
 using tdcr::bvp::CvodeIntegrator;
 using tdcr::bvp::Rk4Integrator;
 
-// Count every operator new in this test binary, to check that warm RK4 allocates nothing.
-static std::atomic<long> g_allocations{0};
-void* operator new(std::size_t n) {
-  ++g_allocations;
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+
 
 namespace {
 

@@ -4,57 +4,17 @@
 #include <cmath>
 #include <set>
 
+#include "bvp_test_systems.hpp"
 #include "tdcr/bvp/residual_system.hpp"
 
 using tdcr::bvp::SparsityPattern;
 
 namespace {
 
-SparsityPattern tridiagonal(int n) {
-  std::vector<std::pair<int, int>> e;
-  for (int i = 0; i < n; ++i) {
-    e.emplace_back(i, i);
-    if (i > 0) e.emplace_back(i, i - 1);
-    if (i + 1 < n) e.emplace_back(i, i + 1);
-  }
-  return SparsityPattern::from_triplets(n, n, e);
-}
 
-// Discretised Bratu problem u'' + lambda e^u = 0, u(0) = u(1) = 0, scaled by h^2:
-// F_i = u_{i-1} - 2 u_i + u_{i+1} + h^2 lambda exp(u_i). Tridiagonal Jacobian.
-class Bratu : public tdcr::bvp::ResidualSystem {
- public:
-  Bratu(int n, double lambda, bool analytic)
-      : n_(n), lambda_(lambda), h_(1.0 / (n + 1)), analytic_(analytic), p_(tridiagonal(n)) {}
-  int size() const override { return n_; }
-  bool residual(const Eigen::Ref<const Eigen::VectorXd>& u,
-                Eigen::Ref<Eigen::VectorXd> f) override {
-    ++evaluations;
-    for (int i = 0; i < n_; ++i) {
-      const double left = i > 0 ? u[i - 1] : 0.0, right = i + 1 < n_ ? u[i + 1] : 0.0;
-      f[i] = left - 2.0 * u[i] + right + h_ * h_ * lambda_ * std::exp(u[i]);
-    }
-    return true;
-  }
-  const SparsityPattern* sparsity() const override { return &p_; }
-  bool has_jacobian() const override { return analytic_; }
-  bool sparse_jacobian(const Eigen::Ref<const Eigen::VectorXd>& u,
-                       const Eigen::Ref<const Eigen::VectorXd>&, double* v) override {
-    for (int j = 0; j < n_; ++j)
-      for (int k = p_.col_ptr[j]; k < p_.col_ptr[j + 1]; ++k) {
-        const int i = p_.row_idx[k];
-        v[k] = (i == j) ? -2.0 + h_ * h_ * lambda_ * std::exp(u[j]) : 1.0;
-      }
-    return true;
-  }
-  int evaluations = 0;
 
- private:
-  int n_;
-  double lambda_, h_;
-  bool analytic_;
-  SparsityPattern p_;
-};
+using bvp_test::Bratu;
+using bvp_test::tridiagonal;
 
 // A dense 3x3 system with an analytic Jacobian, optionally with one wrong entry.
 class Dense3 : public tdcr::bvp::ResidualSystem {

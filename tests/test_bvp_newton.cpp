@@ -8,6 +8,8 @@
 #include <new>
 #include <stdexcept>
 
+#include "bvp_test_systems.hpp"
+#include "allocation_counter.hpp"
 #include "tdcr/bvp/newton_solver.hpp"
 #include "tdcr/core/error.hpp"
 
@@ -17,16 +19,7 @@ using tdcr::bvp::NewtonOptions;
 using tdcr::bvp::NewtonSolver;
 using tdcr::bvp::SparsityPattern;
 
-// Count every operator new in this test binary: a solve may allocate a few strings for its
-// report, but nothing per Newton iteration.
-static std::atomic<long> g_allocations{0};
-void* operator new(std::size_t n) {
-  ++g_allocations;
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+
 
 namespace {
 
@@ -64,54 +57,10 @@ class Dense3 : public tdcr::bvp::ResidualSystem {
   }
 };
 
-SparsityPattern tridiagonal(int n) {
-  std::vector<std::pair<int, int>> e;
-  for (int i = 0; i < n; ++i) {
-    e.emplace_back(i, i);
-    if (i > 0) e.emplace_back(i, i - 1);
-    if (i + 1 < n) e.emplace_back(i, i + 1);
-  }
-  return SparsityPattern::from_triplets(n, n, e);
-}
 
-// Bratu: u'' + lambda e^u = 0 on (0, 1), u(0) = u(1) = 0; central differences, scaled by h^2.
-class Bratu : public tdcr::bvp::ResidualSystem {
- public:
-  Bratu(int n, double lambda, bool analytic)
-      : n_(n), h_(1.0 / (n + 1)), analytic_(analytic), p_(tridiagonal(n)), lambda(lambda) {}
-  int size() const override { return n_; }
-  bool residual(const Eigen::Ref<const Eigen::VectorXd>& u,
-                Eigen::Ref<Eigen::VectorXd> f) override {
-    for (int i = 0; i < n_; ++i) {
-      const double left = i > 0 ? u[i - 1] : 0.0, right = i + 1 < n_ ? u[i + 1] : 0.0;
-      f[i] = left - 2.0 * u[i] + right + h_ * h_ * lambda * std::exp(u[i]);
-    }
-    return true;
-  }
-  const SparsityPattern* sparsity() const override { return &p_; }
-  bool has_jacobian() const override { return analytic_; }
-  bool sparse_jacobian(const Eigen::Ref<const Eigen::VectorXd>& u,
-                       const Eigen::Ref<const Eigen::VectorXd>&, double* v) override {
-    for (int j = 0; j < n_; ++j)
-      for (int k = p_.col_ptr[j]; k < p_.col_ptr[j + 1]; ++k)
-        v[k] = (p_.row_idx[k] == j) ? -2.0 + h_ * h_ * lambda * std::exp(u[j]) : 1.0;
-    return true;
-  }
-  // h^2-scaled residuals are O(h^2); scale them back to O(1) so fnormtol means what it says.
-  void residual_scale(Eigen::Ref<Eigen::VectorXd> s) const override {
-    s.setConstant(1.0 / (h_ * h_));
-  }
-  double h() const { return h_; }
 
- private:
-  int n_;
-  double h_;
-  bool analytic_;
-  SparsityPattern p_;
-
- public:
-  double lambda;
-};
+using bvp_test::Bratu;
+using bvp_test::tridiagonal;
 
 // Exact Bratu solution u(x) = -2 ln(cosh((x - 1/2) t / 2) / cosh(t / 4)), where t solves
 // t = sqrt(2 lambda) cosh(t / 4) (lower branch).
