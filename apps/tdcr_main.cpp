@@ -174,14 +174,15 @@ struct Timed {
 };
 
 /// Solves `repeat` times from the same initial guess (no warm start), reusing one workspace.
-Timed solve_timed(const tdcr::StaticModel& model, int repeat) {
+Timed solve_timed(const tdcr::StaticModel& model, const tdcr::Scene& scene, int repeat) {
+  const tdcr::ModelInput input = scene.input();
   auto workspace = model.make_workspace();
   std::vector<double> us;
   us.reserve(static_cast<std::size_t>(repeat));
   Timed out;
   for (int r = 0; r < repeat; ++r) {
     const auto t0 = std::chrono::steady_clock::now();
-    out.solution = model.solve(*workspace, nullptr);
+    out.solution = tdcr::solve(model, *workspace, input, scene.solver);
     const auto t1 = std::chrono::steady_clock::now();
     us.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
   }
@@ -217,7 +218,7 @@ int run_solve(const std::vector<std::string>& argv) {
   const tdcr::ModelKind kind = model_kind(scene, args.accuracy, &selection);
   scene.model = tdcr::to_string(kind);
   const std::unique_ptr<tdcr::StaticModel> model = tdcr::make_model(kind, scene);
-  Timed t = solve_timed(*model, args.repeat);
+  Timed t = solve_timed(*model, scene, args.repeat);
   t.solution.model_selection = selection;
   if (args.json) {
     tdcr::SolutionJsonOptions o;

@@ -63,7 +63,7 @@ std::optional<Solution> try_solve(ModelKind kind, const Scene& scene, const Solu
   try {
     auto m = make_model(kind, scene);
     auto ws = m->make_workspace();
-    return m->solve(*ws, warm);
+    return solve(*m, *ws, scene.input(), scene.solver, warm);
   } catch (const InputError& e) {
     return std::nullopt;
   }
@@ -169,7 +169,7 @@ void scenario1(const Settings& cfg) {
         continue;
       }
       const int reps = kind == ModelKind::CC ? cfg.repeat * 100 : cfg.repeat;
-      const bench::Timing t = bench::time_solves(*model, std::max(1, reps));
+      const bench::Timing t = bench::time_solves(*model, timed, std::max(1, reps));
       MeanTipError e{};
       int ncmp = 0, fails = 0;
       if (kind != ModelKind::VCref && !acc[kind].tips.empty()) {
@@ -229,7 +229,7 @@ void scenario2(const Settings& cfg) {
         } catch (const InputError&) {
           continue;
         }
-        const bench::Timing t = bench::time_solves(*model, std::max(1, cfg.repeat / 4));
+        const bench::Timing t = bench::time_solves(*model, half, std::max(1, cfg.repeat / 4));
         MeanTipError e{};
         int ncmp = 0;
         if (kind != ModelKind::VCref && !acc[kind].tips.empty()) {
@@ -270,7 +270,7 @@ void tradeoff(const Settings& cfg) {
       } catch (const InputError&) {
         return;
       }
-      const bench::Timing t = bench::time_solves(*model, reps);
+      const bench::Timing t = bench::time_solves(*model, s, reps);
       const TipError e = tip_error(t.last.tip(), truth->tip());
       int n = s.robot.segments[0].disks;
       csv.row(cs.name, to_string(kind), setting, n, 100 * e.position / 0.1, e.angle * 180 / M_PI, t.median_us,
@@ -333,7 +333,7 @@ void effects(const Settings& cfg) {
       } catch (const InputError&) {
         continue;
       }
-      const bench::Timing t = bench::time_solves(*model, reps);
+      const bench::Timing t = bench::time_solves(*model, s, reps);
       csv.row(to_string(kind), v.name, t.median_us, t.last.summary.iterations, t.last.converged() ? 1 : 0);
     }
     bench::progress("effects: " + to_string(kind), 1, 1);
@@ -365,7 +365,7 @@ void warmstart(const Settings& cfg) {
         }
         auto ws = model->make_workspace();
         const auto t0 = std::chrono::steady_clock::now();
-        Solution sol = model->solve(*ws, warm && prev ? &*prev : nullptr);
+        Solution sol = solve(*model, *ws, s.input(), s.solver, warm && prev ? &*prev : nullptr);
         total += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
         iters += sol.summary.iterations;
         ok = ok && sol.converged();

@@ -21,13 +21,14 @@ struct Timing {
   Solution last;
 };
 
-inline Timing time_solves(const StaticModel& model, int repeat, const Solution* warm = nullptr) {
+inline Timing time_solves(const StaticModel& model, const Scene& scene, int repeat, const Solution* warm = nullptr) {
+  const ModelInput input = scene.input();
   auto ws = model.make_workspace();
   std::vector<double> t;
   Timing out;
   for (int i = 0; i < repeat; ++i) {
     const auto t0 = std::chrono::steady_clock::now();
-    out.last = model.solve(*ws, warm);
+    out.last = solve(model, *ws, input, scene.solver, warm);
     t.push_back(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
   }
   std::sort(t.begin(), t.end());

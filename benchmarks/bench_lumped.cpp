@@ -40,7 +40,7 @@ int main(int argc, char** argv) {
       for (int config : {2, 5}) {
         const Scene s = paper::scene(n, config, name);
         auto model = make_model(parse_model_kind(name), s);
-        const bench::Timing t = bench::time_solves(*model, reps);
+        const bench::Timing t = bench::time_solves(*model, s, reps);
         const auto it = paper.find({name, n});
         const bool ok = t.last.converged();
         all_ok = all_ok && ok;

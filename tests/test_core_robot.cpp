@@ -63,7 +63,6 @@ TEST(RobotValidation, NamesFieldAndValue) {
   { Scene b = s; b.robot.segments[0].tendons[1] = {0.0, 0.0}; expect_error(b, "robot.segments[0].tendons[1]", "(0, 0)"); }
   { Scene b = s; b.robot.backbone.outer_radius = 0.0; expect_error(b, "robot.backbone.outer_radius", "0"); }
   { Scene b = s; b.loads.tip_force.y() = INFINITY; expect_error(b, "loads.tip_force[1]", "inf"); }
-  { Scene b = s; b.model = "foo"; expect_error(b, "model", "foo"); }
   { Scene b = s; b.solver.rk4_steps = 0; expect_error(b, "solver.rk4_steps", "0"); }
 }
 

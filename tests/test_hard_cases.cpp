@@ -111,7 +111,7 @@ void check_planar(Context& c, double tol = 1e-9) {
 Solution solve_kind(ModelKind k, const Scene& s) {
   auto m = make_model(k, s);
   auto ws = m->make_workspace();
-  return m->solve(*ws);
+  return solve(*m, *ws, s.input(), s.solver);
 }
 
 std::vector<HardCase> cases() {

@@ -490,7 +490,7 @@ TEST(VcModel, LongSoftRobotUnderGravityHangsLikeVcref) {
   r.model = "vcref";
   auto ref = make_model(ModelKind::VCref, r);
   auto rws = ref->make_workspace();
-  const Solution b = ref->solve(*rws);
+  const Solution b = solve(*ref, *rws, r.input(), r.solver);
   ASSERT_TRUE(b.converged()) << b.summary.message;
   EXPECT_LT(a.tip().p.y(), -0.5);
   EXPECT_LT(b.tip().p.y(), -0.5);

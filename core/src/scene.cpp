@@ -15,8 +15,17 @@ void require_finite_vec(const std::string& field, const Vec3& v) {
 }
 }  // namespace
 
-void Scene::validate() const {
-  robot.validate();
+void Effects::validate() const {
+  for (int i = 0; i < 4; ++i)
+    if (!(std::isfinite(prb.gamma[i]) && prb.gamma[i] > 0.0))
+      throw InputError("effects.prb.gamma[" + std::to_string(i) + "]", format_value(prb.gamma[i]), "must be positive");
+  for (int i = 0; i < 3; ++i)
+    if (!(std::isfinite(prb.k_theta[i]) && prb.k_theta[i] > 0.0))
+      throw InputError("effects.prb.k_theta[" + std::to_string(i) + "]", format_value(prb.k_theta[i]),
+                       "must be positive");
+}
+
+void ModelInput::validate(const Robot& robot) const {
   const int m = robot.tendon_count();
   const bool tensions = actuation.kind == Actuation::Kind::Tensions;
   const std::string key = tensions ? "actuation.tensions" : "actuation.displacements";
@@ -33,23 +42,18 @@ void Scene::validate() const {
   require_finite_vec("loads.tip_force", loads.tip_force);
   require_finite_vec("loads.tip_moment", loads.tip_moment);
   require_finite_vec("loads.gravity", loads.gravity);
-  for (int i = 0; i < 4; ++i)
-    if (!(std::isfinite(effects.prb.gamma[i]) && effects.prb.gamma[i] > 0.0))
-      throw InputError("effects.prb.gamma[" + std::to_string(i) + "]", format_value(effects.prb.gamma[i]),
-                       "must be positive");
-  for (int i = 0; i < 3; ++i)
-    if (!(std::isfinite(effects.prb.k_theta[i]) && effects.prb.k_theta[i] > 0.0))
-      throw InputError("effects.prb.k_theta[" + std::to_string(i) + "]", format_value(effects.prb.k_theta[i]),
-                       "must be positive");
-  static const char* kModels[] = {"cc", "ccsub", "prb", "vc", "vcref", "auto"};
-  bool known = false;
-  for (const char* k : kModels) known = known || model == k;
-  if (!known) throw InputError("model", model, "unknown model (cc, ccsub, prb, vc, vcref, auto)");
+}
+
+void Scene::validate() const {
+  robot.validate();
+  input().validate(robot);
+  effects.validate();
   solver.validate();
 }
 
-SceneEffects Scene::active_effects() const {
+SceneEffects active_effects(const Robot& robot, const Effects& effects, const ModelInput& input) {
   SceneEffects e;
+  const Loads& loads = input.loads;
   e.tip_wrench = loads.tip_force.squaredNorm() > 0.0 || loads.tip_moment.squaredNorm() > 0.0;
   const bool g = loads.gravity.squaredNorm() > 0.0;
   e.backbone_weight = g && robot.backbone.linear_mass() > 0.0;

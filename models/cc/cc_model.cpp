@@ -13,7 +13,7 @@ namespace tdcr {
 
 namespace {
 
-class CcWorkspace final : public ModelWorkspace {};
+class CcWorkspace final : public LegacyWorkspace {};
 
 // Shortening of tendon r over a segment of length l with curvature (kx, ky) = kappa (cos, sin),
 // split into n subsegments. Fully constrained (Eq. 15): l kappa d with d = r . (cos, sin).
@@ -68,7 +68,7 @@ CcModel::CcModel(const Scene& scene) : scene_(scene) {
   }
 }
 
-std::unique_ptr<ModelWorkspace> CcModel::make_workspace() const { return std::make_unique<CcWorkspace>(); }
+std::unique_ptr<LegacyWorkspace> CcModel::make_workspace() const { return std::make_unique<CcWorkspace>(); }
 
 std::vector<CcArc> CcModel::arcs(double* misfit) const {
   const Robot& robot = scene_.robot;
@@ -145,7 +145,7 @@ std::vector<CcArc> CcModel::arcs(double* misfit) const {
   return out;
 }
 
-Solution CcModel::solve(ModelWorkspace&, const Solution*) const {
+Solution CcModel::solve(LegacyWorkspace&, const Solution*) const {
   const auto t0 = std::chrono::steady_clock::now();
   Solution sol;
   sol.model = "cc";
@@ -207,7 +207,7 @@ Solution CcModel::solve(ModelWorkspace&, const Solution*) const {
 }
 
 namespace detail {
-std::unique_ptr<StaticModel> make_cc_model(const Scene& scene) { return std::make_unique<CcModel>(scene); }
+std::unique_ptr<LegacyStaticModel> make_legacy_cc_model(const Scene& scene) { return std::make_unique<CcModel>(scene); }
 }  // namespace detail
 
 }  // namespace tdcr

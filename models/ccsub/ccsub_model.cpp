@@ -94,7 +94,7 @@ struct CcsubModel::Impl {
 
 namespace {
 
-class CcsubWorkspace final : public ModelWorkspace {
+class CcsubWorkspace final : public LegacyWorkspace {
  public:
   bvp::NewtonSolver newton;
   std::vector<Frame> frames;
@@ -154,7 +154,7 @@ CcsubModel::CcsubModel(const Scene& scene) : scene_(scene) {
 
 CcsubModel::~CcsubModel() = default;
 
-std::unique_ptr<ModelWorkspace> CcsubModel::make_workspace() const { return std::make_unique<CcsubWorkspace>(); }
+std::unique_ptr<LegacyWorkspace> CcsubModel::make_workspace() const { return std::make_unique<CcsubWorkspace>(); }
 
 std::vector<Frame> CcsubModel::frames(const Eigen::VectorXd& x) const {
   if (x.size() != 3 * impl_->N)
@@ -164,7 +164,7 @@ std::vector<Frame> CcsubModel::frames(const Eigen::VectorXd& x) const {
   return f;
 }
 
-Solution CcsubModel::solve(ModelWorkspace& workspace, const Solution* warm_start) const {
+Solution CcsubModel::solve(LegacyWorkspace& workspace, const Solution* warm_start) const {
   const auto t0 = std::chrono::steady_clock::now();
   auto* ws = dynamic_cast<CcsubWorkspace*>(&workspace);
   if (!ws) throw InputError("workspace", "", "not a workspace of the CCsub model");
@@ -209,7 +209,7 @@ Solution CcsubModel::solve(ModelWorkspace& workspace, const Solution* warm_start
 }
 
 namespace detail {
-std::unique_ptr<StaticModel> make_ccsub_model(const Scene& scene) { return std::make_unique<CcsubModel>(scene); }
+std::unique_ptr<LegacyStaticModel> make_legacy_ccsub_model(const Scene& scene) { return std::make_unique<CcsubModel>(scene); }
 }  // namespace detail
 
 }  // namespace tdcr

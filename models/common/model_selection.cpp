@@ -3,42 +3,28 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <vector>
 
 #include "tdcr/core/error.hpp"
+#include "tdcr/models/model_registry.hpp"
 
 namespace tdcr {
 
 namespace {
 
-// Mean tip position error against VCref, % of the robot length, on the paper's case study,
-// measured by `bench_case_study` (docs/benchmarks.md). Beyond the table the error of the
-// constant-curvature family falls as 1/n^2 (second-order chord approximation of the tendon path).
-struct ErrorRow {
-  int n;
-  double cc_vc;  // CC from tensions equals VC without external load (Camarillo et al. 2008)
-  double prb;
-};
-constexpr ErrorRow kScenario1[] = {
-    {1, 25.7, 1.21}, {2, 4.27, 0.231}, {5, 0.605, 0.0165}, {10, 0.151, 0.0345},
-};
-// With tip forces (scenario 2, n = 10, stiffness 0.1x to 10x, planar and transverse), VC's mean
-// error stays below 3.2 times its load-free value (0.469 % against 0.148 % at stiffness 0.178x,
-// transverse); the factor below is that measured bound.
-constexpr double kLoadedVcFactor = 3.2;
-
-double table_error(int n, double ErrorRow::*field) {
-  const int rows = static_cast<int>(sizeof kScenario1 / sizeof kScenario1[0]);
-  if (n <= kScenario1[0].n) return kScenario1[0].*field;
-  for (int i = 1; i < rows; ++i) {
-    if (n <= kScenario1[i].n) {
-      // Interpolate in log-log between the measured disk counts.
-      const double x0 = std::log(kScenario1[i - 1].n), x1 = std::log(kScenario1[i].n);
-      const double y0 = std::log(kScenario1[i - 1].*field), y1 = std::log(kScenario1[i].*field);
+// The registry's expected error at n disks per segment: log-log interpolation between the
+// measured disk counts 1, 2, 5, 10, and the tail law beyond.
+double table_error(const ExpectedAccuracy& a, int n) {
+  static const int kDisks[4] = {1, 2, 5, 10};
+  if (n <= kDisks[0]) return a.percent_at[0];
+  for (int i = 1; i < 4; ++i)
+    if (n <= kDisks[i]) {
+      if (a.percent_at[i - 1] <= 0.0 || a.percent_at[i] <= 0.0) return a.percent_at[i];
+      const double x0 = std::log(kDisks[i - 1]), x1 = std::log(kDisks[i]);
+      const double y0 = std::log(a.percent_at[i - 1]), y1 = std::log(a.percent_at[i]);
       return std::exp(y0 + (y1 - y0) * (std::log(n) - x0) / (x1 - x0));
     }
-  }
-  const ErrorRow& last = kScenario1[rows - 1];
-  return field == &ErrorRow::cc_vc ? last.cc_vc * std::pow(static_cast<double>(last.n) / n, 2.0) : last.*field;
+  return a.percent_at[3] * std::pow(10.0 / n, a.tail_exponent);
 }
 
 std::string percent(double fraction) {
@@ -50,18 +36,8 @@ std::string percent(double fraction) {
 }  // namespace
 
 double expected_model_error(ModelKind kind, int disks, bool loaded) {
-  switch (kind) {
-    case ModelKind::VCref: return 0.0;
-    case ModelKind::CC:
-      return loaded ? INFINITY : table_error(disks, &ErrorRow::cc_vc) / 100.0;
-    case ModelKind::VC:
-      return table_error(disks, &ErrorRow::cc_vc) / 100.0 * (loaded ? kLoadedVcFactor : 1.0);
-    case ModelKind::PRB:
-      return table_error(disks, &ErrorRow::prb) / 100.0 * (loaded ? kLoadedVcFactor : 1.0);
-    case ModelKind::CCsub:
-      return 1.2 * table_error(disks, &ErrorRow::cc_vc) / 100.0 * (loaded ? kLoadedVcFactor : 1.0);
-  }
-  return INFINITY;
+  const ExpectedAccuracy& a = model_info(kind).accuracy;
+  return table_error(a, disks) / 100.0 * (loaded ? a.loaded_factor : 1.0);
 }
 
 ModelChoice choose_model(const Scene& scene, double tolerance) {
@@ -84,9 +60,13 @@ ModelChoice choose_model(const Scene& scene, double tolerance) {
     c.reason = "tendon displacements: CC is the only kinematic model (" + features + ")";
     return c;
   }
-  // Cheapest first; the first model expected to meet the tolerance wins.
-  const ModelKind order[] = {ModelKind::CC, ModelKind::VC, ModelKind::PRB};
-  for (ModelKind k : order) {
+  // Cheapest first (registry cost rank); the first model expected to meet the tolerance wins.
+  std::vector<const ModelInfo*> order;
+  for (const ModelInfo& m : model_registry()) order.push_back(&m);
+  std::sort(order.begin(), order.end(), [](const ModelInfo* a, const ModelInfo* b) { return a->cost_rank < b->cost_rank; });
+  for (const ModelInfo* info : order) {
+    const ModelKind k = info->kind;
+    if (k == ModelKind::VCref) continue;  // the reference: the fallback below
     if (k == ModelKind::PRB && loaded) continue;  // slower than VCref with loads (benchmarks)
     const double err = expected_model_error(k, n, loaded);
     if (err <= tolerance) {
@@ -106,12 +86,11 @@ ModelChoice choose_model(const Scene& scene, double tolerance) {
 
 Solution solve_auto(const Scene& scene, double tolerance, const Solution* warm_start) {
   const ModelChoice c = choose_model(scene, tolerance);
-  Scene s = scene;
-  s.model = to_string(c.kind);
-  auto model = make_model(c.kind, s);
-  auto ws = model->make_workspace();
-  const Solution* warm = warm_start && warm_start->model == s.model ? warm_start : nullptr;
-  Solution sol = model->solve(*ws, warm);
+  const auto model = make_model(c.kind, scene);
+  const auto ws = model->make_workspace();
+  const Solution* warm =
+      warm_start && warm_start->model_fingerprint == model->fingerprint() ? warm_start : nullptr;
+  Solution sol = solve(*model, *ws, scene.input(), scene.solver, warm);
   sol.model_selection = "auto: " + c.reason;
   return sol;
 }

@@ -117,7 +117,7 @@ struct PrbModel::Impl {
 
 namespace {
 
-class PrbWorkspace final : public ModelWorkspace {
+class PrbWorkspace final : public LegacyWorkspace {
  public:
   bvp::NewtonSolver newton;
   std::vector<Frame> frames;
@@ -225,7 +225,7 @@ PrbModel::PrbModel(const Scene& scene) : scene_(scene) {
 
 PrbModel::~PrbModel() = default;
 
-std::unique_ptr<ModelWorkspace> PrbModel::make_workspace() const { return std::make_unique<PrbWorkspace>(); }
+std::unique_ptr<LegacyWorkspace> PrbModel::make_workspace() const { return std::make_unique<PrbWorkspace>(); }
 
 std::vector<Frame> PrbModel::frames(const Eigen::VectorXd& x) const {
   if (x.size() != kU * impl_->N)
@@ -248,7 +248,7 @@ std::vector<Vec3> PrbModel::joint_points(const Eigen::VectorXd& x) const {
   return pts;
 }
 
-Solution PrbModel::solve(ModelWorkspace& workspace, const Solution* warm_start) const {
+Solution PrbModel::solve(LegacyWorkspace& workspace, const Solution* warm_start) const {
   const auto t0 = std::chrono::steady_clock::now();
   auto* ws = dynamic_cast<PrbWorkspace*>(&workspace);
   if (!ws) throw InputError("workspace", "", "not a workspace of the PRB model");
@@ -316,7 +316,7 @@ Solution PrbModel::solve(ModelWorkspace& workspace, const Solution* warm_start) 
 }
 
 namespace detail {
-std::unique_ptr<StaticModel> make_prb_model(const Scene& scene) { return std::make_unique<PrbModel>(scene); }
+std::unique_ptr<LegacyStaticModel> make_legacy_prb_model(const Scene& scene) { return std::make_unique<PrbModel>(scene); }
 }  // namespace detail
 
 }  // namespace tdcr

@@ -605,7 +605,7 @@ VcModel::VcModel(const Scene& scene, VcOptions options) : scene_(scene), options
 
 VcModel::~VcModel() = default;
 
-std::unique_ptr<ModelWorkspace> VcModel::make_workspace() const {
+std::unique_ptr<LegacyWorkspace> VcModel::make_workspace() const {
   auto ws = std::make_unique<VcWorkspace>();
   ws->impl = std::make_unique<VcWorkspace::Impl>();
   return ws;
@@ -684,7 +684,7 @@ bool VcModel::warm_reaction(const Solution& previous, Vec6& x) const {
   return x.allFinite();
 }
 
-Solution VcModel::solve(ModelWorkspace& workspace, const Solution* warm_start) const {
+Solution VcModel::solve(LegacyWorkspace& workspace, const Solution* warm_start) const {
   const auto t0 = std::chrono::steady_clock::now();
   auto* ws = dynamic_cast<VcWorkspace*>(&workspace);
   if (!ws) throw InputError("workspace", "", "not a VC workspace (use VcModel::make_workspace)");
@@ -925,7 +925,7 @@ Solution VcModel::solve_multiple(VcWorkspace& ws, const Solution* warm_start) co
 }
 
 namespace detail {
-std::unique_ptr<StaticModel> make_vc_model(const Scene& scene) { return std::make_unique<VcModel>(scene); }
+std::unique_ptr<LegacyStaticModel> make_legacy_vc_model(const Scene& scene) { return std::make_unique<VcModel>(scene); }
 }  // namespace detail
 
 }  // namespace tdcr

@@ -342,7 +342,7 @@ class VcrefSystem final : public bvp::ParameterizedSystem {
   int jacobians_ = 0;
 };
 
-class VcrefWorkspace final : public ModelWorkspace {
+class VcrefWorkspace final : public LegacyWorkspace {
  public:
   VcrefWorkspace(const VcrefModel::Data& d, const Scene& scene) : system(d, scene) {}
   VcrefSystem system;
@@ -466,11 +466,11 @@ double VcrefModel::compression_parameter() const { return data_->compression_par
 bool VcrefModel::loads_from_rest() const { return data_->from_rest; }
 int VcrefModel::jacobian_nonzeros() const { return data_->pattern.nnz(); }
 
-std::unique_ptr<ModelWorkspace> VcrefModel::make_workspace() const {
+std::unique_ptr<LegacyWorkspace> VcrefModel::make_workspace() const {
   return std::make_unique<VcrefWorkspace>(*data_, scene_);
 }
 
-Solution VcrefModel::solve(ModelWorkspace& workspace, const Solution* warm_start) const {
+Solution VcrefModel::solve(LegacyWorkspace& workspace, const Solution* warm_start) const {
   const auto t0 = std::chrono::steady_clock::now();
   auto* ws = dynamic_cast<VcrefWorkspace*>(&workspace);
   if (!ws) throw InputError("workspace", "", "not a VCref workspace (use VcrefModel::make_workspace)");
@@ -536,7 +536,7 @@ Solution VcrefModel::solve(ModelWorkspace& workspace, const Solution* warm_start
   return sol;
 }
 
-bvp::JacobianCheck VcrefModel::check_jacobian(ModelWorkspace& workspace, const Solution* at,
+bvp::JacobianCheck VcrefModel::check_jacobian(LegacyWorkspace& workspace, const Solution* at,
                                               double perturbation) const {
   auto* ws = dynamic_cast<VcrefWorkspace*>(&workspace);
   if (!ws) throw InputError("workspace", "", "not a VCref workspace (use VcrefModel::make_workspace)");
@@ -549,7 +549,7 @@ bvp::JacobianCheck VcrefModel::check_jacobian(ModelWorkspace& workspace, const S
 }
 
 namespace detail {
-std::unique_ptr<StaticModel> make_vcref_model(const Scene& scene) { return std::make_unique<VcrefModel>(scene); }
+std::unique_ptr<LegacyStaticModel> make_legacy_vcref_model(const Scene& scene) { return std::make_unique<VcrefModel>(scene); }
 }  // namespace detail
 
 }  // namespace tdcr

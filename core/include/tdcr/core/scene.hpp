@@ -62,7 +62,8 @@ struct PrbParameters {
   double k_theta[3] = {3.25, 2.84, 2.95};
 };
 
-/// @brief What the scene asks to simulate. Defaults are the paper's code.
+/// @brief What the scene asks to simulate. Part of a model's description (a model is built from
+/// a Robot and its Effects); defaults are the paper's code.
 struct Effects {
   bool shear_extension = true;  ///< Cosserat rod with shear and extension (VC, VCref; CC with
                                 ///< tension input: axial strain); else inextensible,
@@ -70,10 +71,25 @@ struct Effects {
   DiskNormalForce disk_normal_force = DiskNormalForce::Removed;  ///< Eq. 58 (VCref, CCsub, PRB).
   TendonPath tendon_path = TendonPath::FullyConstrained;         ///< CC only.
   PrbParameters prb;                                             ///< PRB only.
+
+  /// @brief Throws InputError (field `effects.prb.gamma[i]` or `effects.prb.k_theta[i]`) on a
+  /// PRB parameter that is not a positive finite number.
+  void validate() const;
 };
 
-/// @brief Which physical effects a scene turns on, decided once before a solve so that inner
-/// loops carry no branch for effects that are off.
+/// @brief The per-call input of a model: how the tendons are actuated and the external loads.
+/// A model is built once from a robot and its effects; a trajectory is a sequence of inputs.
+struct ModelInput {
+  Actuation actuation;  ///< Tendon tensions or displacements, one value per tendon.
+  Loads loads;          ///< Tip wrench and gravity (base frame).
+
+  /// @brief Throws InputError naming the field and value: a list of the wrong length for
+  /// `robot`, a non-finite value, a negative tension, a non-finite load.
+  void validate(const Robot& robot) const;
+};
+
+/// @brief Which physical effects a solve turns on, decided once before it so that inner loops
+/// carry no branch for effects that are off.
 struct SceneEffects {
   bool tip_wrench = false;       ///< Nonzero tip force or moment.
   bool gravity = false;          ///< Nonzero gravity and nonzero backbone or disk mass.
@@ -82,6 +98,9 @@ struct SceneEffects {
   bool shear_extension = true;            ///< Effects::shear_extension (CC, VC, VCref).
   bool disk_normal_force_removed = true;  ///< Effects::disk_normal_force is Removed (Eq. 58).
 };
+
+/// @brief The effects a solve of `robot` with `effects` under `input` turns on.
+SceneEffects active_effects(const Robot& robot, const Effects& effects, const ModelInput& input);
 
 /// @brief A complete problem: robot, actuation, loads, effects, model and solver settings.
 struct Scene {
@@ -93,12 +112,14 @@ struct Scene {
   SolverOptions solver;  ///< Numerical settings (`solver`).
 
   /// @brief Throws InputError naming the field and value for any unusable entry: the robot's
-  /// (Robot::validate), an actuation list of the wrong length, non-finite actuation values,
-  /// negative tensions, non-finite loads, PRB parameters that are not positive, an unknown
-  /// model name, an invalid solver option (SolverOptions::validate).
+  /// (Robot::validate), the input's (ModelInput::validate), the effects' (Effects::validate), an
+  /// invalid solver option (SolverOptions::validate). The model name is checked against the
+  /// model registry by the models layer (tdcr::validate_scene, models/static_model.hpp).
   void validate() const;
+  /// @brief The per-call part of the scene: actuation and loads.
+  ModelInput input() const { return ModelInput{actuation, loads}; }
   /// @brief The effects this scene enables (see SceneEffects).
-  SceneEffects active_effects() const;
+  SceneEffects active_effects() const { return tdcr::active_effects(robot, effects, input()); }
 };
 
 }  // namespace tdcr

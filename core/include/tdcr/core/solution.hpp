@@ -3,6 +3,7 @@
 /// never reported as converged.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -61,6 +62,9 @@ struct BackboneSample {
 /// @brief The answer of a model for one scene.
 struct Solution {
   std::string model;                      ///< Model name ("cc", "vc", ...).
+  /// Identity of the model that produced it (kind, robot, effects; StaticModel::fingerprint()):
+  /// a warm start is accepted only from a Solution of the same model.
+  std::uint64_t model_fingerprint = 0;
   SolverSummary summary;                  ///< Status and diagnostics.
   std::vector<Frame> disk_frames;         ///< Base disk (index 0), every disk, tip last.
   std::vector<double> tendon_displacements;  ///< Per tendon (m), positive when pulled, at base.

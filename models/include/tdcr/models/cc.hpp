@@ -26,7 +26,7 @@
 
 #include <Eigen/Core>
 
-#include "tdcr/models/static_model.hpp"
+#include "tdcr/models/legacy_model.hpp"
 
 namespace tdcr {
 
@@ -41,7 +41,7 @@ struct CcArc {
 /// @brief The CC model of one scene. Closed form: solve() performs no iteration for fully
 /// constrained tendons; the partially constrained variant runs a 2-unknown Gauss-Newton per
 /// segment.
-class CcModel final : public StaticModel {
+class CcModel final : public LegacyStaticModel {
  public:
   /// @brief Validates the scene and, for displacement input, factorises each segment's
   /// displacement-to-curvature map once. Throws InputError if the scene is invalid, has a tip
@@ -50,8 +50,8 @@ class CcModel final : public StaticModel {
   explicit CcModel(const Scene& scene);
   ModelKind kind() const override { return ModelKind::CC; }
   const Scene& scene() const override { return scene_; }
-  std::unique_ptr<ModelWorkspace> make_workspace() const override;
-  Solution solve(ModelWorkspace& workspace, const Solution* warm_start = nullptr) const override;
+  std::unique_ptr<LegacyWorkspace> make_workspace() const override;
+  Solution solve(LegacyWorkspace& workspace, const Solution* warm_start = nullptr) const override;
 
   /// @brief Arc parameters of every segment for the scene's actuation (the core of solve()).
   /// `misfit` receives the least-squares residual of the displacement fit (m), 0 if exact.

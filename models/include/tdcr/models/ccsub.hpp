@@ -39,7 +39,7 @@
 
 #include <memory>
 
-#include "tdcr/models/static_model.hpp"
+#include "tdcr/models/legacy_model.hpp"
 
 namespace tdcr {
 
@@ -50,7 +50,7 @@ namespace tdcr {
 /// can be reused across solves. Solution::unknowns holds x_j = (l_j u_x, l_j u_y, eps_j) for all
 /// N subsegments (3N values, zero for unloaded distal subsegments); passing a previous Solution
 /// of a robot with the same number of disks as warm_start starts Newton from it.
-class CcsubModel final : public StaticModel {
+class CcsubModel final : public LegacyStaticModel {
  public:
   /// @brief Validates the scene; throws InputError for displacement actuation (CCsub is a
   /// static model driven by tensions).
@@ -58,8 +58,8 @@ class CcsubModel final : public StaticModel {
   ~CcsubModel() override;
   ModelKind kind() const override { return ModelKind::CCsub; }
   const Scene& scene() const override { return scene_; }
-  std::unique_ptr<ModelWorkspace> make_workspace() const override;
-  Solution solve(ModelWorkspace& workspace, const Solution* warm_start = nullptr) const override;
+  std::unique_ptr<LegacyWorkspace> make_workspace() const override;
+  Solution solve(LegacyWorkspace& workspace, const Solution* warm_start = nullptr) const override;
 
   /// @brief Disk frames (base disk first, tip last) for unknowns x (size 3N, see class comment).
   std::vector<Frame> frames(const Eigen::VectorXd& x) const;

@@ -46,7 +46,7 @@
 
 #include <memory>
 
-#include "tdcr/models/static_model.hpp"
+#include "tdcr/models/legacy_model.hpp"
 
 namespace tdcr {
 
@@ -57,7 +57,7 @@ namespace tdcr {
 /// Solution::unknowns holds x_j = (theta_1, theta_2, theta_3, phi, eps) for all N subsegments
 /// (5N values; zero for unloaded distal subsegments); a previous Solution of a robot with the
 /// same number of disks passed as warm_start starts Newton from it.
-class PrbModel final : public StaticModel {
+class PrbModel final : public LegacyStaticModel {
  public:
   /// @brief Validates the scene; throws InputError for displacement actuation or PRB
   /// parameters that are not positive and finite.
@@ -65,8 +65,8 @@ class PrbModel final : public StaticModel {
   ~PrbModel() override;
   ModelKind kind() const override { return ModelKind::PRB; }
   const Scene& scene() const override { return scene_; }
-  std::unique_ptr<ModelWorkspace> make_workspace() const override;
-  Solution solve(ModelWorkspace& workspace, const Solution* warm_start = nullptr) const override;
+  std::unique_ptr<LegacyWorkspace> make_workspace() const override;
+  Solution solve(LegacyWorkspace& workspace, const Solution* warm_start = nullptr) const override;
 
   /// @brief Disk frames (base disk first, tip last) for unknowns x (size 5N).
   std::vector<Frame> frames(const Eigen::VectorXd& x) const;

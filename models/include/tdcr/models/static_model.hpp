@@ -1,21 +1,38 @@
 /// @file static_model.hpp
-/// @brief The interface every model implements, and the dispatcher from a scene to a model.
+/// @brief The model interface, its workspaces, and the one solve function.
 ///
-/// Pinocchio-style split: a model object is an immutable description built once from a Scene
-/// (validated, with the effects it must simulate decided up front); a ModelWorkspace holds the
-/// mutable memory of a solve (integrator and Newton solver memory, Jacobian storage) and can be
-/// reused across solves. A solve is a plain function of (model, workspace, options, warm start).
+/// Pinocchio's split: a StaticModel is an immutable description built once from a Robot and its
+/// Effects; a ModelWorkspace is the mutable memory of its solves (Newton and integrator memory,
+/// Jacobian storage), made by the model and belonging to it; the actuation and the loads are the
+/// per-call ModelInput. A trajectory uses one model and one workspace:
+///
+/// @code
+/// auto model = tdcr::make_model(tdcr::ModelKind::VC, robot, effects);
+/// auto ws = model->make_workspace();
+/// tdcr::Solution previous;
+/// for (const tdcr::ModelInput& input : trajectory) {
+///   tdcr::Solution s = tdcr::solve(*model, *ws, input, options, previous.converged() ? &previous : nullptr);
+///   previous = s;
+/// }
+/// @endcode
+///
+/// A Scene (robot, input, effects, model name, options) and `tdcr::solve(scene)` stay the front
+/// door for one-shot solves and scene files.
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <string>
 
+#include "tdcr/core/robot.hpp"
 #include "tdcr/core/scene.hpp"
 #include "tdcr/core/solution.hpp"
+#include "tdcr/core/solver_options.hpp"
 
 namespace tdcr {
 
-/// @brief The models of the paper (Table 2).
+/// @brief The models of the paper (Table 2). Names, capabilities and factories are in the
+/// registry (model_registry.hpp).
 enum class ModelKind {
   CC,     ///< Constant curvature per segment, kinematic (Eq. 8, 14-18; 20-23).
   CCsub,  ///< Constant curvature per subsegment with twist, static (Eq. 8, 30-33, 43-47).
@@ -24,43 +41,117 @@ enum class ModelKind {
   VCref   ///< Cosserat rod per subsegment, discrete disk forces (Eq. 30-33, 38-41, 44-47, 58).
 };
 
-/// @brief Parse "cc", "ccsub", "prb", "vc", "vcref" (case-insensitive). Throws InputError with
-/// field `model` otherwise.
-ModelKind parse_model_kind(const std::string& name);
-/// @brief Lower-case model name.
+/// @brief The registry name of a model ("cc", "ccsub", "prb", "vc", "vcref").
 std::string to_string(ModelKind kind);
+/// @brief The model of a registry name (case-insensitive). Throws InputError with field `model`.
+ModelKind parse_model_kind(const std::string& name);
 
-/// @brief Mutable memory of a model's solves; reuse it across solves of the same model.
+class StaticModel;
+
+namespace detail {
+class ModelProblem;
+}  // namespace detail
+
+/// @brief Mutable memory of one model's solves. Made by StaticModel::make_workspace(), it
+/// belongs to that model: solving another model with it is an InputError, also after its model
+/// was destroyed (never undefined behaviour).
 class ModelWorkspace {
  public:
-  virtual ~ModelWorkspace() = default;
+  virtual ~ModelWorkspace();
+  ModelWorkspace(const ModelWorkspace&) = delete;
+  ModelWorkspace& operator=(const ModelWorkspace&) = delete;
+  /// @brief True if this workspace was made by `model` and that model still exists.
+  bool belongs_to(const StaticModel& model) const;
+
+ protected:
+  /// @brief A workspace of `owner`.
+  explicit ModelWorkspace(const StaticModel& owner);
+
+ private:
+  std::weak_ptr<const int> owner_;
 };
 
-/// @brief An immutable model of one scene's robot, actuation, loads and effects.
+/// @brief An immutable model of a robot with the effects it simulates.
+///
+/// What a model adds to the robot is decided once, in its constructor (validated; throws
+/// InputError naming the field and value). Solving goes through tdcr::solve(), which owns the
+/// policy (guess, direct solve, loading from rest, continuation, final residual check, summary,
+/// timing); a model supplies its residual system, guesses and outputs (detail::ModelProblem).
 class StaticModel {
  public:
-  virtual ~StaticModel() = default;
+  virtual ~StaticModel();
+  StaticModel(const StaticModel&) = delete;
+  StaticModel& operator=(const StaticModel&) = delete;
+
   /// @brief Which model this is.
   virtual ModelKind kind() const = 0;
-  /// @brief The scene this model was built from (validated).
-  virtual const Scene& scene() const = 0;
-  /// @brief A fresh workspace for this model.
+  /// @brief The registry name ("vc", ...).
+  std::string name() const { return to_string(kind()); }
+  /// @brief The robot (validated).
+  const Robot& robot() const { return robot_; }
+  /// @brief The effects it simulates.
+  const Effects& effects() const { return effects_; }
+  /// @brief The robot's disks and tendon routing.
+  const TendonRouting& routing() const { return routing_; }
+  /// @brief Identity of (kind, robot, effects): stamped on every Solution, checked on warm starts.
+  std::uint64_t fingerprint() const { return fingerprint_; }
+  /// @brief A fresh workspace of this model.
   virtual std::unique_ptr<ModelWorkspace> make_workspace() const = 0;
-  /// @brief Solve the model. `warm_start`, if given, is a previous Solution of the same model and
-  /// robot (e.g. the previous configuration of a trajectory); otherwise the model's cold-start
-  /// guess is used (CCsub, PRB: the straight robot; VC: VcInitialGuess; VCref:
-  /// VcrefOptions::InitialGuess; CC needs none). Never throws for a non-convergent solve: the
-  /// Solution's summary says so.
-  virtual Solution solve(ModelWorkspace& workspace, const Solution* warm_start = nullptr) const = 0;
+  /// @brief Throws InputError naming the field and value if this model cannot take `input`
+  /// (e.g. CC refuses external loads, the static models refuse displacements). The input
+  /// itself is validated against the robot before (ModelInput::validate).
+  virtual void check_input(const ModelInput& input) const;
+
+ protected:
+  /// @brief Validates `robot` and `effects` (InputError) and derives the routing.
+  StaticModel(const Robot& robot, const Effects& effects);
+  /// @brief The token ModelWorkspace holds to tell its owner (expires with the model).
+  const std::shared_ptr<const int>& ownership_token() const { return token_; }
+
+ private:
+  friend class ModelWorkspace;
+  friend Solution solve(const StaticModel&, ModelWorkspace&, const ModelInput&, const SolverOptions&,
+                        const Solution*);
+  /// @brief Bind the workspace to one input and options: the problem the solve driver works on.
+  /// `workspace` belongs to this model (checked by the caller).
+  virtual detail::ModelProblem& bind(ModelWorkspace& workspace, const ModelInput& input,
+                                     const SolverOptions& options) const = 0;
+
+  Robot robot_;
+  Effects effects_;
+  TendonRouting routing_;
+  std::uint64_t fingerprint_ = 0;
+  std::shared_ptr<const int> token_;
 };
 
-/// @brief Build the model `kind` for `scene` (validated first; throws InputError on bad input).
+/// @brief Solve `model` for one input.
+///
+/// The answer for a cold solve (no warm start) follows the model's cold-start rule (a direct
+/// Newton solve from its cold guess, or loading the robot from rest under large external loads);
+/// a warm start begins from `warm_start`, a previous Solution of the same model (same kind,
+/// robot and effects; anything else is an InputError). With SolverOptions::continuation a
+/// failed direct solve is retried by load continuation. The returned Solution is converged only
+/// if the residual at its unknowns, evaluated again at full load, is below
+/// SolverOptions::function_tolerance; otherwise its summary says why (never an exception for a
+/// non-convergent solve).
+///
+/// Throws InputError on invalid input or options, on a workspace of another model, on a warm
+/// start of another model.
+Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelInput& input,
+               const SolverOptions& options = SolverOptions(), const Solution* warm_start = nullptr);
+
+/// @brief Build the model `kind` of a robot with the given effects (InputError on bad input).
+std::unique_ptr<StaticModel> make_model(ModelKind kind, const Robot& robot, const Effects& effects = Effects());
+/// @brief Build the model `kind` of a scene's robot and effects (the scene's input is not used).
 std::unique_ptr<StaticModel> make_model(ModelKind kind, const Scene& scene);
 
-/// @brief One-shot convenience: build the scene's model (scene.model: one of the five names, or
-/// "auto", which chooses with solve_auto at 1 % accuracy, model_selection.hpp) with a fresh
-/// workspace and solve it. Load
-/// continuation, when SolverOptions::continuation is on, is part of every model's solve().
+/// @brief Scene::validate plus the model name (a registry name or "auto") and, for a named
+/// model, StaticModel::check_input. Throws InputError naming the field and value.
+void validate_scene(const Scene& scene);
+
+/// @brief One-shot front door: build the scene's model (scene.model; "auto" chooses with
+/// solve_auto at 1 % accuracy, model_selection.hpp) with a fresh workspace and solve the scene's
+/// input with its solver options.
 Solution solve(const Scene& scene, const Solution* warm_start = nullptr);
 
 }  // namespace tdcr

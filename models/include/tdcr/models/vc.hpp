@@ -99,7 +99,7 @@
 
 #include <Eigen/Core>
 
-#include "tdcr/models/static_model.hpp"
+#include "tdcr/models/legacy_model.hpp"
 
 namespace tdcr {
 
@@ -142,7 +142,7 @@ struct VcOptions {
 
 /// @brief Mutable memory of VC solves: integrators, the KINSOL workspace and the shooting state.
 /// Reuse it across solves of the same model (no allocation after the first solve).
-class VcWorkspace final : public ModelWorkspace {
+class VcWorkspace final : public LegacyWorkspace {
  public:
   ~VcWorkspace() override;
   /// @brief Right-hand side evaluations of the rod ODE since construction (a cost measure).
@@ -152,7 +152,7 @@ class VcWorkspace final : public ModelWorkspace {
 };
 
 /// @brief The VC model of one scene (model "vc"). Immutable; solve() is const.
-class VcModel final : public StaticModel {
+class VcModel final : public LegacyStaticModel {
  public:
   /// @brief Validate the scene and decide once which effects are simulated.
   /// Throws InputError on an invalid scene or on a displacement actuation (VC is tension driven).
@@ -161,7 +161,7 @@ class VcModel final : public StaticModel {
   ModelKind kind() const override { return ModelKind::VC; }
   const Scene& scene() const override { return scene_; }
   /// @brief A fresh VcWorkspace.
-  std::unique_ptr<ModelWorkspace> make_workspace() const override;
+  std::unique_ptr<LegacyWorkspace> make_workspace() const override;
   /// @brief Solve by single or multiple shooting (uses_multiple_shooting()). `warm_start`: any
   /// previous Solution of a robot with the same disks. Single shooting starts from the base
   /// reaction of the previous shape under this scene's loads (n(0) = F_tip + W - sum T_k t_k(0),
@@ -174,7 +174,7 @@ class VcModel final : public StaticModel {
   /// (each step warm-started); a cold multiple-shooting solve always loads from rest.
   /// Never throws for a non-convergent solve: the summary says so (and frames, if the last
   /// iterate can be integrated, are those of the last iterate).
-  Solution solve(ModelWorkspace& workspace, const Solution* warm_start = nullptr) const override;
+  Solution solve(LegacyWorkspace& workspace, const Solution* warm_start = nullptr) const override;
 
   /// @brief The cold-start guess of (n(0), m(0)) selected by `guess` (base frame, N and N m).
   Eigen::Matrix<double, 6, 1> initial_guess(VcInitialGuess guess) const;

@@ -106,7 +106,7 @@
 
 #include "tdcr/bvp/residual_system.hpp"
 #include "tdcr/core/robot.hpp"
-#include "tdcr/models/static_model.hpp"
+#include "tdcr/models/legacy_model.hpp"
 
 namespace tdcr {
 
@@ -136,7 +136,7 @@ struct VcrefOptions {
 /// All mutable memory of a solve (integrator, Newton solver with its KLU factorisation, the
 /// end states of the intervals, Jacobian scratch) lives in the workspace from make_workspace(),
 /// which can be reused across solves.
-class VcrefModel final : public StaticModel {
+class VcrefModel final : public LegacyStaticModel {
  public:
   /// @brief Validate the scene and decide once which effects to evaluate (active tendons with
   /// nonzero tension, tip wrench, backbone and disk weights). Throws InputError if the scene is
@@ -144,14 +144,14 @@ class VcrefModel final : public StaticModel {
   explicit VcrefModel(const Scene& scene, const VcrefOptions& options = VcrefOptions());
   ModelKind kind() const override { return ModelKind::VCref; }
   const Scene& scene() const override { return scene_; }
-  std::unique_ptr<ModelWorkspace> make_workspace() const override;
+  std::unique_ptr<LegacyWorkspace> make_workspace() const override;
   /// @brief Solve by multiple shooting. `warm_start`: a previous VCref Solution of a robot with
   /// the same disks (its unknowns and disk rotations are the initial guess); otherwise (or if
   /// the sizes do not match) VcrefOptions::initial_guess. With SolverOptions::continuation, a
   /// cold solve under large external loads (loads_from_rest()) loads the robot from rest instead of
   /// solving directly, and a failed direct solve is retried by ramping the tensions and loads
   /// from rest. Never throws for a non-convergent solve.
-  Solution solve(ModelWorkspace& workspace, const Solution* warm_start = nullptr) const override;
+  Solution solve(LegacyWorkspace& workspace, const Solution* warm_start = nullptr) const override;
 
   /// @brief The dimensionless external load L^2 (|W| + |F_tip|) / EI (L: robot length, W: total
   /// weight of backbone and disks, F_tip: tip force, EI: bending stiffness; tensions do not
@@ -174,7 +174,7 @@ class VcrefModel final : public StaticModel {
   /// residual (bvp::check_jacobian), at the initial guess of `at` (a previous Solution, as for a
   /// warm start) or the cold initial guess, each unknown x_i moved by
   /// perturbation * sin(1 + i) * (typical magnitude of x_i) so the check can leave the guess.
-  bvp::JacobianCheck check_jacobian(ModelWorkspace& workspace, const Solution* at = nullptr,
+  bvp::JacobianCheck check_jacobian(LegacyWorkspace& workspace, const Solution* at = nullptr,
                                     double perturbation = 0.0) const;
 
   /// @brief Internal data shared with the workspace (implementation detail).

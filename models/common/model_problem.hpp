@@ -1,0 +1,68 @@
+// Private to models/: what a model gives the solve driver (solve_driver.cpp) for one solve.
+//
+// A model's bind() sets its workspace up for one input and options and returns the workspace's
+// ModelProblem. The driver owns the policy (which guess, direct solve or loading from rest,
+// continuation, final residual check, summary, timing); the problem owns the physics (the
+// residual system with the load factor as its parameter, the guesses, the outputs).
+#pragma once
+
+#include <string>
+
+#include <Eigen/Core>
+
+#include "tdcr/bvp/continuation.hpp"
+#include "tdcr/bvp/newton_solver.hpp"
+#include "tdcr/core/solution.hpp"
+
+namespace tdcr::detail {
+
+/// How a cold solve starts.
+struct ColdStart {
+  /// Load the robot from rest (continuation from load factor 0) instead of a direct solve:
+  /// under large external loads a direct solve can land on another equilibrium.
+  bool from_rest = false;
+  double first_step = 0.0;  ///< First load step when from_rest (0: the continuation default).
+  std::string reason;       ///< Why, for the summary message.
+};
+
+/// One bound solve of a model: the residual system at the bound input and what surrounds it.
+class ModelProblem {
+ public:
+  virtual ~ModelProblem() = default;
+
+  /// The residual system F(x; lambda) = 0, lambda the load factor scaling every load (tensions,
+  /// tip wrench, weights; lambda = 1 is the bound input, lambda = 0 the unloaded robot). Null for
+  /// a closed-form model: then extract() computes the whole answer and its summary.
+  virtual bvp::ParameterizedSystem* system() = 0;
+  /// The Newton solver memory of the workspace (reused across solves).
+  virtual bvp::NewtonSolver& newton() = 0;
+  /// Model-specific Newton settings on top of the options (e.g. a bounded step).
+  virtual void adjust(bvp::NewtonOptions& options) const { (void)options; }
+  /// The cold-start rule for the bound input.
+  virtual ColdStart cold_start() const { return {}; }
+  /// Cold guess at load factor 1 (system parameter already 1).
+  virtual void cold_guess(Eigen::VectorXd& x) = 0;
+  /// A second cold guess tried once after the first failed (false: none).
+  virtual bool alternative_guess(Eigen::VectorXd& x) { (void)x; return false; }
+  /// The exact solution at load factor 0 (the unloaded robot); the system parameter is 0.
+  virtual void rest_state(Eigen::VectorXd& x) = 0;
+  /// Guess from a previous Solution of the same model (checked by the driver); false if it
+  /// cannot be used (e.g. it did not converge to finite unknowns).
+  virtual bool warm_guess(const Solution& previous, Eigen::VectorXd& x) = 0;
+  /// Outputs at the returned unknowns x: frames, backbone samples, tendon displacements, the
+  /// tensions used. Called right after the driver evaluated system()->residual(x) at load
+  /// factor 1 (`evaluated`: it succeeded), so a system may reuse the state of that evaluation.
+  /// May downgrade a converged summary (e.g. a final pass that fails to integrate).
+  virtual void extract(const Eigen::VectorXd& x, bool evaluated, Solution& solution) = 0;
+  /// Transitional (legacy_adapter.cpp): a model that still solves a whole scene itself does it
+  /// here and returns true; the driver then only checks and stamps the Solution.
+  virtual bool solve_whole(const Solution* warm_start, Solution& solution) {
+    (void)warm_start;
+    (void)solution;
+    return false;
+  }
+  /// The integrator's name for the summary ("rk4", "cvode", "none").
+  virtual std::string integrator_name() const { return "none"; }
+};
+
+}  // namespace tdcr::detail
