@@ -15,16 +15,21 @@ State make_state(const Frame& f, const Vec3& n, const Vec3& m) {
 
 Frame frame_of(const double* y) { return Frame{rotation(y), position(y)}; }
 
-Section Section::from(const Scene& scene) {
+Section Section::from(const Robot& robot, const Effects& effects, const Vec3& weight) {
   Section s;
-  const BackboneStiffness k = scene.robot.backbone.effective_stiffness();
+  const BackboneStiffness k = robot.backbone.effective_stiffness();
   s.inv_kbt = Vec3(1.0 / k.EI, 1.0 / k.EI, 1.0 / k.GJ);
   s.inv_kse = Vec3(1.0 / k.GA, 1.0 / k.GA, 1.0 / k.EA);
-  s.shear_extension = scene.effects.shear_extension;
-  const SceneEffects e = scene.active_effects();
-  s.gravity = e.backbone_weight;
-  if (s.gravity) s.weight = scene.robot.backbone.linear_mass() * scene.loads.gravity;
+  s.shear_extension = effects.shear_extension;
+  s.gravity = weight.squaredNorm() > 0.0;
+  s.weight = weight;
   return s;
+}
+
+Section Section::from(const Scene& scene) {
+  const SceneEffects e = scene.active_effects();
+  const Vec3 w = e.backbone_weight ? Vec3(scene.robot.backbone.linear_mass() * scene.loads.gravity) : Vec3::Zero();
+  return from(scene.robot, scene.effects, w);
 }
 
 void FreeRod::rhs(double, const double* y, double* dyds) const {

@@ -59,6 +59,9 @@ struct Section {
   Vec3 weight = Vec3::Zero();   ///< Distributed backbone weight rho A g (N/m, base frame).
   bool gravity = false;         ///< weight != 0: the term is skipped entirely when off.
 
+  /// @brief From a robot's stiffness, the shear/extension effect and the backbone weight per
+  /// unit length rho A g (N/m, base frame; zero: no gravity term).
+  static Section from(const Robot& robot, const Effects& effects, const Vec3& weight);
   /// @brief From a validated scene (stiffness, shear/extension effect, backbone weight).
   static Section from(const Scene& scene);
   /// @brief Curvature u = Kbt^-1 R^T m (body frame, rad/m).
