@@ -20,6 +20,7 @@
 
 #include "tdcr/core/error.hpp"
 #include "tdcr/core/scene_io.hpp"
+#include "tdcr/models/model_registry.hpp"
 #include "tdcr/models/model_selection.hpp"
 #include "tdcr/models/static_model.hpp"
 
@@ -35,28 +36,39 @@ constexpr int kExitBadInput = 2;
 constexpr int kExitInternal = 3;
 constexpr long kMaxRepeat = 1000000;
 
-const char* const kUsage =
-    "usage: tdcr solve SCENE.json [--model NAME] [--accuracy FRACTION] [--json] [--repeat N]\n"
-    "                             [--integrator rk4|cvode] [--continuation]\n"
-    "       tdcr --help | --version\n"
-    "\n"
-    "Solve the static shape of a tendon-driven continuum robot described by a scene file\n"
-    "(see examples/ and docs/). SCENE.json may be '-' to read the scene from standard input.\n"
-    "\n"
-    "options of solve:\n"
-    "  --model NAME          cc, ccsub, prb, vc, vcref or auto; overrides the scene's \"model\"\n"
-    "  --accuracy FRACTION   with auto: requested tip position accuracy as a fraction of the\n"
-    "                        robot length (default 0.01); auto picks the cheapest model\n"
-    "                        expected to meet it and prints why\n"
-    "  --json                print the result as JSON (model, status, reason, iterations,\n"
-    "                        residual_norm, tip, disks, tendon_displacements, timing, summary)\n"
-    "  --repeat N            solve N times (N >= 1) from the same initial guess and report the\n"
-    "                        median and minimum solve time\n"
-    "  --integrator NAME     rk4 or cvode; overrides the scene's solver.integrator\n"
-    "  --continuation        if a direct solve fails, ramp actuation and loads (continuation)\n"
-    "\n"
-    "exit status: 0 converged, 1 not converged (result printed with status \"failed\"),\n"
-    "             2 bad input or usage, 3 internal error\n";
+/// The usage text; the model list comes from the registry.
+std::string usage() {
+  std::string models;
+  for (const tdcr::ModelInfo& m : tdcr::model_registry()) {
+    std::string name = m.name;
+    name.resize(std::max<std::size_t>(name.size(), 8), ' ');
+    models += "  " + name + m.description + "\n";
+  }
+  return "usage: tdcr solve SCENE.json [--model NAME] [--accuracy FRACTION] [--json] [--repeat N]\n"
+         "                             [--integrator rk4|cvode] [--continuation]\n"
+         "       tdcr --help | --version\n"
+         "\n"
+         "Solve the static shape of a tendon-driven continuum robot described by a scene file\n"
+         "(see examples/ and docs/). SCENE.json may be '-' to read the scene from standard input.\n"
+         "\n"
+         "options of solve:\n"
+         "  --model NAME          " + tdcr::model_names() + " or auto; overrides the scene's \"model\"\n"
+         "  --accuracy FRACTION   with auto: requested tip position accuracy as a fraction of the\n"
+         "                        robot length (default 0.01); auto picks the cheapest model\n"
+         "                        expected to meet it and prints why\n"
+         "  --json                print the result as JSON (model, status, reason, iterations,\n"
+         "                        residual_norm, tip, disks, tendon_displacements, timing, summary)\n"
+         "  --repeat N            solve N times (N >= 1) from the same initial guess and report the\n"
+         "                        median and minimum solve time\n"
+         "  --integrator NAME     rk4 or cvode; overrides the scene's solver.integrator\n"
+         "  --continuation        if a direct solve fails, ramp actuation and loads (continuation)\n"
+         "\n"
+         "models:\n" + models +
+         "  auto    the cheapest model expected to meet --accuracy\n"
+         "\n"
+         "exit status: 0 converged, 1 not converged (result printed with status \"failed\"),\n"
+         "             2 bad input or usage, 3 internal error\n";
+}
 
 /// A usage error: wrong command line (exit 2).
 struct UsageError : std::runtime_error {
@@ -157,11 +169,16 @@ void apply_overrides(const SolveArgs& args, tdcr::Scene& scene) {
   if (args.continuation) scene.solver.continuation = true;
 }
 
+/// "auto" in any case is "auto"; other names are checked against the registry by validate_scene.
+bool is_auto(const std::string& name) {
+  std::string lower = name;
+  std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return std::tolower(c); });
+  return lower == "auto";
+}
+
 /// The model to solve with; "auto" chooses from the scene and the requested accuracy and says why.
 tdcr::ModelKind model_kind(const tdcr::Scene& scene, double accuracy, std::string* selection) {
-  std::string lower = scene.model;
-  std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return std::tolower(c); });
-  if (lower != "auto") return tdcr::parse_model_kind(lower);
+  if (scene.model != "auto") return tdcr::parse_model_kind(scene.model);
   const tdcr::ModelChoice choice = tdcr::choose_model(scene, accuracy);
   *selection = "auto: " + choice.reason;
   return choice.kind;
@@ -214,6 +231,8 @@ int run_solve(const std::vector<std::string>& argv) {
   const SolveArgs args = parse_solve_args(argv);
   tdcr::Scene scene = load(args.scene_path);
   apply_overrides(args, scene);
+  if (is_auto(scene.model)) scene.model = "auto";
+  tdcr::validate_scene(scene);
   std::string selection;
   const tdcr::ModelKind kind = model_kind(scene, args.accuracy, &selection);
   scene.model = tdcr::to_string(kind);
@@ -237,7 +256,7 @@ int run(const std::vector<std::string>& args) {
   if (args.empty()) throw UsageError("missing command");
   const std::string& cmd = args[0];
   if (cmd == "--help" || cmd == "-h" || cmd == "help") {
-    std::printf("%s", kUsage);
+    std::printf("%s", usage().c_str());
     return 0;
   }
   if (cmd == "--version") {
@@ -247,7 +266,7 @@ int run(const std::vector<std::string>& args) {
   if (cmd == "solve") {
     const std::vector<std::string> rest(args.begin() + 1, args.end());
     if (std::find(rest.begin(), rest.end(), "--help") != rest.end()) {
-      std::printf("%s", kUsage);
+      std::printf("%s", usage().c_str());
       return 0;
     }
     return run_solve(rest);

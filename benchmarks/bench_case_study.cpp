@@ -58,31 +58,60 @@ std::map<std::pair<std::string, int>, double> paper_code_times() {
   return t;
 }
 
-// Build and solve; nullopt if the model refuses the scene (InputError, e.g. CC with a tip force).
-std::optional<Solution> try_solve(ModelKind kind, const Scene& scene, const Solution* warm = nullptr) {
-  try {
-    auto m = make_model(kind, scene);
-    auto ws = m->make_workspace();
-    return solve(*m, *ws, scene.input(), scene.solver, warm);
-  } catch (const InputError& e) {
-    return std::nullopt;
+// One model of one robot and its workspace: every input on that robot (configurations, load
+// steps, a trajectory) is solved with both. nullopt if the model refuses the robot or an input
+// (InputError, e.g. CC with a tip force).
+class Runner {
+ public:
+  Runner(ModelKind kind, const Robot& robot, const Effects& effects = Effects()) {
+    try {
+      model_ = make_model(kind, robot, effects);
+      ws_ = model_->make_workspace();
+    } catch (const InputError&) {
+      model_.reset();
+    }
   }
-}
+  explicit operator bool() const { return model_ != nullptr; }
+  const StaticModel& model() const { return *model_; }
+  ModelWorkspace& workspace() { return *ws_; }
+  std::optional<Solution> solve(const ModelInput& input, const SolverOptions& options = SolverOptions(),
+                                const Solution* warm = nullptr) {
+    if (!model_) return std::nullopt;
+    try {
+      return tdcr::solve(*model_, *ws_, input, options, warm);
+    } catch (const InputError&) {
+      return std::nullopt;
+    }
+  }
+  // Median and minimum time of `repeat` cold solves of one input.
+  std::optional<bench::Timing> time(const ModelInput& input, const SolverOptions& options, int repeat) {
+    if (!model_) return std::nullopt;
+    try {
+      return bench::time_solves(*model_, *ws_, input, options, repeat);
+    } catch (const InputError&) {
+      return std::nullopt;
+    }
+  }
+
+ private:
+  std::unique_ptr<StaticModel> model_;
+  std::unique_ptr<ModelWorkspace> ws_;
+};
 
 // Solve along the loading path: actuation and loads raised in `steps` equal increments, each
 // step warm-started from the last (the paper code's "ramp" runs). Soft robots under tip forces
 // have several equilibria; comparing models is meaningful only on the branch reached by loading
 // the robot from rest, which a direct solve from the straight guess does not guarantee.
-std::optional<Solution> ramp_solve(ModelKind kind, const Scene& scene, int steps) {
+std::optional<Solution> ramp_solve(Runner& runner, const ModelInput& input, int steps) {
   std::optional<Solution> prev;
   for (int k = 1; k <= steps; ++k) {
     const double lambda = static_cast<double>(k) / steps;
-    Scene s = scene;
-    for (double& v : s.actuation.values) v *= lambda;
-    s.loads.tip_force *= lambda;
-    s.loads.tip_moment *= lambda;
-    s.loads.gravity *= lambda;
-    auto sol = try_solve(kind, s, prev ? &*prev : nullptr);
+    ModelInput in = input;
+    for (double& v : in.actuation.values) v *= lambda;
+    in.loads.tip_force *= lambda;
+    in.loads.tip_moment *= lambda;
+    in.loads.gravity *= lambda;
+    auto sol = runner.solve(in, SolverOptions(), prev ? &*prev : nullptr);
     if (!sol) return std::nullopt;
     if (!sol->converged()) return sol;
     prev = std::move(sol);
@@ -91,19 +120,17 @@ std::optional<Solution> ramp_solve(ModelKind kind, const Scene& scene, int steps
 }
 
 // The reference: VCref, with continuation as the fallback so that the reference is converged.
-std::optional<Solution> reference(Scene scene) {
-  scene.solver.continuation = true;
-  return try_solve(ModelKind::VCref, scene);
+std::optional<Solution> reference(Runner& vcref, const ModelInput& input, SolverOptions options = SolverOptions()) {
+  options.continuation = true;
+  return vcref.solve(input, options);
 }
 
 // CC is fed with the tendon displacements of the VC solution of the same tensions (Section 7).
-Scene cc_scene(const Scene& scene, const Solution& vc) {
-  Scene s = scene;
-  s.actuation.kind = Actuation::Kind::Displacements;
-  s.actuation.values = vc.tendon_displacements;
-  s.loads = Loads{};
-  s.model = "cc";
-  return s;
+ModelInput cc_input(const Solution& vc) {
+  ModelInput in;
+  in.actuation.kind = Actuation::Kind::Displacements;
+  in.actuation.values = vc.tendon_displacements;
+  return in;
 }
 
 struct ErrorAccumulator {
@@ -133,16 +160,21 @@ void scenario1(const Settings& cfg) {
   for (int n : ns) {
     std::map<ModelKind, ErrorAccumulator> acc;
     const double length = 0.1;
+    // One model and workspace per (model, robot): the 16 configurations are inputs.
+    const Robot robot = paper::robot(n);
+    std::map<ModelKind, Runner> run;
+    for (ModelKind kind : {ModelKind::CC, ModelKind::CCsub, ModelKind::PRB, ModelKind::VC, ModelKind::VCref})
+      run.emplace(kind, Runner(kind, robot));
     for (int c = 1; c <= 16; ++c) {
       bench::progress("scenario 1: n = " + std::to_string(n), done, static_cast<int>(ns.size()) * 16);
-      const Scene base = paper::scene(n, c);
-      const auto ref = reference(base);
+      const ModelInput base = paper::scene(n, c).input();
+      const auto ref = reference(run.at(ModelKind::VCref), base);
       std::map<ModelKind, std::optional<Solution>> sol;
-      sol[ModelKind::VC] = try_solve(ModelKind::VC, base);
-      sol[ModelKind::CCsub] = try_solve(ModelKind::CCsub, base);
-      sol[ModelKind::PRB] = try_solve(ModelKind::PRB, base);
+      sol[ModelKind::VC] = run.at(ModelKind::VC).solve(base);
+      sol[ModelKind::CCsub] = run.at(ModelKind::CCsub).solve(base);
+      sol[ModelKind::PRB] = run.at(ModelKind::PRB).solve(base);
       if (sol[ModelKind::VC] && sol[ModelKind::VC]->converged())
-        sol[ModelKind::CC] = try_solve(ModelKind::CC, cc_scene(base, *sol[ModelKind::VC]));
+        sol[ModelKind::CC] = run.at(ModelKind::CC).solve(cc_input(*sol[ModelKind::VC]));
       if (ref) sol[ModelKind::VCref] = ref;
       for (auto& [kind, s] : sol) {
         if (!s) continue;
@@ -154,22 +186,13 @@ void scenario1(const Settings& cfg) {
       ++done;
     }
     // Timing: configuration 2 (T_M, 0, 0, 0) from the straight guess, as the paper.
-    const Scene timed = paper::scene(n, 2);
-    const auto vc2 = try_solve(ModelKind::VC, timed);
+    const ModelInput timed = paper::scene(n, 2).input();
+    const auto vc2 = run.at(ModelKind::VC).solve(timed);
     for (ModelKind kind : {ModelKind::CC, ModelKind::CCsub, ModelKind::PRB, ModelKind::VC, ModelKind::VCref}) {
-      std::unique_ptr<StaticModel> model;
-      try {
-        if (kind == ModelKind::CC) {
-          if (!vc2) continue;
-          model = make_model(kind, cc_scene(timed, *vc2));
-        } else {
-          model = make_model(kind, timed);
-        }
-      } catch (const InputError&) {
-        continue;
-      }
+      if (kind == ModelKind::CC && !vc2) continue;
       const int reps = kind == ModelKind::CC ? cfg.repeat * 100 : cfg.repeat;
-      const bench::Timing t = bench::time_solves(*model, timed, std::max(1, reps));
+      const auto t = run.at(kind).time(kind == ModelKind::CC ? cc_input(*vc2) : timed, SolverOptions(), std::max(1, reps));
+      if (!t) continue;
       MeanTipError e{};
       int ncmp = 0, fails = 0;
       if (kind != ModelKind::VCref && !acc[kind].tips.empty()) {
@@ -179,8 +202,8 @@ void scenario1(const Settings& cfg) {
       if (kind != ModelKind::VCref) fails = acc[kind].failures;
       const auto it = paper.find({to_string(kind), n});
       const double pc = it == paper.end() ? NAN : it->second;
-      csv.row(n, to_string(kind), e.e_p_percent, e.e_R_deg, e.max_p_percent, e.max_R_deg, ncmp, fails, t.median_us,
-              t.min_us, pc, pc / t.median_us);
+      csv.row(n, to_string(kind), e.e_p_percent, e.e_R_deg, e.max_p_percent, e.max_R_deg, ncmp, fails, t->median_us,
+              t->min_us, pc, pc / t->median_us);
     }
   }
   bench::progress("scenario 1", done, done);
@@ -206,30 +229,26 @@ void scenario2(const Settings& cfg) {
       std::vector<int> cs = configs;
       if (cs.empty())
         for (int c = 1; c <= 16; ++c) cs.push_back(c);
+      std::map<ModelKind, Runner> run;
+      for (ModelKind kind : {ModelKind::CCsub, ModelKind::PRB, ModelKind::VC, ModelKind::VCref})
+        run.emplace(kind, Runner(kind, robot));
       for (int c : cs) {
-        Scene s;
-        s.robot = robot;
-        s.actuation.values = paper::configuration_tensions(c, tm);
-        s.loads.tip_force = F;
+        ModelInput in;
+        in.actuation.values = paper::configuration_tensions(c, tm);
+        in.loads.tip_force = F;
         // Every model, the reference included, follows the loading path (10 load steps).
-        const auto ref = ramp_solve(ModelKind::VCref, s, 10);
+        const auto ref = ramp_solve(run.at(ModelKind::VCref), in, 10);
         if (!ref || !ref->converged()) ++ref_fail;
         for (ModelKind kind : {ModelKind::CCsub, ModelKind::PRB, ModelKind::VC})
-          acc[kind].add(ramp_solve(kind, s, 10), ref);
+          acc[kind].add(ramp_solve(run.at(kind), in, 10), ref);
       }
       // Timing at half load, configuration 2, as the paper (Section 8.2).
-      Scene half;
-      half.robot = robot;
+      ModelInput half;
       half.actuation.values = paper::configuration_tensions(2, tm / 2);
       half.loads.tip_force = F / 2;
       for (ModelKind kind : {ModelKind::CCsub, ModelKind::PRB, ModelKind::VC, ModelKind::VCref}) {
-        std::unique_ptr<StaticModel> model;
-        try {
-          model = make_model(kind, half);
-        } catch (const InputError&) {
-          continue;
-        }
-        const bench::Timing t = bench::time_solves(*model, half, std::max(1, cfg.repeat / 4));
+        const auto t = run.at(kind).time(half, SolverOptions(), std::max(1, cfg.repeat / 4));
+        if (!t) continue;
         MeanTipError e{};
         int ncmp = 0;
         if (kind != ModelKind::VCref && !acc[kind].tips.empty()) {
@@ -238,7 +257,7 @@ void scenario2(const Settings& cfg) {
         }
         csv.row(f, robot.backbone.effective_stiffness().EI, tm, force_case, to_string(kind), e.e_p_percent, e.e_R_deg,
                 e.max_p_percent, e.max_R_deg, ncmp, kind == ModelKind::VCref ? 0 : acc[kind].failures, ref_fail,
-                t.median_us, t.min_us);
+                t->median_us, t->min_us);
       }
     }
   }
@@ -254,54 +273,52 @@ void tradeoff(const Settings& cfg) {
   };
   const std::vector<Case> cases = {{"tendons_only", Vec3::Zero()}, {"transverse_force", Vec3(0.25, 0, 0)}};
   const int reps = std::max(1, cfg.repeat / 5);
+  // One robot (n = 10) throughout, one model and workspace per model: the lumped models have no
+  // solver setting that trades accuracy for time; the Cosserat models trade integrator work.
+  const Robot robot = paper::robot(10);
+  std::map<ModelKind, Runner> models;
+  for (ModelKind kind : {ModelKind::CC, ModelKind::CCsub, ModelKind::PRB, ModelKind::VC, ModelKind::VCref})
+    models.emplace(kind, Runner(kind, robot));
   for (const Case& cs : cases) {
-    Scene truth_scene = paper::scene(10, 2);
-    truth_scene.loads.tip_force = cs.force;
-    truth_scene.solver.integrator = IntegratorKind::Cvode;
-    truth_scene.solver.cvode_rtol = 1e-10;
-    truth_scene.solver.cvode_atol = 1e-12;
-    const auto truth = reference(truth_scene);
+    ModelInput input = paper::scene(10, 2).input();
+    input.loads.tip_force = cs.force;
+    SolverOptions truth_options;
+    truth_options.integrator = IntegratorKind::Cvode;
+    truth_options.cvode_rtol = 1e-10;
+    truth_options.cvode_atol = 1e-12;
+    const auto truth = reference(models.at(ModelKind::VCref), input, truth_options);
     if (!truth || !truth->converged()) continue;
-    auto run = [&](ModelKind kind, Scene s, const std::string& setting) {
-      s.loads.tip_force = cs.force;
-      std::unique_ptr<StaticModel> model;
-      try {
-        model = make_model(kind, s);
-      } catch (const InputError&) {
-        return;
-      }
-      const bench::Timing t = bench::time_solves(*model, s, reps);
-      const TipError e = tip_error(t.last.tip(), truth->tip());
-      int n = s.robot.segments[0].disks;
-      csv.row(cs.name, to_string(kind), setting, n, 100 * e.position / 0.1, e.angle * 180 / M_PI, t.median_us,
-              t.last.converged() ? 1 : 0);
+    auto run = [&](ModelKind kind, const ModelInput& in, const SolverOptions& options, const std::string& setting) {
+      const auto t = models.at(kind).time(in, options, reps);
+      if (!t) return;
+      const TipError e = tip_error(t->last.tip(), truth->tip());
+      csv.row(cs.name, to_string(kind), setting, robot.segments[0].disks, 100 * e.position / 0.1, e.angle * 180 / M_PI,
+              t->median_us, t->last.converged() ? 1 : 0);
     };
     bench::progress("trade-off: " + cs.name, 0, 1);
-    // One robot (n = 10) throughout: the lumped models have no solver setting that trades
-    // accuracy for time; the Cosserat models trade integrator work.
-    run(ModelKind::CCsub, paper::scene(10, 2), "default");
-    run(ModelKind::PRB, paper::scene(10, 2), "default");
+    run(ModelKind::CCsub, input, SolverOptions(), "default");
+    run(ModelKind::PRB, input, SolverOptions(), "default");
     for (int steps : {1, 2, 4, 8, 16}) {
-      Scene s = paper::scene(10, 2);
-      s.solver.rk4_steps = steps;
-      s.solver.rk4_max_step = std::numeric_limits<double>::infinity();  // exactly rk4_steps per interval
-      run(ModelKind::VC, s, "rk4_" + std::to_string(steps));
-      run(ModelKind::VCref, s, "rk4_" + std::to_string(steps));
+      SolverOptions o;
+      o.rk4_steps = steps;
+      o.rk4_max_step = std::numeric_limits<double>::infinity();  // exactly rk4_steps per interval
+      run(ModelKind::VC, input, o, "rk4_" + std::to_string(steps));
+      run(ModelKind::VCref, input, o, "rk4_" + std::to_string(steps));
     }
     for (double rtol : {1e-4, 1e-6, 1e-8}) {
-      Scene s = paper::scene(10, 2);
-      s.solver.integrator = IntegratorKind::Cvode;
-      s.solver.cvode_rtol = rtol;
-      s.solver.cvode_atol = rtol * 1e-2;
+      SolverOptions o;
+      o.integrator = IntegratorKind::Cvode;
+      o.cvode_rtol = rtol;
+      o.cvode_atol = rtol * 1e-2;
       std::ostringstream name;
       name << "cvode_" << rtol;
-      run(ModelKind::VC, s, name.str());
-      run(ModelKind::VCref, s, name.str());
+      run(ModelKind::VC, input, o, name.str());
+      run(ModelKind::VCref, input, o, name.str());
     }
     if (cs.force.isZero()) {
-      const auto vc = try_solve(ModelKind::VC, paper::scene(10, 2));
-      if (vc) run(ModelKind::CC, cc_scene(paper::scene(10, 2), *vc), "from_vc_displacements");
-      run(ModelKind::CC, [] { Scene s = paper::scene(10, 2); s.model = "cc"; return s; }(), "from_tensions");
+      const auto vc = models.at(ModelKind::VC).solve(input);
+      if (vc) run(ModelKind::CC, cc_input(*vc), SolverOptions(), "from_vc_displacements");
+      run(ModelKind::CC, input, SolverOptions(), "from_tensions");
     }
     bench::progress("trade-off: " + cs.name, 1, 1);
   }
@@ -327,14 +344,10 @@ void effects(const Settings& cfg) {
     for (const Variant& v : variants) {
       Scene s = paper::scene(10, 2);
       v.apply(s);
-      std::unique_ptr<StaticModel> model;
-      try {
-        model = make_model(kind, s);
-      } catch (const InputError&) {
-        continue;
-      }
-      const bench::Timing t = bench::time_solves(*model, s, reps);
-      csv.row(to_string(kind), v.name, t.median_us, t.last.summary.iterations, t.last.converged() ? 1 : 0);
+      Runner run(kind, s.robot, s.effects);  // a variant may change the robot or its effects
+      const auto t = run.time(s.input(), s.solver, reps);
+      if (!t) continue;
+      csv.row(to_string(kind), v.name, t->median_us, t->last.summary.iterations, t->last.converged() ? 1 : 0);
     }
     bench::progress("effects: " + to_string(kind), 1, 1);
   }
@@ -345,7 +358,11 @@ void effects(const Settings& cfg) {
 void warmstart(const Settings& cfg) {
   bench::Csv csv(cfg.out + "/warmstart.csv", "model,mode,steps,total_ms,mean_iterations,all_converged");
   const int steps = cfg.quick ? 10 : 100;
+  const Robot robot = paper::robot(10);
   for (ModelKind kind : {ModelKind::CCsub, ModelKind::PRB, ModelKind::VC, ModelKind::VCref}) {
+    // One model and one workspace for the whole trajectory; only the input changes.
+    Runner run(kind, robot);
+    if (!run) continue;
     for (const bool warm : {false, true}) {
       double total = 0.0;
       long iters = 0;
@@ -353,23 +370,19 @@ void warmstart(const Settings& cfg) {
       std::optional<Solution> prev;
       bool available = true;
       for (int i = 1; i <= steps && available; ++i) {
-        Scene s = paper::scene(10, 1);
-        s.actuation.values[0] = paper::max_tension(s.robot) * i / steps;
-        s.loads.tip_force = Vec3(0.05, 0, 0);
-        std::unique_ptr<StaticModel> model;
-        try {
-          model = make_model(kind, s);
-        } catch (const InputError&) {
+        ModelInput in = paper::scene(10, 1).input();
+        in.actuation.values[0] = paper::max_tension(robot) * i / steps;
+        in.loads.tip_force = Vec3(0.05, 0, 0);
+        const auto t0 = std::chrono::steady_clock::now();
+        std::optional<Solution> sol = run.solve(in, SolverOptions(), warm && prev ? &*prev : nullptr);
+        total += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+        if (!sol) {
           available = false;
           break;
         }
-        auto ws = model->make_workspace();
-        const auto t0 = std::chrono::steady_clock::now();
-        Solution sol = solve(*model, *ws, s.input(), s.solver, warm && prev ? &*prev : nullptr);
-        total += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-        iters += sol.summary.iterations;
-        ok = ok && sol.converged();
-        prev = sol;
+        iters += sol->summary.iterations;
+        ok = ok && sol->converged();
+        prev = std::move(sol);
       }
       if (available)
         csv.row(to_string(kind), warm ? "warm" : "cold", steps, total, static_cast<double>(iters) / steps, ok ? 1 : 0);

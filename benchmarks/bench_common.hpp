@@ -21,14 +21,13 @@ struct Timing {
   Solution last;
 };
 
-inline Timing time_solves(const StaticModel& model, const Scene& scene, int repeat, const Solution* warm = nullptr) {
-  const ModelInput input = scene.input();
-  auto ws = model.make_workspace();
+inline Timing time_solves(const StaticModel& model, ModelWorkspace& ws, const ModelInput& input,
+                          const SolverOptions& options, int repeat, const Solution* warm = nullptr) {
   std::vector<double> t;
   Timing out;
   for (int i = 0; i < repeat; ++i) {
     const auto t0 = std::chrono::steady_clock::now();
-    out.last = solve(model, *ws, input, scene.solver, warm);
+    out.last = solve(model, ws, input, options, warm);
     t.push_back(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
   }
   std::sort(t.begin(), t.end());
@@ -36,6 +35,12 @@ inline Timing time_solves(const StaticModel& model, const Scene& scene, int repe
   out.min_us = t.front();
   out.median_us = t.size() % 2 ? t[t.size() / 2] : 0.5 * (t[t.size() / 2 - 1] + t[t.size() / 2]);
   return out;
+}
+
+/// The same for a scene's input and solver options, on a fresh workspace of `model`.
+inline Timing time_solves(const StaticModel& model, const Scene& scene, int repeat, const Solution* warm = nullptr) {
+  auto ws = model.make_workspace();
+  return time_solves(model, *ws, scene.input(), scene.solver, repeat, warm);
 }
 
 /// A CSV file with a header row; rows are written as they come (a sweep cut short keeps its rows).

@@ -12,12 +12,14 @@
 #include <cstdio>
 #include <cstdlib>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "test_scenes.hpp"
 #include "tdcr/core/lie.hpp"
 #include "tdcr/core/paper_robot.hpp"
+#include "tdcr/models/model_registry.hpp"
 #include "tdcr/models/static_model.hpp"
 #include "tdcr/models/verification.hpp"
 
@@ -39,6 +41,8 @@ struct Context {
   const Scene& scene;
   const Solution& sol;
   std::string* property;  // one line for the table: what was checked, with the number
+  const StaticModel& model;  // the model of the scene's robot and effects
+  ModelWorkspace& workspace;  // its workspace: further inputs on the same robot reuse both
 };
 
 struct HardCase {
@@ -108,6 +112,7 @@ void check_planar(Context& c, double tol = 1e-9) {
   *c.property += fmt("; planar: max abs(x) %.1e m", worst);
 }
 
+// One solve of a scene (a model of another robot than the case's).
 Solution solve_kind(ModelKind k, const Scene& s) {
   auto m = make_model(k, s);
   auto ws = m->make_workspace();
@@ -166,9 +171,9 @@ std::vector<HardCase> cases() {
                  return s;
                },
                [](Context& c) {
-                 Scene m = c.scene;
+                 ModelInput m = c.scene.input();
                  m.loads.tip_force = -m.loads.tip_force;
-                 const Solution r = solve_kind(c.kind, m);
+                 const Solution r = solve(c.model, c.workspace, m, c.scene.solver);
                  ASSERT_TRUE(r.converged()) << r.summary.message;
                  const Vec3 a = c.sol.tip().p, b = r.tip().p;
                  const double d = (Vec3(-a.x(), a.y(), a.z()) - b).norm();
@@ -312,8 +317,14 @@ TEST_P(HardCases, ConvergesWithVerifiedEquilibriumOrFailsClearly) {
   Scene s = hc.scene();
   s.model = to_string(p.kind);
   const auto t0 = std::chrono::steady_clock::now();
+  std::unique_ptr<StaticModel> model;
+  std::unique_ptr<ModelWorkspace> ws;
   Solution sol;
-  ASSERT_NO_THROW(sol = solve_kind(p.kind, s));
+  ASSERT_NO_THROW({
+    model = make_model(p.kind, s);
+    ws = model->make_workspace();
+    sol = solve(*model, *ws, s.input(), s.solver);
+  });
   const double ms = 1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const SolverSummary& sum = sol.summary;
 
@@ -325,10 +336,10 @@ TEST_P(HardCases, ConvergesWithVerifiedEquilibriumOrFailsClearly) {
     EXPECT_TRUE(sol.unknowns.allFinite());
     for (const Frame& f : sol.disk_frames) EXPECT_TRUE(f.p.allFinite() && f.R.allFinite());
     EXPECT_LE(sum.residual_norm, s.solver.function_tolerance);
-    // Independent verification: global equilibrium (VC, VCref).
-    const EquilibriumCheck eq = verify_equilibrium(s, sol);
+    // Independent verification: global equilibrium (models with backbone wrench: VC, VCref).
+    const EquilibriumCheck eq = verify_equilibrium(*model, s.input(), sol);
     std::string eqs;
-    if (continuous_rod(p.kind)) {
+    if (model_info(p.kind).capabilities.backbone_wrench) {
       ASSERT_TRUE(eq.evaluated) << eq.reason;
       // Measured <= 1e-8 without gravity (RK4 integration error); with gravity the check's own
       // Hermite quadrature of the backbone weight over 20 mm samples limits it to ~6e-7.
@@ -338,7 +349,7 @@ TEST_P(HardCases, ConvergesWithVerifiedEquilibriumOrFailsClearly) {
       EXPECT_FALSE(eq.evaluated);
       eqs = fmt("own residual %.1e", sum.residual_norm);
     }
-    Context ctx{p.kind, s, sol, &property};
+    Context ctx{p.kind, s, sol, &property, *model, *ws};
     hc.check(ctx);
     property = eqs + "; " + property;
   } else {
@@ -371,16 +382,20 @@ namespace {
 TEST(VerifyEquilibrium, DetectsAnImbalance) {
   Scene s = paper_scene(10, {TM(), 0, TM(), 0});
   s.loads.tip_force = Vec3(0.1, 0.2, 0.0);
-  const Solution sol = solve_kind(ModelKind::VCref, s);
+  const auto model = make_model(ModelKind::VCref, s);
+  const auto ws = model->make_workspace();
+  const Solution sol = solve(*model, *ws, s.input(), s.solver);
   ASSERT_TRUE(sol.converged());
-  const EquilibriumCheck ok = verify_equilibrium(s, sol);
+  const EquilibriumCheck ok = verify_equilibrium(*model, s.input(), sol);
   ASSERT_TRUE(ok.evaluated) << ok.reason;
   EXPECT_LT(ok.relative_error(), 1e-8);
   EXPECT_GT(ok.eq58_force.norm(), 0.0);  // the tip force makes the curvature non-uniform
+  // The scene overload is the same check.
+  EXPECT_EQ(verify_equilibrium(s, sol).force, ok.force);
 
-  Scene other = s;
+  ModelInput other = s.input();
   other.loads.tip_force.x() += 0.01 * 2 * TM();
-  const EquilibriumCheck bad = verify_equilibrium(other, sol);
+  const EquilibriumCheck bad = verify_equilibrium(*model, other, sol);
   ASSERT_TRUE(bad.evaluated);
   EXPECT_NEAR(bad.force.x(), 0.01 * 2 * TM(), 1e-8);
   EXPECT_GT(bad.relative_error(), 1e-3);
@@ -399,6 +414,15 @@ TEST(VerifyEquilibrium, SaysWhenItDoesNotApply) {
   Solution empty;
   empty.model = "vcref";
   EXPECT_FALSE(verify_equilibrium(s, empty).evaluated);
+  // A Solution of another model is refused by the model overload.
+  const auto vcref = make_model(ModelKind::VCref, s);
+  const auto ws = vcref->make_workspace();
+  const Solution sol = solve(*vcref, *ws, s.input(), s.solver);
+  const auto vc = make_model(ModelKind::VC, s);
+  const EquilibriumCheck other = verify_equilibrium(*vc, s.input(), sol);
+  EXPECT_FALSE(other.evaluated);
+  EXPECT_FALSE(other.reason.empty());
+  EXPECT_TRUE(verify_equilibrium(*vcref, s.input(), sol).evaluated);
 }
 
 }  // namespace

@@ -51,14 +51,15 @@ TEST(ModelSelection, ThePromiseHoldsAgainstVcref) {
   // The chosen model's actual error on the paper's configurations stays within the requested
   // accuracy, checked against VCref.
   for (int n : {3, 10}) {
+    // One reference model and workspace per robot; the configurations are its inputs.
+    const auto vcref = make_model(ModelKind::VCref, paper::robot(n));
+    const auto ws = vcref->make_workspace();
     for (int c : {2, 6, 11, 16}) {
       const Scene s = paper::scene(n, c, "auto");
       const Solution sol = solve_auto(s, 0.01);
       ASSERT_TRUE(sol.converged()) << sol.summary.brief_report();
       EXPECT_FALSE(sol.model_selection.empty());
-      Scene r = s;
-      r.model = "vcref";
-      const Solution ref = solve(r);
+      const Solution ref = solve(*vcref, *ws, s.input(), s.solver);
       ASSERT_TRUE(ref.converged());
       const TipError e = tip_error(sol.tip(), ref.tip());
       EXPECT_LT(e.position / s.robot.total_length(), 0.01) << "n " << n << " config " << c << ": " << sol.model_selection;

@@ -33,6 +33,25 @@ std::string percent(double fraction) {
   return b;
 }
 
+// The reference model: its expected error against itself is zero at every disk count.
+bool is_reference(const ModelInfo& m) {
+  for (double p : m.accuracy.percent_at)
+    if (p != 0.0) return false;
+  return true;
+}
+
+// The models that can take an input of this kind (and loads), cheapest first for the scene.
+std::vector<const ModelInfo*> candidates(bool displacements, bool loaded) {
+  std::vector<const ModelInfo*> v;
+  for (const ModelInfo& m : model_registry()) {
+    const ModelCapabilities& c = m.capabilities;
+    if ((displacements ? c.displacement_input : c.tension_input) && (!loaded || c.external_loads)) v.push_back(&m);
+  }
+  auto rank = [loaded](const ModelInfo* m) { return loaded && m->loaded_cost_rank >= 0 ? m->loaded_cost_rank : m->cost_rank; };
+  std::stable_sort(v.begin(), v.end(), [&](const ModelInfo* a, const ModelInfo* b) { return rank(a) < rank(b); });
+  return v;
+}
+
 }  // namespace
 
 double expected_model_error(ModelKind kind, int disks, bool loaded) {
@@ -51,37 +70,41 @@ ModelChoice choose_model(const Scene& scene, double tolerance) {
   const std::string features = std::string(loaded ? "external loads" : "no external load") + ", " +
                                std::to_string(n) + " disks per segment (fewest)";
   ModelChoice c;
-  if (scene.actuation.kind == Actuation::Kind::Displacements) {
-    if (loaded)
-      throw InputError("model", "auto",
-                       "no model takes tendon displacements together with external loads; give tensions");
-    c.kind = ModelKind::CC;
-    c.expected_error = expected_model_error(ModelKind::CC, n, false);
-    c.reason = "tendon displacements: CC is the only kinematic model (" + features + ")";
+  const bool displacements = scene.actuation.kind == Actuation::Kind::Displacements;
+  const std::vector<const ModelInfo*> order = candidates(displacements, loaded);
+  if (order.empty())
+    throw InputError("model", "auto",
+                     displacements ? "no model takes tendon displacements together with external loads; give tensions"
+                                   : "no model takes this scene");
+  if (displacements) {
+    // Kinematic: the cheapest model that takes displacements (there is no accuracy table for them).
+    c.kind = order.front()->kind;
+    c.expected_error = expected_model_error(c.kind, n, false);
+    c.reason = "tendon displacements: " + to_string(c.kind) + " is the " +
+               (order.size() == 1 ? "only model that takes them" : "cheapest model that takes them") + " (" + features +
+               ")";
     return c;
   }
-  // Cheapest first (registry cost rank); the first model expected to meet the tolerance wins.
-  std::vector<const ModelInfo*> order;
-  for (const ModelInfo& m : model_registry()) order.push_back(&m);
-  std::sort(order.begin(), order.end(), [](const ModelInfo* a, const ModelInfo* b) { return a->cost_rank < b->cost_rank; });
+  // Cheapest first (registry cost rank); the first model expected to meet the tolerance wins,
+  // the reference model (zero expected error) at the latest.
   for (const ModelInfo* info : order) {
     const ModelKind k = info->kind;
-    if (k == ModelKind::VCref) continue;  // the reference: the fallback below
-    if (k == ModelKind::PRB && loaded) continue;  // slower than VCref with loads (benchmarks)
     const double err = expected_model_error(k, n, loaded);
-    if (err <= tolerance) {
-      c.kind = k;
-      c.expected_error = err;
+    if (!(err <= tolerance)) continue;
+    c.kind = k;
+    c.expected_error = err;
+    if (!is_reference(*info)) {
       c.reason = features + ": " + to_string(k) + " is the cheapest model expected within " + percent(err) +
                  " of VCref, below the requested " + percent(tolerance);
       return c;
     }
+    const ModelInfo& cheapest = *order.front();
+    c.reason = features + ": no cheaper model is expected within the requested " + percent(tolerance) + " (" +
+               to_string(cheapest.kind) + " " + percent(expected_model_error(cheapest.kind, n, loaded)) +
+               "), so the reference model " + to_string(k);
+    return c;
   }
-  c.kind = ModelKind::VCref;
-  c.expected_error = 0.0;
-  c.reason = features + ": no cheaper model is expected within the requested " + percent(tolerance) +
-             " (VC " + percent(expected_model_error(ModelKind::VC, n, loaded)) + "), so the reference model VCref";
-  return c;
+  throw InputError("accuracy", format_value(tolerance), "no model is expected to meet it");
 }
 
 Solution solve_auto(const Scene& scene, double tolerance, const Solution* warm_start) {

@@ -18,6 +18,9 @@ struct ModelCapabilities {
   bool displacement_input = false;  ///< Actuation by tendon displacements.
   bool external_loads = true;       ///< Tip wrench and gravity.
   bool backbone_wrench = false;     ///< Solutions carry internal force and moment samples.
+  /// Tendons act on the backbone at the disks only, along straight chords between holes
+  /// (Eq. 30-33); else along the backbone (fully constrained path, Eq. 24-29).
+  bool tendon_forces_at_disks = false;
 };
 
 /// @brief Mean tip position error of a model against VCref (% of the robot length) on the
@@ -42,6 +45,8 @@ struct ModelInfo {
   ModelCapabilities capabilities;  ///< What it takes.
   ExpectedAccuracy accuracy;       ///< Expected error against VCref.
   int cost_rank;                   ///< Order of typical solve time, cheapest first (auto).
+  /// The same order with external loads, where it differs (-1: cost_rank).
+  int loaded_cost_rank = -1;
 };
 
 /// @brief Every model, in ModelKind order.

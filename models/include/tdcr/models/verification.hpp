@@ -10,20 +10,23 @@
 /// must vanish for every model whose tendon forces are internal (a tendon in equilibrium with
 /// constant tension: its loads on the backbone telescope to the pull at the base).
 ///
-/// Per model:
-/// - VC (Cosserat rod, continuous tendons): d_k is the tendon tangent at s = 0,
-///   (v + u x r_k) / |v + u x r_k| with u, v from n(0), m(0) (Eq. 24-29). Exact up to the ODE
-///   integration error.
-/// - VCref (Cosserat rod per subsegment, discrete disk forces): d_k is the chord from the base
-///   hole to the disk-1 hole (Eq. 30-33). With the frictionless-disk condition (Eq. 58,
+/// Which models it applies to is read from the model registry (model_registry.hpp):
+/// - Models whose Solutions carry the backbone wrench (capability backbone_wrench), with tendons
+///   along the backbone (VC: Cosserat rod, continuous tendons): d_k is the tendon tangent at
+///   s = 0, (v + u x r_k) / |v + u x r_k| with u, v from n(0), m(0) (Eq. 24-29). Exact up to the
+///   ODE integration error.
+/// - Those with tendon forces at the disks (capability tendon_forces_at_disks; VCref: Cosserat
+///   rod per subsegment, discrete disk forces): d_k is the chord from the base hole to the
+///   disk-1 hole (Eq. 30-33). With the frictionless-disk condition (Eq. 58,
 ///   effects.disk_normal_force = removed) the model drops the component of every pass-through
 ///   tendon force along the disk normal: the tendons are then not in equilibrium, and the
 ///   dropped forces are the model's own departure from global equilibrium. They are computed
 ///   from the disk frames, reported separately (eq58_force, eq58_moment) and accounted for, so
 ///   the imbalance is again zero up to integration error.
-/// - CCsub, PRB, CC: the Solution carries no internal wrench at the base (no backbone samples),
-///   so evaluated = false with a reason; these models are checked by re-evaluating their own
-///   residual at the returned unknowns (NewtonSolver's final check, reported in the summary).
+/// - Models without backbone wrench (CC, CCsub, PRB): the Solution carries no internal wrench at
+///   the base, so evaluated = false with a reason; these models are checked by re-evaluating
+///   their own residual at the returned unknowns (the solve driver's final check, reported in
+///   the summary).
 ///
 /// The backbone weight rho A g (per unit reference arc length) is integrated over the backbone
 /// samples with the cubic Hermite rule, int p ds ~ h (p0 + p1) / 2 + h^2 (t0 - t1) / 12 with
@@ -35,6 +38,7 @@
 #include "tdcr/core/scene.hpp"
 #include "tdcr/core/solution.hpp"
 #include "tdcr/core/types.hpp"
+#include "tdcr/models/static_model.hpp"
 
 namespace tdcr {
 
@@ -60,9 +64,14 @@ struct EquilibriumCheck {
 
 /// @brief Global equilibrium of a solved robot (see file comment): the imbalance of all loads
 /// on the robot, computed from the solution's disk frames and backbone samples (sample 0: the
-/// rod's internal force n and moment m at s = 0+, base frame) and the scene's tensions, tip
-/// wrench and gravity. Never throws for a failed or odd solution: it reports evaluated = false
-/// with a reason (no frames, no base sample, unknown model, non-finite values).
+/// rod's internal force n and moment m at s = 0+, base frame) and the input's tensions, tip
+/// wrench and gravity acting on the model's robot. Never throws for a failed or odd solution: it
+/// reports evaluated = false with a reason (a Solution of another model, no frames, no base
+/// sample, a model without backbone wrench, non-finite values).
+EquilibriumCheck verify_equilibrium(const StaticModel& model, const ModelInput& input, const Solution& solution);
+
+/// @brief The same for a scene: the model named by `solution.model`, of the scene's robot and
+/// effects, under the scene's input (no model is built).
 EquilibriumCheck verify_equilibrium(const Scene& scene, const Solution& solution);
 
 }  // namespace tdcr
