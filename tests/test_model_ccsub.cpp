@@ -31,9 +31,9 @@ Scene paper_scene(int n, const std::vector<double>& T, const Vec3& F = Vec3::Zer
 }
 
 Solution solve_ccsub(const Scene& s, const Solution* warm = nullptr) {
-  CcsubModel model(s);
+  const CcsubModel model(s.robot, s.effects);
   auto ws = model.make_workspace();
-  return model.solve(*ws, warm);
+  return tdcr::solve(model, *ws, s.input(), s.solver, warm);
 }
 
 }  // namespace
@@ -167,9 +167,9 @@ TEST(CcsubModel, GlobalEquilibriumWithGravityAndTipForce) {
   s.loads.tip_force = Vec3(0.05, -0.1, 0.02);
   s.loads.tip_moment = Vec3(0.0, 0.002, 0.001);
   s.loads.gravity = Vec3(0.0, -9.81, 0.0);
-  CcsubModel model(s);
+  const CcsubModel model(s.robot, s.effects);
   auto ws = model.make_workspace();
-  const Solution sol = model.solve(*ws);
+  const Solution sol = tdcr::solve(model, *ws, s.input(), s.solver);
   ASSERT_TRUE(sol.converged()) << sol.summary.message;
   ASSERT_EQ(sol.disk_frames.size(), 16u);
 
@@ -223,11 +223,11 @@ TEST(CcsubModel, NonConvergentSolveReportsFailure) {
 TEST(CcsubModel, WarmStartFromPreviousSolution) {
   const double TM = paper::max_tension(paper::robot(10));
   const Scene s = paper_scene(10, {TM, 0, 0.5 * TM, 0}, Vec3(0.1, 0, 0));
-  CcsubModel model(s);
+  const CcsubModel model(s.robot, s.effects);
   auto ws = model.make_workspace();
-  const Solution cold = model.solve(*ws);
+  const Solution cold = tdcr::solve(model, *ws, s.input(), s.solver);
   ASSERT_TRUE(cold.converged());
-  const Solution warm = model.solve(*ws, &cold);
+  const Solution warm = tdcr::solve(model, *ws, s.input(), s.solver, &cold);
   ASSERT_TRUE(warm.converged());
   EXPECT_LE(warm.summary.iterations, 1);
   EXPECT_LT(cold.summary.iterations, 30);
