@@ -245,3 +245,23 @@ TEST(CcsubModel, OnlyLoadedSubsegmentsAreUnknowns) {
   const Solution b = solve_ccsub(paper_scene(10, {0, 0, TM, 0}));
   EXPECT_EQ(b.summary.unknowns, 60);
 }
+
+// A trajectory on one model and one workspace: a Solution of an input that loads segment 1 only
+// (J = N/2) warm-starts an input that loads every subsegment, and back.
+TEST(CcsubModel, WarmStartAcrossInputsWithOtherLoadedSubsegments) {
+  const double TM = paper::max_tension(paper::robot(10));
+  const Scene a = paper_scene(10, {TM, 0, 0, 0});
+  const Scene b = paper_scene(10, {TM, 0, 0.2 * TM, 0});
+  const CcsubModel model(a.robot, a.effects);
+  auto ws = model.make_workspace();
+  const Solution sa = tdcr::solve(model, *ws, a.input(), a.solver);
+  ASSERT_TRUE(sa.converged());
+  const Solution sb = tdcr::solve(model, *ws, b.input(), b.solver, &sa);
+  ASSERT_TRUE(sb.converged()) << sb.summary.message;
+  EXPECT_EQ(sb.summary.unknowns, 60);
+  const Solution sb_cold = solve_ccsub(b);
+  EXPECT_LT((sb.tip().p - sb_cold.tip().p).norm(), 1e-9);
+  const Solution sa2 = tdcr::solve(model, *ws, a.input(), a.solver, &sb);
+  ASSERT_TRUE(sa2.converged());
+  EXPECT_LT((sa2.tip().p - sa.tip().p).norm(), 1e-9);
+}

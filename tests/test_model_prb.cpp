@@ -239,3 +239,22 @@ TEST(PrbModel, WarmStartAndBranch) {
   // Both satisfy the tolerance 1e-10 on angle-sized residuals: tips agree to ~N * 1e-10 * L.
   EXPECT_LT((warm.tip().p - cold.tip().p).norm(), 1e-9);
 }
+
+// A trajectory on one model and one workspace: warm starts across inputs that load a different
+// number of subsegments (J = N/2, then N, then N/2 again).
+TEST(PrbModel, WarmStartAcrossInputsWithOtherLoadedSubsegments) {
+  const double TM = paper::max_tension(paper::robot(5));
+  const Scene a = paper_scene(5, {TM, 0, 0, 0});
+  const Scene b = paper_scene(5, {TM, 0, 0.2 * TM, 0});
+  const PrbModel model(a.robot, a.effects);
+  auto ws = model.make_workspace();
+  const Solution sa = tdcr::solve(model, *ws, a.input(), a.solver);
+  ASSERT_TRUE(sa.converged());
+  const Solution sb = tdcr::solve(model, *ws, b.input(), b.solver, &sa);
+  ASSERT_TRUE(sb.converged()) << sb.summary.message;
+  EXPECT_EQ(sb.summary.unknowns, 50);
+  EXPECT_LT((sb.tip().p - solve_prb(b).tip().p).norm(), 1e-9);
+  const Solution sa2 = tdcr::solve(model, *ws, a.input(), a.solver, &sb);
+  ASSERT_TRUE(sa2.converged());
+  EXPECT_LT((sa2.tip().p - sa.tip().p).norm(), 1e-9);
+}
