@@ -62,13 +62,6 @@ void LumpedProblem::evaluate(const double* x) {
   body_.statics.distal_wrenches(loads_, frames_.data(), centroids_.data(), F_.data(), M_.data());
 }
 
-Vec3 LumpedProblem::base_moment(int j) const {
-  const Frame& a = frames_[j - 1];
-  Vec3 Mb = M_[j] + (frames_[j].p - a.p).cross(F_[j]);
-  if (backbone_weight_on()) Mb += (centroids_[j] - a.p).cross(backbone_weight(j));
-  return Mb;
-}
-
 void LumpedProblem::extract(const Eigen::VectorXd& x, bool evaluated, Solution& solution) {
   Eigen::VectorXd full = Eigen::VectorXd::Zero(body_.per_subsegment * body_.N);
   full.head(x.size()) = x;

@@ -69,7 +69,12 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   /// geometry(x), then the distal wrenches F_, M_ of subsegments 1..J.
   void evaluate(const double* x);
   /// Moment about O_{j-1} (base frame) of everything distal of disk j-1 at the last evaluate().
-  Vec3 base_moment(int j) const;
+  Vec3 base_moment(int j) const {
+    const Vec3& o = frames_[j - 1].p;
+    Vec3 m = M_[j] + (frames_[j].p - o).cross(F_[j]);
+    if (backbone_weight_on()) m += (centroids_[j] - o).cross(backbone_weight(j));
+    return m;
+  }
 
   int active() const { return loads_.active; }
   bool backbone_weight_on() const { return loads_.loads.has_backbone_weight(); }
