@@ -1,5 +1,5 @@
 // Solve time of the lumped static models CCsub and PRB on the paper's robot (Table 3), cold
-// solves from the straight initial guess, against the paper's own code (reference/
+// solves from the straight initial guess (one model and one workspace per row), against the paper's own code (reference/
 // paper_code_timing.csv: configuration 2 = (T_M, 0, 0, 0), straight guess, median of up to 100
 // cold solves). Usage: bench_lumped [--quick] [--reps N]
 //

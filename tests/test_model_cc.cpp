@@ -42,9 +42,9 @@ void expect_frame_near(const Frame& a, const Frame& b, double tol) {
 }
 
 Solution solve_cc(const Scene& s) {
-  CcModel m(s);
+  const CcModel m(s.robot, s.effects);
   auto ws = m.make_workspace();
-  return m.solve(*ws);
+  return tdcr::solve(m, *ws, s.input(), s.solver);
 }
 
 }  // namespace
@@ -137,7 +137,7 @@ TEST(CcModel, TensionsGiveTheLoadFreeCosseratArc) {
 TEST(CcModel, RefusesExternalLoadsNamingTheField) {
   auto field_of = [](const Scene& s) {
     try {
-      CcModel m{s};
+      solve_cc(s);
     } catch (const InputError& e) {
       return e.field() + " " + e.value();
     }

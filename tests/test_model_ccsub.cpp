@@ -31,9 +31,9 @@ Scene paper_scene(int n, const std::vector<double>& T, const Vec3& F = Vec3::Zer
 }
 
 Solution solve_ccsub(const Scene& s, const Solution* warm = nullptr) {
-  CcsubModel model(s);
+  const CcsubModel model(s.robot, s.effects);
   auto ws = model.make_workspace();
-  return model.solve(*ws, warm);
+  return tdcr::solve(model, *ws, s.input(), s.solver, warm);
 }
 
 }  // namespace
@@ -167,9 +167,9 @@ TEST(CcsubModel, GlobalEquilibriumWithGravityAndTipForce) {
   s.loads.tip_force = Vec3(0.05, -0.1, 0.02);
   s.loads.tip_moment = Vec3(0.0, 0.002, 0.001);
   s.loads.gravity = Vec3(0.0, -9.81, 0.0);
-  CcsubModel model(s);
+  const CcsubModel model(s.robot, s.effects);
   auto ws = model.make_workspace();
-  const Solution sol = model.solve(*ws);
+  const Solution sol = tdcr::solve(model, *ws, s.input(), s.solver);
   ASSERT_TRUE(sol.converged()) << sol.summary.message;
   ASSERT_EQ(sol.disk_frames.size(), 16u);
 
@@ -223,11 +223,11 @@ TEST(CcsubModel, NonConvergentSolveReportsFailure) {
 TEST(CcsubModel, WarmStartFromPreviousSolution) {
   const double TM = paper::max_tension(paper::robot(10));
   const Scene s = paper_scene(10, {TM, 0, 0.5 * TM, 0}, Vec3(0.1, 0, 0));
-  CcsubModel model(s);
+  const CcsubModel model(s.robot, s.effects);
   auto ws = model.make_workspace();
-  const Solution cold = model.solve(*ws);
+  const Solution cold = tdcr::solve(model, *ws, s.input(), s.solver);
   ASSERT_TRUE(cold.converged());
-  const Solution warm = model.solve(*ws, &cold);
+  const Solution warm = tdcr::solve(model, *ws, s.input(), s.solver, &cold);
   ASSERT_TRUE(warm.converged());
   EXPECT_LE(warm.summary.iterations, 1);
   EXPECT_LT(cold.summary.iterations, 30);
@@ -244,4 +244,24 @@ TEST(CcsubModel, OnlyLoadedSubsegmentsAreUnknowns) {
     EXPECT_NEAR((a.disk_frames[j + 1].p - a.disk_frames[j].p - 0.005 * a.disk_frames[j].R.col(2)).norm(), 0.0, 1e-15);
   const Solution b = solve_ccsub(paper_scene(10, {0, 0, TM, 0}));
   EXPECT_EQ(b.summary.unknowns, 60);
+}
+
+// A trajectory on one model and one workspace: a Solution of an input that loads segment 1 only
+// (J = N/2) warm-starts an input that loads every subsegment, and back.
+TEST(CcsubModel, WarmStartAcrossInputsWithOtherLoadedSubsegments) {
+  const double TM = paper::max_tension(paper::robot(10));
+  const Scene a = paper_scene(10, {TM, 0, 0, 0});
+  const Scene b = paper_scene(10, {TM, 0, 0.2 * TM, 0});
+  const CcsubModel model(a.robot, a.effects);
+  auto ws = model.make_workspace();
+  const Solution sa = tdcr::solve(model, *ws, a.input(), a.solver);
+  ASSERT_TRUE(sa.converged());
+  const Solution sb = tdcr::solve(model, *ws, b.input(), b.solver, &sa);
+  ASSERT_TRUE(sb.converged()) << sb.summary.message;
+  EXPECT_EQ(sb.summary.unknowns, 60);
+  const Solution sb_cold = solve_ccsub(b);
+  EXPECT_LT((sb.tip().p - sb_cold.tip().p).norm(), 1e-9);
+  const Solution sa2 = tdcr::solve(model, *ws, a.input(), a.solver, &sb);
+  ASSERT_TRUE(sa2.converged());
+  EXPECT_LT((sa2.tip().p - sa.tip().p).norm(), 1e-9);
 }

@@ -31,9 +31,9 @@ Scene paper_scene(int n, const std::vector<double>& T, const Vec3& F = Vec3::Zer
 }
 
 Solution solve_prb(const Scene& s, const Solution* warm = nullptr) {
-  PrbModel model(s);
+  const PrbModel model(s.robot, s.effects);
   auto ws = model.make_workspace();
-  return model.solve(*ws, warm);
+  return tdcr::solve(model, *ws, s.input(), s.solver, warm);
 }
 
 }  // namespace
@@ -167,9 +167,9 @@ TEST(PrbModel, GlobalEquilibriumWithGravityAndTipForce) {
   s.loads.tip_force = Vec3(0.05, -0.1, 0.02);
   s.loads.tip_moment = Vec3(0.0, 0.002, 0.001);
   s.loads.gravity = Vec3(0.0, -9.81, 0.0);
-  PrbModel model(s);
+  const PrbModel model(s.robot, s.effects);
   auto ws = model.make_workspace();
-  const Solution sol = model.solve(*ws);
+  const Solution sol = tdcr::solve(model, *ws, s.input(), s.solver);
   ASSERT_TRUE(sol.converged()) << sol.summary.message;
   const std::vector<Vec3> pts = model.joint_points(sol.unknowns);
   const TendonRouting routing = TendonRouting::from(s.robot);
@@ -227,15 +227,34 @@ TEST(PrbModel, NonConvergentSolveReportsFailure) {
 TEST(PrbModel, WarmStartAndBranch) {
   const double TM = paper::max_tension(paper::robot(10));
   const Scene s = paper_scene(10, {TM, 0, 0.5 * TM, 0});
-  PrbModel model(s);
+  const PrbModel model(s.robot, s.effects);
   auto ws = model.make_workspace();
-  const Solution cold = model.solve(*ws);
+  const Solution cold = tdcr::solve(model, *ws, s.input(), s.solver);
   ASSERT_TRUE(cold.converged()) << cold.summary.message;
   for (int j = 0; j < 20; ++j)
     for (int q = 0; q < 3; ++q) EXPECT_GT(cold.unknowns[5 * j + q], 0.0) << j << " " << q;
-  const Solution warm = model.solve(*ws, &cold);
+  const Solution warm = tdcr::solve(model, *ws, s.input(), s.solver, &cold);
   ASSERT_TRUE(warm.converged());
   EXPECT_LE(warm.summary.iterations, 1);
   // Both satisfy the tolerance 1e-10 on angle-sized residuals: tips agree to ~N * 1e-10 * L.
   EXPECT_LT((warm.tip().p - cold.tip().p).norm(), 1e-9);
+}
+
+// A trajectory on one model and one workspace: warm starts across inputs that load a different
+// number of subsegments (J = N/2, then N, then N/2 again).
+TEST(PrbModel, WarmStartAcrossInputsWithOtherLoadedSubsegments) {
+  const double TM = paper::max_tension(paper::robot(5));
+  const Scene a = paper_scene(5, {TM, 0, 0, 0});
+  const Scene b = paper_scene(5, {TM, 0, 0.2 * TM, 0});
+  const PrbModel model(a.robot, a.effects);
+  auto ws = model.make_workspace();
+  const Solution sa = tdcr::solve(model, *ws, a.input(), a.solver);
+  ASSERT_TRUE(sa.converged());
+  const Solution sb = tdcr::solve(model, *ws, b.input(), b.solver, &sa);
+  ASSERT_TRUE(sb.converged()) << sb.summary.message;
+  EXPECT_EQ(sb.summary.unknowns, 50);
+  EXPECT_LT((sb.tip().p - solve_prb(b).tip().p).norm(), 1e-9);
+  const Solution sa2 = tdcr::solve(model, *ws, a.input(), a.solver, &sb);
+  ASSERT_TRUE(sa2.converged());
+  EXPECT_LT((sa2.tip().p - sa.tip().p).norm(), 1e-9);
 }

@@ -32,9 +32,9 @@ Solution solve_vc(const Scene& s, VcOptions opt = {}, const Solution* warm = nul
 Solution solve_cc(const Scene& s) {
   Scene c = s;
   c.model = "cc";
-  CcModel m(c);
+  const CcModel m(c.robot, c.effects);
   auto ws = m.make_workspace();
-  return m.solve(*ws);
+  return tdcr::solve(m, *ws, c.input(), c.solver);
 }
 
 Scene paper_scene(int n, std::vector<double> tensions) {

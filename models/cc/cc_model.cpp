@@ -1,19 +1,17 @@
 #include "tdcr/models/cc.hpp"
 
-#include <chrono>
 #include <cmath>
 
 #include <Eigen/Dense>
 
 #include "common/model_factories.hpp"
+#include "common/model_problem.hpp"
 #include "tdcr/core/error.hpp"
 #include "tdcr/core/lie.hpp"
 
 namespace tdcr {
 
 namespace {
-
-class CcWorkspace final : public LegacyWorkspace {};
 
 // Shortening of tendon r over a segment of length l with curvature (kx, ky) = kappa (cos, sin),
 // split into n subsegments. Fully constrained (Eq. 15): l kappa d with d = r . (cos, sin).
@@ -35,76 +33,62 @@ double CcArc::bending_plane() const {
   return std::atan2(-u.x(), u.y());
 }
 
-CcModel::CcModel(const Scene& scene) : scene_(scene) {
-  scene_.validate();
-  const SceneEffects e = scene_.active_effects();
-  // CC is kinematic or load-free: external loads would be silently ignored, so refuse them.
-  if (e.tip_wrench) {
-    const bool force = scene_.loads.tip_force.squaredNorm() > 0.0;
-    const Vec3& v = force ? scene_.loads.tip_force : scene_.loads.tip_moment;
-    throw InputError(force ? "loads.tip_force" : "loads.tip_moment",
-                     "[" + format_value(v.x()) + ", " + format_value(v.y()) + ", " + format_value(v.z()) + "]",
-                     "the CC model cannot account for a tip wrench; use ccsub, prb, vc or vcref");
-  }
-  if (e.gravity)
-    throw InputError("loads.gravity",
-                     "[" + format_value(scene_.loads.gravity.x()) + ", " + format_value(scene_.loads.gravity.y()) + ", " +
-                         format_value(scene_.loads.gravity.z()) + "]",
-                     "the CC model cannot account for gravity; use ccsub, prb, vc or vcref");
-  for (std::size_t i = 0; i < scene_.robot.segments.size(); ++i) {
-    const auto& seg = scene_.robot.segments[i];
-    if (scene_.actuation.kind == Actuation::Kind::Displacements && seg.tendons.size() < 2)
-      throw InputError("robot.segments[" + std::to_string(i) + "].tendons", std::to_string(seg.tendons.size()),
-                       "the CC model needs at least 2 tendons per segment for displacement input");
-  }
-  routing_ = TendonRouting::from(scene_.robot);
-  if (scene_.actuation.kind == Actuation::Kind::Displacements) {
-    for (const Segment& seg : scene_.robot.segments) {
-      Eigen::MatrixXd A(seg.tendons.size(), 2);
-      for (std::size_t i = 0; i < seg.tendons.size(); ++i)
-        A.row(i) << seg.length * seg.tendons[i].x, seg.length * seg.tendons[i].y;
-      displacement_to_curvature_.push_back(A.completeOrthogonalDecomposition().pseudoInverse());
-    }
+CcModel::CcModel(const Robot& robot, const Effects& effects) : StaticModel(robot, effects) {
+  for (const Segment& seg : this->robot().segments) {
+    Eigen::MatrixXd A(seg.tendons.size(), 2);
+    for (std::size_t i = 0; i < seg.tendons.size(); ++i)
+      A.row(i) << seg.length * seg.tendons[i].x, seg.length * seg.tendons[i].y;
+    displacement_to_curvature_.push_back(seg.tendons.empty() ? Eigen::Matrix<double, 2, Eigen::Dynamic>(2, 0)
+                                                             : A.completeOrthogonalDecomposition().pseudoInverse());
   }
 }
 
-std::unique_ptr<LegacyWorkspace> CcModel::make_workspace() const { return std::make_unique<CcWorkspace>(); }
+void CcModel::check_input(const ModelInput& input) const {
+  StaticModel::check_input(input);
+  if (input.actuation.kind != Actuation::Kind::Displacements) return;
+  for (std::size_t i = 0; i < robot().segments.size(); ++i) {
+    const std::size_t m = robot().segments[i].tendons.size();
+    if (m < 2)
+      throw InputError("robot.segments[" + std::to_string(i) + "].tendons", std::to_string(m),
+                       "the CC model needs at least 2 tendons per segment for displacement input");
+  }
+}
 
-std::vector<CcArc> CcModel::arcs(double* misfit) const {
-  const Robot& robot = scene_.robot;
+std::vector<CcArc> CcModel::arcs(const ModelInput& input, double* misfit) const {
+  const Robot& robot = this->robot();
   const int nseg = static_cast<int>(robot.segments.size());
   std::vector<CcArc> out(nseg);
   double sq = 0.0;
-  if (scene_.actuation.kind == Actuation::Kind::Tensions) {
+  if (input.actuation.kind == Actuation::Kind::Tensions) {
     const BackboneStiffness k = robot.backbone.effective_stiffness();
     for (int s = 0; s < nseg; ++s) {
       Vec3 m = Vec3::Zero();
       double T = 0.0;
-      for (const RoutedTendon& t : routing_.tendons) {
+      for (const RoutedTendon& t : routing().tendons) {
         if (t.segment < s) continue;  // ended before segment s
-        const double Tk = scene_.actuation.values[t.index];
+        const double Tk = input.actuation.values[t.index];
         m += Tk * Vec3::UnitZ().cross(t.r);
         T += Tk;
       }
       out[s].u = m / k.EI;
-      if (scene_.effects.shear_extension) out[s].v = Vec3(0.0, 0.0, 1.0 - T / k.EA);
+      if (effects().shear_extension) out[s].v = Vec3(0.0, 0.0, 1.0 - T / k.EA);
     }
     if (misfit) *misfit = 0.0;
     return out;
   }
 
-  const TendonPath path = scene_.effects.tendon_path;
-  const bool at_base = scene_.actuation.convention == Actuation::DisplacementConvention::AtBase;
+  const TendonPath path = effects().tendon_path;
+  const bool at_base = input.actuation.convention == Actuation::DisplacementConvention::AtBase;
   std::vector<Eigen::Vector2d> kappa(nseg, Eigen::Vector2d::Zero());
   for (int s = 0; s < nseg; ++s) {
     const Segment& seg = robot.segments[s];
     const int m = static_cast<int>(seg.tendons.size());
     Eigen::VectorXd b(m);
     std::vector<Vec3> r(m);
-    for (int i = 0, k = 0; k < static_cast<int>(routing_.tendons.size()); ++k) {
-      const RoutedTendon& t = routing_.tendons[k];
+    for (int i = 0, k = 0; k < static_cast<int>(routing().tendons.size()); ++k) {
+      const RoutedTendon& t = routing().tendons[k];
       if (t.segment != s) continue;
-      double d = scene_.actuation.values[k];
+      double d = input.actuation.values[k];
       if (at_base)  // remove the share of the proximal segments the tendon runs through
         for (int q = 0; q < s; ++q)
           d -= segment_shortening(t.r, robot.segments[q].length, kappa[q], path, robot.segments[q].disks);
@@ -145,16 +129,43 @@ std::vector<CcArc> CcModel::arcs(double* misfit) const {
   return out;
 }
 
-Solution CcModel::solve(LegacyWorkspace&, const Solution*) const {
-  const auto t0 = std::chrono::steady_clock::now();
-  Solution sol;
-  sol.model = "cc";
-  double misfit = 0.0;
-  const std::vector<CcArc> a = arcs(&misfit);
-  const Robot& robot = scene_.robot;
+namespace {
 
-  sol.disk_frames.reserve(routing_.disk_count());
-  sol.disk_frames.push_back(Frame{});
+// The closed form has no residual system: extract() computes the answer and its summary.
+class CcProblem final : public detail::ModelProblem {
+ public:
+  explicit CcProblem(const CcModel& model) : model_(model) {}
+  void bind(const ModelInput& input) { input_ = &input; }
+
+  bvp::ParameterizedSystem* system() override { return nullptr; }
+  bvp::NewtonSolver& newton() override { return newton_; }
+  void cold_guess(Eigen::VectorXd& x) override { x.resize(0); }
+  void rest_state(Eigen::VectorXd& x) override { x.resize(0); }
+  bool warm_guess(const Solution&, Eigen::VectorXd&) override { return false; }
+  void extract(const Eigen::VectorXd&, bool, Solution& solution) override;
+
+ private:
+  const CcModel& model_;
+  const ModelInput* input_ = nullptr;  // the input of the solve under way (bind to extract)
+  bvp::NewtonSolver newton_;
+};
+
+class CcWorkspace final : public ModelWorkspace {
+ public:
+  explicit CcWorkspace(const CcModel& owner) : ModelWorkspace(owner), problem(owner) {}
+  CcProblem problem;
+};
+
+void CcProblem::extract(const Eigen::VectorXd&, bool, Solution& solution) {
+  const ModelInput& input = *input_;
+  const Robot& robot = model_.robot();
+  const TendonRouting& routing = model_.routing();
+  const Effects& effects = model_.effects();
+  double misfit = 0.0;
+  const std::vector<CcArc> a = model_.arcs(input, &misfit);
+
+  solution.disk_frames.reserve(routing.disk_count());
+  solution.disk_frames.push_back(Frame{});
   // Disks are equally spaced along a segment, so one SE(3) step per segment, composed n times,
   // gives every disk frame (the last one lands at the segment end to rounding).
   Frame current;
@@ -164,50 +175,58 @@ Solution CcModel::solve(LegacyWorkspace&, const Solution*) const {
     const Frame step = lie::exp_se3(a[s].u * ds, a[s].v * ds);
     for (int j = 0; j < seg.disks; ++j) {
       current = current * step;
-      sol.disk_frames.push_back(current);
+      solution.disk_frames.push_back(current);
     }
   }
 
   // Tendon displacements of the solved shape (what the base actuators see).
-  sol.tendon_displacements.assign(routing_.tendons.size(), 0.0);
-  for (const RoutedTendon& t : routing_.tendons) {
+  solution.tendon_displacements.assign(routing.tendons.size(), 0.0);
+  for (const RoutedTendon& t : routing.tendons) {
     double d = 0.0;
     for (int s = 0; s <= t.segment; ++s) {
       const Segment& seg = robot.segments[s];
       const Eigen::Vector2d k(a[s].u.y(), -a[s].u.x());
       // Axial strain shortens every tendon with the backbone.
-      d += segment_shortening(t.r, seg.length, k, scene_.effects.tendon_path, seg.disks) +
+      d += segment_shortening(t.r, seg.length, k, effects.tendon_path, seg.disks) +
            seg.length * (1.0 - a[s].v.z());
     }
-    if (scene_.actuation.convention == Actuation::DisplacementConvention::PerSegment) {
+    if (input.actuation.convention == Actuation::DisplacementConvention::PerSegment) {
       const Segment& seg = robot.segments[t.segment];
       const Eigen::Vector2d k(a[t.segment].u.y(), -a[t.segment].u.x());
-      d = segment_shortening(t.r, seg.length, k, scene_.effects.tendon_path, seg.disks) +
+      d = segment_shortening(t.r, seg.length, k, effects.tendon_path, seg.disks) +
           seg.length * (1.0 - a[t.segment].v.z());
     }
-    sol.tendon_displacements[t.index] = d;
+    solution.tendon_displacements[t.index] = d;
   }
-  if (scene_.actuation.kind == Actuation::Kind::Tensions) sol.tensions = scene_.actuation.values;
+  if (input.actuation.kind == Actuation::Kind::Tensions) solution.tensions = input.actuation.values;
 
   Eigen::VectorXd unknowns(3 * a.size());
   for (std::size_t s = 0; s < a.size(); ++s) unknowns.segment<3>(3 * s) = a[s].u;
-  sol.unknowns = unknowns;
+  solution.unknowns = unknowns;
 
-  SolverSummary& sum = sol.summary;
+  SolverSummary& sum = solution.summary;
   sum.termination = TerminationType::Converged;
   // The least-squares misfit of over-determined displacements (m) is the physical residual.
   sum.message = "closed form";
   sum.physical_residual = misfit;
   sum.residual_norm = 0.0;
   sum.unknowns = static_cast<int>(unknowns.size());
-  sum.linear_solver = "none";
-  sum.integrator = "none";
-  sum.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  return sol;
+}
+
+}  // namespace
+
+std::unique_ptr<ModelWorkspace> CcModel::make_workspace() const { return std::make_unique<CcWorkspace>(*this); }
+
+detail::ModelProblem& CcModel::bind(ModelWorkspace& workspace, const ModelInput& input, const SolverOptions&) const {
+  CcProblem& problem = static_cast<CcWorkspace&>(workspace).problem;
+  problem.bind(input);
+  return problem;
 }
 
 namespace detail {
-std::unique_ptr<LegacyStaticModel> make_legacy_cc_model(const Scene& scene) { return std::make_unique<CcModel>(scene); }
+std::unique_ptr<StaticModel> make_cc_model(const Robot& robot, const Effects& effects) {
+  return std::make_unique<CcModel>(robot, effects);
+}
 }  // namespace detail
 
 }  // namespace tdcr

@@ -1,16 +1,9 @@
 #include "tdcr/models/ccsub.hpp"
 
-#include <chrono>
 #include <cmath>
 
-#include "common/load_continuation.hpp"
+#include "common/lumped_problem.hpp"
 #include "common/model_factories.hpp"
-#include "common/newton_summary.hpp"
-#include "common/subsegment_statics.hpp"
-#include "tdcr/bvp/newton_solver.hpp"
-#include "tdcr/core/error.hpp"
-#include "tdcr/core/lie.hpp"
-#include "tdcr/models/tendon_physics.hpp"
 
 namespace tdcr {
 
@@ -35,26 +28,17 @@ struct ArcCoefficients {
   }
 };
 
-}  // namespace
+class CcsubBody final : public detail::LumpedBody {
+ public:
+  CcsubBody(const Robot& robot, const TendonRouting& routing, const Effects& effects)
+      : LumpedBody(robot, routing, effects, 3) {}
 
-struct CcsubModel::Impl {
-  detail::SubsegmentStatics statics;
-  double EI = 0.0;
-  double GJ = 0.0;
-  int N = 0;  // subsegments
-  int J = 0;  // loaded subsegments (unknowns 3J)
+  void compute_frames(const double* x, int J, Frame* frames) const override { arcs(x, J, frames, nullptr); }
+  std::unique_ptr<detail::LumpedProblem> make_problem() const override;
 
-  explicit Impl(const Scene& scene) : statics(scene) {
-    const BackboneStiffness k = scene.robot.backbone.effective_stiffness();
-    EI = k.EI;
-    GJ = k.GJ;
-    N = statics.subsegments();
-    J = statics.active_subsegments();
-  }
-
-  // Frames of all disks from the unknowns of subsegments 1..J (x has >= 3J values); subsegments
-  // beyond J are straight. If centroids is not null, also the arc centroids (base frame).
-  void compute_frames(const double* x, Frame* frames, Vec3* centroids) const {
+  // Frames of all disks from the unknowns of subsegments 1..J; subsegments beyond J are
+  // straight. If centroids is not null, also the arc centroids (base frame).
+  void arcs(const double* x, int J, Frame* frames, Vec3* centroids) const {
     frames[0] = Frame{};
     for (int j = 1; j <= N; ++j) {
       const double l = statics.length(j);
@@ -92,42 +76,20 @@ struct CcsubModel::Impl {
   }
 };
 
-namespace {
-
-class CcsubWorkspace final : public LegacyWorkspace {
+// The 3J residuals of Eq. 43 with the recursive balance Eq. 44-47 (see ccsub.hpp).
+class CcsubProblem final : public detail::LumpedProblem {
  public:
-  bvp::NewtonSolver newton;
-  std::vector<Frame> frames;
-  std::vector<Vec3> centroids, F, M;
-};
+  explicit CcsubProblem(const CcsubBody& body) : LumpedProblem(body), body_(body) {}
 
-// The 3J residuals of Eq. 43 with the recursive balance Eq. 44-47 (see ccsub.hpp). Its
-// parameter is the load factor (continuation): the balance is linear in the loads, so scaling
-// every load by lambda scales the moments M_j by lambda.
-class CcsubSystem final : public bvp::ParameterizedSystem {
- public:
-  CcsubSystem(const CcsubModel::Impl& m, CcsubWorkspace& ws) : m_(m), ws_(ws) {
-    ws_.frames.resize(m.N + 1);
-    ws_.centroids.assign(m.N + 1, Vec3::Zero());
-    ws_.F.assign(m.N + 1, Vec3::Zero());
-    ws_.M.assign(m.N + 1, Vec3::Zero());
-  }
-  int size() const override { return 3 * m_.J; }
-  void set_parameter(double lambda) override { load_ = lambda; }
   bool residual(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> f) override {
-    const bool bb = m_.statics.has_backbone_weight();
-    Frame* fr = ws_.frames.data();
-    m_.compute_frames(x.data(), fr, bb ? ws_.centroids.data() : nullptr);
-    m_.statics.distal_wrenches(fr, ws_.centroids.data(), ws_.F.data(), ws_.M.data());
-    const double gj_ei = m_.GJ / m_.EI;
-    for (int j = 1; j <= m_.J; ++j) {
-      const Frame& a = fr[j - 1];
-      // Moment about O_{j-1} of everything distal of disk j-1 (Eq. 45, 47).
-      Vec3 Mb = ws_.M[j] + (fr[j].p - a.p).cross(ws_.F[j]);
-      if (bb) Mb += (ws_.centroids[j] - a.p).cross(m_.statics.backbone_weight(j));
-      const Vec3 m_loc = load_ * (a.R.transpose() * Mb);
-      const Vec3 z_loc = a.R.transpose() * fr[j].R.col(2);
-      const double s = m_.statics.length(j) / m_.EI;
+    evaluate(x.data());
+    const double gj_ei = body_.GJ / body_.EI;
+    for (int j = 1; j <= active(); ++j) {
+      const Mat3& Ra = frames_[j - 1].R;
+      // Moment about O_{j-1} of everything distal of disk j-1 (Eq. 45, 47), frame of disk j-1.
+      const Vec3 m_loc = Ra.transpose() * base_moment(j);
+      const Vec3 z_loc = Ra.transpose() * frames_[j].R.col(2);
+      const double s = body_.statics.length(j) / body_.EI;
       const int i = 3 * (j - 1);
       // Eq. 43 scaled by l/EI: l u + (GJ/EI) eps z_j - (l/EI) M_j = 0, frame of disk j-1.
       f[i] = x[i] + gj_ei * x[i + 2] * z_loc.x() - s * m_loc.x();
@@ -138,78 +100,26 @@ class CcsubSystem final : public bvp::ParameterizedSystem {
   }
 
  private:
-  const CcsubModel::Impl& m_;
-  CcsubWorkspace& ws_;
-  double load_ = 1.0;
+  void geometry(const double* x) override {
+    body_.arcs(x, active(), frames_.data(), backbone_weight_on() ? centroids_.data() : nullptr);
+  }
+  const CcsubBody& body_;
 };
+
+std::unique_ptr<detail::LumpedProblem> CcsubBody::make_problem() const { return std::make_unique<CcsubProblem>(*this); }
+
+std::unique_ptr<detail::LumpedBody> make_body(const Robot& robot, const TendonRouting& routing, const Effects& effects) {
+  return std::make_unique<CcsubBody>(robot, routing, effects);
+}
 
 }  // namespace
 
-CcsubModel::CcsubModel(const Scene& scene) : scene_(scene) {
-  scene_.validate();
-  if (scene_.actuation.kind != Actuation::Kind::Tensions)
-    throw InputError("actuation.kind", "displacements", "the CCsub model is driven by tendon tensions");
-  impl_ = std::make_unique<Impl>(scene_);
-}
-
-CcsubModel::~CcsubModel() = default;
-
-std::unique_ptr<LegacyWorkspace> CcsubModel::make_workspace() const { return std::make_unique<CcsubWorkspace>(); }
-
-std::vector<Frame> CcsubModel::frames(const Eigen::VectorXd& x) const {
-  if (x.size() != 3 * impl_->N)
-    throw InputError("unknowns", std::to_string(x.size()), "expected 3 unknowns per subsegment");
-  std::vector<Frame> f(impl_->N + 1);
-  impl_->compute_frames(x.data(), f.data(), nullptr);
-  return f;
-}
-
-Solution CcsubModel::solve(LegacyWorkspace& workspace, const Solution* warm_start) const {
-  const auto t0 = std::chrono::steady_clock::now();
-  auto* ws = dynamic_cast<CcsubWorkspace*>(&workspace);
-  if (!ws) throw InputError("workspace", "", "not a workspace of the CCsub model");
-  const Impl& m = *impl_;
-
-  Solution sol;
-  sol.model = "ccsub";
-  SolverSummary& sum = sol.summary;
-  sum.linear_solver = "dense";
-  sum.integrator = "none";
-  Eigen::VectorXd full = Eigen::VectorXd::Zero(3 * m.N);
-  if (warm_start && warm_start->unknowns.size() == full.size() && warm_start->unknowns.allFinite())
-    full.head(3 * m.J) = warm_start->unknowns.head(3 * m.J);
-
-  CcsubSystem system(m, *ws);
-  sum.unknowns = system.size();
-  if (m.J == 0) {
-    sum.termination = TerminationType::Converged;
-    sum.message = "no load: the robot is straight";
-    sum.linear_solver = "none";
-  } else {
-    Eigen::VectorXd x = full.head(3 * m.J);
-    bvp::NewtonOptions opt = bvp::NewtonOptions::from(scene_.solver);
-    opt.linear_solver = LinearSolverKind::Dense;
-    const bvp::NewtonResult r = ws->newton.solve(system, x, opt);
-    detail::copy_newton_result(r, sum);
-    if (!r.converged() && scene_.solver.continuation) {
-      x.setZero();  // the straight robot, exact at load factor 0
-      detail::continue_loads(ws->newton, system, x, opt, scene_.solver, sum);
-    }
-    full.head(3 * m.J) = x;
-  }
-
-  sol.disk_frames.resize(m.N + 1);
-  m.compute_frames(full.data(), sol.disk_frames.data(), nullptr);
-  sol.tendon_displacements =
-      tendon::chord_displacements(sol.disk_frames, m.statics.routing(), scene_.actuation.convention);
-  sol.tensions = scene_.actuation.values;
-  sol.unknowns = full;
-  sum.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  return sol;
-}
+CcsubModel::CcsubModel(const Robot& robot, const Effects& effects) : LumpedModel(robot, effects, make_body) {}
 
 namespace detail {
-std::unique_ptr<LegacyStaticModel> make_legacy_ccsub_model(const Scene& scene) { return std::make_unique<CcsubModel>(scene); }
+std::unique_ptr<StaticModel> make_ccsub_model(const Robot& robot, const Effects& effects) {
+  return std::make_unique<CcsubModel>(robot, effects);
+}
 }  // namespace detail
 
 }  // namespace tdcr

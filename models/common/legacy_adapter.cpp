@@ -71,15 +71,6 @@ class LegacyModelAdapter final : public StaticModel {
 }  // namespace
 
 namespace detail {
-std::unique_ptr<StaticModel> make_cc_model(const Robot& r, const Effects& e) {
-  return std::make_unique<LegacyModelAdapter>(ModelKind::CC, r, e, make_legacy_cc_model);
-}
-std::unique_ptr<StaticModel> make_ccsub_model(const Robot& r, const Effects& e) {
-  return std::make_unique<LegacyModelAdapter>(ModelKind::CCsub, r, e, make_legacy_ccsub_model);
-}
-std::unique_ptr<StaticModel> make_prb_model(const Robot& r, const Effects& e) {
-  return std::make_unique<LegacyModelAdapter>(ModelKind::PRB, r, e, make_legacy_prb_model);
-}
 std::unique_ptr<StaticModel> make_vc_model(const Robot& r, const Effects& e) {
   return std::make_unique<LegacyModelAdapter>(ModelKind::VC, r, e, make_legacy_vc_model);
 }

@@ -1,5 +1,7 @@
 #include "tdcr/models/tendon_physics.hpp"
 
+#include "physics/tendon_path.hpp"
+
 namespace tdcr::tendon {
 
 DiskWrench disk_wrench(int j, const Frame* frames, const TendonRouting& routing, const double* tensions,
@@ -7,16 +9,17 @@ DiskWrench disk_wrench(int j, const Frame* frames, const TendonRouting& routing,
   DiskWrench w;
   const Frame& fj = frames[j];
   const Vec3 z = fj.R.col(2);
+  const double* s = routing.disk_s.data();
   for (const RoutedTendon& t : routing.tendons) {
     if (j > t.end_disk) continue;
     const double T = tensions[t.index];
     if (T == 0.0) continue;
-    const Vec3 P = hole_position(fj, t);
+    const Vec3 P = physics::hole_position(fj, t, s[j]);
     // Eq. 30 / first term of Eq. 32: pull towards the hole in the previous disk.
-    Vec3 F = T * (hole_position(frames[j - 1], t) - P).normalized();
+    Vec3 F = T * (physics::hole_position(frames[j - 1], t, s[j - 1]) - P).normalized();
     if (j < t.end_disk) {
       // Eq. 32: pass-through, also pulled towards the next disk.
-      F += T * (hole_position(frames[j + 1], t) - P).normalized();
+      F += T * (physics::hole_position(frames[j + 1], t, s[j + 1]) - P).normalized();
       if (remove_normal) F -= F.dot(z) * z;  // Eq. 58: frictionless disk.
     }
     w.force += F;
@@ -29,7 +32,9 @@ double chord_length(const Frame* frames, const TendonRouting& routing, int k, in
   const RoutedTendon& t = routing.tendons[k];
   double L = 0.0;
   for (int j = first + 1; j <= t.end_disk; ++j)
-    L += (hole_position(frames[j], t) - hole_position(frames[j - 1], t)).norm();
+    L += (physics::hole_position(frames[j], t, routing.disk_s[j]) -
+          physics::hole_position(frames[j - 1], t, routing.disk_s[j - 1]))
+             .norm();
   return L;
 }
 

@@ -1,16 +1,9 @@
 #include "tdcr/models/prb.hpp"
 
-#include <chrono>
 #include <cmath>
-#include <string>
 
-#include "common/load_continuation.hpp"
+#include "common/lumped_problem.hpp"
 #include "common/model_factories.hpp"
-#include "common/newton_summary.hpp"
-#include "common/subsegment_statics.hpp"
-#include "tdcr/bvp/newton_solver.hpp"
-#include "tdcr/core/error.hpp"
-#include "tdcr/models/tendon_physics.hpp"
 
 namespace tdcr {
 
@@ -24,9 +17,12 @@ constexpr double kGaugeA0 = 1e-6;
 // Unknown scale of phi: finite-difference step 1.5e-4 rad for phi, so that the phi column of the
 // Jacobian resolves the gauge term above the rounding noise of the residual (~1e-16 / step).
 constexpr double kPhiScale = 1e-4;
-// Maximum scaled Newton step (rad of joint angle), see solve().
+// Maximum scaled Newton step (rad of joint angle): a Newton step changes the joint angles by at
+// most about one radian in total. A longer step from the straight guess can throw a strongly
+// bent subsegment (n = 1) into the basin where its bending plane is 90 deg off the moment, a
+// local minimum of |F| (configurations 14 and 15 of the case study at n = 1 end there with
+// KINSOL's automatic bound).
 constexpr double kMaxNewtonStep = 1.0;
-}  // namespace
 
 /// Geometry of one PRB subsegment in the frame of its base disk.
 struct PrbLocal {
@@ -36,27 +32,20 @@ struct PrbLocal {
   Mat3 R;         // rotation of disk j relative to disk j-1
 };
 
-struct PrbModel::Impl {
-  detail::SubsegmentStatics statics;
-  double EI = 0.0, GJ = 0.0;
-  double gamma[4] = {};
-  double gamma_sum = 1.0;
-  double k_theta[3] = {};
-  int N = 0, J = 0;
-
-  explicit Impl(const Scene& scene) : statics(scene) {
-    const BackboneStiffness k = scene.robot.backbone.effective_stiffness();
-    EI = k.EI;
-    GJ = k.GJ;
+class PrbBody final : public detail::LumpedBody {
+ public:
+  PrbBody(const Robot& robot, const TendonRouting& routing, const Effects& effects)
+      : LumpedBody(robot, routing, effects, kU) {
     gamma_sum = 0.0;
     for (int i = 0; i < 4; ++i) {
-      gamma[i] = scene.effects.prb.gamma[i];
+      gamma[i] = effects.prb.gamma[i];
       gamma_sum += gamma[i];
     }
-    for (int q = 0; q < 3; ++q) k_theta[q] = scene.effects.prb.k_theta[q];
-    N = statics.subsegments();
-    J = statics.active_subsegments();
+    for (int q = 0; q < 3; ++q) k_theta[q] = effects.prb.k_theta[q];
   }
+
+  void compute_frames(const double* x, int J, Frame* frames) const override { chain(x, J, frames, nullptr, nullptr); }
+  std::unique_ptr<detail::LumpedProblem> make_problem() const override;
 
   // Eq. 11-12 with the twist: the rigid-link body of subsegment j in its base disk frame.
   void local(int j, const double* xj, PrbLocal& g) const {
@@ -87,9 +76,9 @@ struct PrbModel::Impl {
     g.R.col(2) = A.col(2);
   }
 
-  // Frames of all disks; locals[j] (if given) receives the local geometry of subsegments 1..J;
-  // centroids (if given) the backbone centre of mass of every subsegment (base frame).
-  void compute_frames(const double* x, Frame* frames, PrbLocal* locals, Vec3* centroids) const {
+  // Frames of all disks (straight beyond J); locals[j] (if given) receives the local geometry
+  // of subsegments 1..J; centroids (if given) the backbone centre of mass of every subsegment.
+  void chain(const double* x, int J, Frame* frames, PrbLocal* locals, Vec3* centroids) const {
     frames[0] = Frame{};
     PrbLocal g;
     for (int j = 1; j <= N; ++j) {
@@ -113,84 +102,70 @@ struct PrbModel::Impl {
       }
     }
   }
+
+  double gamma[4] = {};
+  double gamma_sum = 1.0;
+  double k_theta[3] = {};
 };
 
-namespace {
-
-class PrbWorkspace final : public LegacyWorkspace {
+// The 5J residuals of Eq. 48-54 (see prb.hpp).
+class PrbProblem final : public detail::LumpedProblem {
  public:
-  bvp::NewtonSolver newton;
-  std::vector<Frame> frames;
-  std::vector<PrbLocal> locals;
-  std::vector<Vec3> centroids, F, M;
-  std::vector<double> phi_ref;
-};
-
-// Its parameter is the load factor (continuation): the distal wrenches are linear in the loads.
-class PrbSystem final : public bvp::ParameterizedSystem {
- public:
-  PrbSystem(const PrbModel::Impl& m, PrbWorkspace& ws) : m_(m), ws_(ws) {
-    ws_.frames.resize(m.N + 1);
-    ws_.locals.resize(m.N + 1);
-    ws_.centroids.assign(m.N + 1, Vec3::Zero());
-    ws_.F.assign(m.N + 1, Vec3::Zero());
-    ws_.M.assign(m.N + 1, Vec3::Zero());
-    ws_.phi_ref.assign(m.N + 1, 0.0);
+  explicit PrbProblem(const PrbBody& body) : LumpedProblem(body), body_(body) {
+    locals_.resize(body.N + 1);
+    phi_ref_.assign(body.N + 1, 0.0);
   }
-  int size() const override { return kU * m_.J; }
-  void set_parameter(double lambda) override { load_ = lambda; }
+
+  void adjust(bvp::NewtonOptions& options) const override {
+    LumpedProblem::adjust(options);
+    options.max_newton_step = kMaxNewtonStep;
+  }
+  void cold_guess(Eigen::VectorXd& x) override { straight_guess(x); }
+  // With phi_ref = phi the straight guess is the exact solution at load factor 0.
+  void rest_state(Eigen::VectorXd& x) override { straight_guess(x); }
+  bool warm_guess(const Solution& previous, Eigen::VectorXd& x) override {
+    if (!LumpedProblem::warm_guess(previous, x)) return false;
+    set_phi_ref(x);
+    return true;
+  }
+
   void unknown_scale(Eigen::Ref<Eigen::VectorXd> s) const override {
     s.setOnes();
-    for (int j = 0; j < m_.J; ++j) s[kU * j + 3] = kPhiScale;
-  }
-
-  // Moment about O_{j-1} (base frame) of everything distal of disk j-1, for the current state.
-  Vec3 base_moment(int j) const {
-    const Frame& a = ws_.frames[j - 1];
-    Vec3 Mb = ws_.M[j] + (ws_.frames[j].p - a.p).cross(ws_.F[j]);
-    if (m_.statics.has_backbone_weight()) Mb += (ws_.centroids[j] - a.p).cross(m_.statics.backbone_weight(j));
-    return Mb;
-  }
-
-  // Evaluate frames and distal wrenches at x.
-  void evaluate(const double* x) {
-    Frame* fr = ws_.frames.data();
-    m_.compute_frames(x, fr, ws_.locals.data(), ws_.centroids.data());
-    m_.statics.distal_wrenches(fr, ws_.centroids.data(), ws_.F.data(), ws_.M.data());
+    for (int j = 0; j < active(); ++j) s[kU * j + 3] = kPhiScale;
   }
 
   bool residual(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> f) override {
     evaluate(x.data());
-    const bool bb = m_.statics.has_backbone_weight();
-    const double gj_ei = m_.GJ / m_.EI;
-    for (int j = 1; j <= m_.J; ++j) {
-      const Frame& a = ws_.frames[j - 1];
-      const PrbLocal& g = ws_.locals[j];
+    const bool bb = backbone_weight_on();
+    const double gj_ei = body_.GJ / body_.EI;
+    for (int j = 1; j <= active(); ++j) {
+      const Frame& a = frames_[j - 1];
+      const PrbLocal& g = locals_[j];
       const double* xj = x.data() + kU * (j - 1);
       double* fj = f.data() + kU * (j - 1);
-      const double s = m_.statics.length(j) / m_.EI;
+      const double s = body_.statics.length(j) / body_.EI;
       const double cp = std::cos(xj[3]), sp = std::sin(xj[3]);
       // Distal wrench in the frame of disk j-1 (only relative geometry from here on).
-      const Vec3 F = load_ * (a.R.transpose() * ws_.F[j]);
-      const Vec3 Mj = load_ * (a.R.transpose() * ws_.M[j]);  // about O_j
+      const Vec3 F = a.R.transpose() * F_[j];
+      const Vec3 Mj = a.R.transpose() * M_[j];  // about O_j
       Vec3 W = Vec3::Zero();
-      if (bb) W = (load_ / m_.gamma_sum) * (a.R.transpose() * m_.statics.backbone_weight(j));
+      if (bb) W = (1.0 / body_.gamma_sum) * (a.R.transpose() * backbone_weight(j));
       const Vec3 y(-sp, cp, 0.0);
       // Eq. 48-51: joint q balances the moment of everything distal of it.
       for (int q = 0; q < 3; ++q) {
         Vec3 Mq = Mj + (g.end - g.joint[q]).cross(F);
         if (bb)
-          for (int i = q + 1; i < 4; ++i) Mq += (g.mid[i] - g.joint[q]).cross(m_.gamma[i] * W);
-        fj[q] = m_.k_theta[q] * xj[q] - s * y.dot(Mq);
+          for (int i = q + 1; i < 4; ++i) Mq += (g.mid[i] - g.joint[q]).cross(body_.gamma[i] * W);
+        fj[q] = body_.k_theta[q] * xj[q] - s * y.dot(Mq);
       }
       // Moment about O_{j-1}.
       Vec3 Mb = Mj + g.end.cross(F);
       if (bb)
-        for (int i = 0; i < 4; ++i) Mb += g.mid[i].cross(m_.gamma[i] * W);
+        for (int i = 0; i < 4; ++i) Mb += g.mid[i].cross(body_.gamma[i] * W);
       // Eq. 52-53, two-sided: the in-plane moment has no component across the joint axis.
       const double t2 = s * s * (Mb.x() * Mb.x() + Mb.y() * Mb.y());
       const double gauge = kGaugeEta * kGaugeA0 * kGaugeA0 / (kGaugeA0 * kGaugeA0 + t2);
-      fj[3] = s * (cp * Mb.x() + sp * Mb.y()) + gauge * std::sin(xj[3] - ws_.phi_ref[j]);
+      fj[3] = s * (cp * Mb.x() + sp * Mb.y()) + gauge * std::sin(xj[3] - phi_ref_[j]);
       // Eq. 54: twist about the end tangent.
       fj[4] = gj_ei * xj[4] - s * g.R.col(2).dot(Mb);
     }
@@ -198,125 +173,61 @@ class PrbSystem final : public bvp::ParameterizedSystem {
   }
 
  private:
-  const PrbModel::Impl& m_;
-  PrbWorkspace& ws_;
-  double load_ = 1.0;
+  void geometry(const double* x) override {
+    body_.chain(x, active(), frames_.data(), locals_.data(), centroids_.data());
+  }
+  void set_phi_ref(const Eigen::VectorXd& x) {
+    for (int j = 1; j <= active(); ++j) phi_ref_[j] = x[kU * (j - 1) + 3];
+  }
+  // Straight guess (all joint angles and twists zero); each bending plane is put where the moment
+  // at the straight state under the full load points (y_phi along M*), see prb.hpp.
+  void straight_guess(Eigen::VectorXd& x) {
+    x.setZero(size());
+    const double lambda = loads_.loads.load_factor();
+    set_parameter(1.0);
+    evaluate(x.data());
+    for (int j = 1; j <= active(); ++j) {
+      const Vec3 a = frames_[j - 1].R.transpose() * base_moment(j);
+      const double scale = body_.statics.length(j) / body_.EI;
+      x[kU * (j - 1) + 3] = scale * std::hypot(a.x(), a.y()) > 1e-14 ? std::atan2(-a.x(), a.y()) : 0.0;
+    }
+    set_parameter(lambda);
+    set_phi_ref(x);
+  }
+
+  const PrbBody& body_;
+  std::vector<PrbLocal> locals_;
+  std::vector<double> phi_ref_;
 };
+
+std::unique_ptr<detail::LumpedProblem> PrbBody::make_problem() const { return std::make_unique<PrbProblem>(*this); }
+
+std::unique_ptr<detail::LumpedBody> make_body(const Robot& robot, const TendonRouting& routing, const Effects& effects) {
+  return std::make_unique<PrbBody>(robot, routing, effects);
+}
 
 }  // namespace
 
-PrbModel::PrbModel(const Scene& scene) : scene_(scene) {
-  scene_.validate();
-  if (scene_.actuation.kind != Actuation::Kind::Tensions)
-    throw InputError("actuation.kind", "displacements", "the PRB model is driven by tendon tensions");
-  for (int i = 0; i < 4; ++i) {
-    const double g = scene_.effects.prb.gamma[i];
-    if (!(g > 0.0) || !std::isfinite(g))
-      throw InputError("effects.prb.gamma[" + std::to_string(i) + "]", format_value(g), "must be positive and finite");
-  }
-  for (int q = 0; q < 3; ++q) {
-    const double k = scene_.effects.prb.k_theta[q];
-    if (!(k > 0.0) || !std::isfinite(k))
-      throw InputError("effects.prb.k_theta[" + std::to_string(q) + "]", format_value(k),
-                       "must be positive and finite");
-  }
-  impl_ = std::make_unique<Impl>(scene_);
-}
-
-PrbModel::~PrbModel() = default;
-
-std::unique_ptr<LegacyWorkspace> PrbModel::make_workspace() const { return std::make_unique<PrbWorkspace>(); }
-
-std::vector<Frame> PrbModel::frames(const Eigen::VectorXd& x) const {
-  if (x.size() != kU * impl_->N)
-    throw InputError("unknowns", std::to_string(x.size()), "expected 5 unknowns per subsegment");
-  std::vector<Frame> f(impl_->N + 1);
-  impl_->compute_frames(x.data(), f.data(), nullptr, nullptr);
-  return f;
-}
+PrbModel::PrbModel(const Robot& robot, const Effects& effects) : LumpedModel(robot, effects, make_body) {}
 
 std::vector<Vec3> PrbModel::joint_points(const Eigen::VectorXd& x) const {
   const std::vector<Frame> f = frames(x);
+  const auto& b = static_cast<const PrbBody&>(body());
   std::vector<Vec3> pts;
-  pts.reserve(4 * impl_->N);
+  pts.reserve(4 * b.N);
   PrbLocal g;
-  for (int j = 1; j <= impl_->N; ++j) {
-    impl_->local(j, x.data() + kU * (j - 1), g);
+  for (int j = 1; j <= b.N; ++j) {
+    b.local(j, x.data() + kU * (j - 1), g);
     for (int q = 0; q < 3; ++q) pts.push_back(f[j - 1].transform(g.joint[q]));
     pts.push_back(f[j].p);
   }
   return pts;
 }
 
-Solution PrbModel::solve(LegacyWorkspace& workspace, const Solution* warm_start) const {
-  const auto t0 = std::chrono::steady_clock::now();
-  auto* ws = dynamic_cast<PrbWorkspace*>(&workspace);
-  if (!ws) throw InputError("workspace", "", "not a workspace of the PRB model");
-  const Impl& m = *impl_;
-
-  Solution sol;
-  sol.model = "prb";
-  SolverSummary& sum = sol.summary;
-  sum.linear_solver = "dense";
-  sum.integrator = "none";
-  Eigen::VectorXd full = Eigen::VectorXd::Zero(kU * m.N);
-  PrbSystem system(m, *ws);
-  sum.unknowns = system.size();
-
-  if (m.J == 0) {
-    sum.termination = TerminationType::Converged;
-    sum.message = "no load: the robot is straight";
-    sum.linear_solver = "none";
-  } else {
-    const bool warm = warm_start && warm_start->unknowns.size() == full.size() && warm_start->unknowns.allFinite();
-    // Straight guess (all joint angles and twists zero); each bending plane is put where the
-    // moment at the straight state points (y_phi along M*), see prb.hpp. With phi_ref = phi it
-    // is the exact solution at load factor 0 (the start of load continuation).
-    auto straight_guess = [&](Eigen::VectorXd& v) {
-      v.setZero();
-      system.evaluate(v.data());
-      for (int j = 1; j <= m.J; ++j) {
-        const Vec3 a = ws->frames[j - 1].R.transpose() * system.base_moment(j);
-        const double scale = m.statics.length(j) / m.EI;
-        v[kU * (j - 1) + 3] = scale * std::hypot(a.x(), a.y()) > 1e-14 ? std::atan2(-a.x(), a.y()) : 0.0;
-      }
-    };
-    if (warm)
-      full.head(kU * m.J) = warm_start->unknowns.head(kU * m.J);
-    else
-      straight_guess(full);
-    for (int j = 1; j <= m.J; ++j) ws->phi_ref[j] = full[kU * (j - 1) + 3];
-    Eigen::VectorXd x = full.head(kU * m.J);
-    bvp::NewtonOptions opt = bvp::NewtonOptions::from(scene_.solver);
-    opt.linear_solver = LinearSolverKind::Dense;
-    // A Newton step changes the joint angles by at most about one radian in total: a longer
-    // step from the straight guess can throw a strongly bent subsegment (n = 1) into the basin
-    // where its bending plane is 90 deg off the moment, a local minimum of |F| (configurations
-    // 14 and 15 of the case study at n = 1 end there with KINSOL's automatic bound).
-    opt.max_newton_step = kMaxNewtonStep;
-    const bvp::NewtonResult r = ws->newton.solve(system, x, opt);
-    detail::copy_newton_result(r, sum);
-    if (!r.converged() && scene_.solver.continuation) {
-      straight_guess(full);
-      for (int j = 1; j <= m.J; ++j) ws->phi_ref[j] = full[kU * (j - 1) + 3];
-      x = full.head(kU * m.J);
-      detail::continue_loads(ws->newton, system, x, opt, scene_.solver, sum);
-    }
-    full.head(kU * m.J) = x;
-  }
-
-  sol.disk_frames.resize(m.N + 1);
-  m.compute_frames(full.data(), sol.disk_frames.data(), nullptr, nullptr);
-  sol.tendon_displacements =
-      tendon::chord_displacements(sol.disk_frames, m.statics.routing(), scene_.actuation.convention);
-  sol.tensions = scene_.actuation.values;
-  sol.unknowns = full;
-  sum.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  return sol;
-}
-
 namespace detail {
-std::unique_ptr<LegacyStaticModel> make_legacy_prb_model(const Scene& scene) { return std::make_unique<PrbModel>(scene); }
+std::unique_ptr<StaticModel> make_prb_model(const Robot& robot, const Effects& effects) {
+  return std::make_unique<PrbModel>(robot, effects);
+}
 }  // namespace detail
 
 }  // namespace tdcr

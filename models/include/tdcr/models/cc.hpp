@@ -26,7 +26,7 @@
 
 #include <Eigen/Core>
 
-#include "tdcr/models/legacy_model.hpp"
+#include "tdcr/models/static_model.hpp"
 
 namespace tdcr {
 
@@ -38,30 +38,31 @@ struct CcArc {
   double bending_plane() const;                                ///< phi (rad), atan2 convention.
 };
 
-/// @brief The CC model of one scene. Closed form: solve() performs no iteration for fully
+/// @brief The CC model of a robot. Closed form: a solve performs no iteration for fully
 /// constrained tendons; the partially constrained variant runs a 2-unknown Gauss-Newton per
-/// segment.
-class CcModel final : public LegacyStaticModel {
+/// segment. Solution::unknowns holds the curvature vector u of every segment (3 per segment).
+class CcModel final : public StaticModel {
  public:
-  /// @brief Validates the scene and, for displacement input, factorises each segment's
-  /// displacement-to-curvature map once. Throws InputError if the scene is invalid, has a tip
-  /// force or moment or effective gravity (CC has no statics of external loads), or, for
-  /// displacement input, has a segment with fewer than 2 tendons.
-  explicit CcModel(const Scene& scene);
+  /// @brief Validates robot and effects (InputError) and factorises each segment's
+  /// displacement-to-curvature map once.
+  CcModel(const Robot& robot, const Effects& effects);
   ModelKind kind() const override { return ModelKind::CC; }
-  const Scene& scene() const override { return scene_; }
-  std::unique_ptr<LegacyWorkspace> make_workspace() const override;
-  Solution solve(LegacyWorkspace& workspace, const Solution* warm_start = nullptr) const override;
+  std::unique_ptr<ModelWorkspace> make_workspace() const override;
+  /// @brief StaticModel::check_input (no external loads: CC has no statics of them), and for
+  /// displacement input every segment needs at least 2 tendons
+  /// (field `robot.segments[i].tendons`).
+  void check_input(const ModelInput& input) const override;
 
-  /// @brief Arc parameters of every segment for the scene's actuation (the core of solve()).
-  /// `misfit` receives the least-squares residual of the displacement fit (m), 0 if exact.
-  std::vector<CcArc> arcs(double* misfit = nullptr) const;
+  /// @brief Arc parameters of every segment for an input (the core of a solve; the input is
+  /// checked by tdcr::solve, not here). `misfit` receives the least-squares residual of the
+  /// displacement fit (m), 0 if exact.
+  std::vector<CcArc> arcs(const ModelInput& input, double* misfit = nullptr) const;
 
  private:
-  Scene scene_;
-  TendonRouting routing_;
+  detail::ModelProblem& bind(ModelWorkspace& workspace, const ModelInput& input,
+                             const SolverOptions& options) const override;
   /// Per segment: the least-squares (minimum-norm) map from the segment's own displacements to
-  /// its curvature vector, factorised once here so that solve() does no decomposition.
+  /// its curvature vector, factorised once here so that a solve does no decomposition.
   std::vector<Eigen::Matrix<double, 2, Eigen::Dynamic>> displacement_to_curvature_;
 };
 

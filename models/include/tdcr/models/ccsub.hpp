@@ -32,43 +32,21 @@
 /// the exact centroid of its arc (the distributed weight integrated along the arc). Inextensible,
 /// no shear (effects.shear_extension is not used by this model).
 ///
-/// Solver: KINSOL Newton with line search on the 3J residuals (J subsegments carry load; those
-/// distal of the last loaded disk are exactly straight and are not unknowns), dense
-/// finite-difference Jacobian (column j of an N-subsegment system costs one O(N) residual).
+/// Solver (lumped_model.hpp): Newton on the 3J residuals of the loaded subsegments, from the
+/// straight robot; the load factor scales every load for continuation.
 #pragma once
 
-#include <memory>
-
-#include "tdcr/models/legacy_model.hpp"
+#include "tdcr/models/lumped_model.hpp"
 
 namespace tdcr {
 
-/// @brief The CCsub model of one scene (tension actuation only).
-///
-/// Build it through make_model(ModelKind::CCsub, scene) or directly. The model is immutable;
-/// solve() takes a workspace (make_workspace()) holding the Newton solver and all buffers, which
-/// can be reused across solves. Solution::unknowns holds x_j = (l_j u_x, l_j u_y, eps_j) for all
-/// N subsegments (3N values, zero for unloaded distal subsegments); passing a previous Solution
-/// of a robot with the same number of disks as warm_start starts Newton from it.
-class CcsubModel final : public LegacyStaticModel {
+/// @brief The CCsub model of a robot (tension input). Solution::unknowns holds
+/// x_j = (l_j u_x, l_j u_y, eps_j) for all N subsegments (3N values).
+class CcsubModel final : public LumpedModel {
  public:
-  /// @brief Validates the scene; throws InputError for displacement actuation (CCsub is a
-  /// static model driven by tensions).
-  explicit CcsubModel(const Scene& scene);
-  ~CcsubModel() override;
+  /// @brief Validates robot and effects (InputError).
+  CcsubModel(const Robot& robot, const Effects& effects);
   ModelKind kind() const override { return ModelKind::CCsub; }
-  const Scene& scene() const override { return scene_; }
-  std::unique_ptr<LegacyWorkspace> make_workspace() const override;
-  Solution solve(LegacyWorkspace& workspace, const Solution* warm_start = nullptr) const override;
-
-  /// @brief Disk frames (base disk first, tip last) for unknowns x (size 3N, see class comment).
-  std::vector<Frame> frames(const Eigen::VectorXd& x) const;
-
-  struct Impl;  ///< Private implementation (loads, stiffness); public only for the solver code.
-
- private:
-  Scene scene_;
-  std::unique_ptr<Impl> impl_;
 };
 
 }  // namespace tdcr

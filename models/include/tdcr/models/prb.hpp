@@ -40,46 +40,30 @@
 /// weights at disk centres and the backbone weight of each rigid link at its midpoint (the exact
 /// weight distribution of the rigid-link body). Inextensible, no shear.
 ///
-/// Solver: KINSOL Newton with line search on the 5J residuals (J: subsegments that carry load;
-/// the distal unloaded ones are exactly straight), dense finite-difference Jacobian.
+/// Solver (lumped_model.hpp): Newton on the 5J residuals of the loaded subsegments from the
+/// straight guess (bending planes along the moment at the straight state), steps bounded to
+/// about one radian of joint angle; the load factor scales every load for continuation.
 #pragma once
 
-#include <memory>
+#include <vector>
 
-#include "tdcr/models/legacy_model.hpp"
+#include "tdcr/models/lumped_model.hpp"
 
 namespace tdcr {
 
-/// @brief The PRB model of one scene (tension actuation only).
-///
-/// Build it through make_model(ModelKind::PRB, scene) or directly. Immutable; solve() takes a
-/// workspace (make_workspace()) that holds the Newton solver and buffers and can be reused.
-/// Solution::unknowns holds x_j = (theta_1, theta_2, theta_3, phi, eps) for all N subsegments
-/// (5N values; zero for unloaded distal subsegments); a previous Solution of a robot with the
-/// same number of disks passed as warm_start starts Newton from it.
-class PrbModel final : public LegacyStaticModel {
+/// @brief The PRB model of a robot (tension input). Solution::unknowns holds
+/// x_j = (theta_1, theta_2, theta_3, phi, eps) for all N subsegments (5N values).
+class PrbModel final : public LumpedModel {
  public:
-  /// @brief Validates the scene; throws InputError for displacement actuation or PRB
-  /// parameters that are not positive and finite.
-  explicit PrbModel(const Scene& scene);
-  ~PrbModel() override;
+  /// @brief Validates robot and effects (InputError; the PRB parameters must be positive and
+  /// finite, Effects::validate).
+  PrbModel(const Robot& robot, const Effects& effects);
   ModelKind kind() const override { return ModelKind::PRB; }
-  const Scene& scene() const override { return scene_; }
-  std::unique_ptr<LegacyWorkspace> make_workspace() const override;
-  Solution solve(LegacyWorkspace& workspace, const Solution* warm_start = nullptr) const override;
 
-  /// @brief Disk frames (base disk first, tip last) for unknowns x (size 5N).
-  std::vector<Frame> frames(const Eigen::VectorXd& x) const;
   /// @brief Joint centres and link ends of the rigid-link body, base frame: for every
   /// subsegment its 3 joint centres followed by the disk centre that ends it (4N points), for
-  /// plotting the 3R shape.
+  /// plotting the 3R shape. `x` as Solution::unknowns (5N values).
   std::vector<Vec3> joint_points(const Eigen::VectorXd& x) const;
-
-  struct Impl;  ///< Private implementation (loads, stiffness, PRB parameters).
-
- private:
-  Scene scene_;
-  std::unique_ptr<Impl> impl_;
 };
 
 }  // namespace tdcr

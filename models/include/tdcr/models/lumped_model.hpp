@@ -1,0 +1,55 @@
+/// @file lumped_model.hpp
+/// @brief The common base of the lumped static models CCsub (ccsub.hpp) and PRB (prb.hpp).
+///
+/// Both cut the robot into subsegments between consecutive disks, describe each by a few
+/// dimensionless unknowns, and balance the tendon forces at the disks (paper Eq. 30-33, 58), the
+/// tip wrench and gravity by the same recursion from the tip (Eq. 44-47); only the kinematics
+/// and the constitutive law of a subsegment differ. Tension input only; inextensible, no shear.
+///
+/// Subsegments distal of the last loaded disk (no tendon with nonzero tension reaches them, no
+/// tip wrench, no gravity) are exactly straight: they are no unknowns of the solve
+/// (SolverSummary::unknowns counts the loaded ones), while Solution::unknowns holds the values
+/// of all N subsegments (zero for the straight ones), so that any Solution of the same model can
+/// warm-start another input. Cold guess: the straight robot. Newton with a dense
+/// finite-difference Jacobian (one column costs one O(N) residual).
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "tdcr/models/static_model.hpp"
+
+namespace tdcr {
+
+namespace detail {
+class LumpedBody;
+}  // namespace detail
+
+/// @brief A lumped static model: immutable; solved through tdcr::solve with its workspace.
+class LumpedModel : public StaticModel {
+ public:
+  ~LumpedModel() override;
+  std::unique_ptr<ModelWorkspace> make_workspace() const override;
+  /// @brief Unknowns per subsegment (3 for CCsub, 5 for PRB).
+  int unknowns_per_subsegment() const;
+  /// @brief Disk frames (base disk first, tip last) for unknowns x of every subsegment
+  /// (Solution::unknowns). Throws InputError on a vector of another size.
+  std::vector<Frame> frames(const Eigen::VectorXd& x) const;
+
+ protected:
+  /// @brief Builds a model's subsegments from the (validated) robot, its routing and effects.
+  using BodyFactory = std::unique_ptr<detail::LumpedBody> (*)(const Robot&, const TendonRouting&, const Effects&);
+  /// @brief Validates robot and effects (InputError) and builds the body with `make_body`.
+  LumpedModel(const Robot& robot, const Effects& effects, BodyFactory make_body);
+  /// @brief The model's subsegments (private type, models/common/lumped_problem.hpp).
+  const detail::LumpedBody& body() const { return *body_; }
+
+ private:
+  detail::ModelProblem& bind(ModelWorkspace& workspace, const ModelInput& input,
+                             const SolverOptions& options) const override;
+  std::unique_ptr<detail::LumpedBody> body_;
+};
+
+}  // namespace tdcr
