@@ -137,12 +137,33 @@ std::string Schema<T>::default_text(std::size_t i) const {
 
 // --- Field builders: one per kind of value ---------------------------------------------------
 
+/// A member read by `read(value, path)` and written as its JSON value (non-finite numbers as null).
+template <class T, class V, class Read>
+Field<T> member_field(const char* key, const char* type, V T::*m, Read read, KeyDoc doc) {
+  return {{key, type, doc},
+          [m, read](const json& j, const std::string& p, T& v) { v.*m = read(j, p); },
+          [m](const T& v) { return ojson(v.*m); },
+          {}};
+}
+
 template <class T>
 Field<T> number_field(const char* key, double T::*m, KeyDoc doc) {
-  return {{key, "number", doc},
-          [m](const json& j, const std::string& p, T& v) { v.*m = read_number(j, p); },
-          [m](const T& v) { return number(v.*m); },
-          {}};
+  return member_field(key, "number", m, read_number, doc);
+}
+
+template <class T>
+Field<T> integer_field(const char* key, int T::*m, KeyDoc doc) {
+  return member_field(key, "integer", m, read_int, doc);
+}
+
+template <class T>
+Field<T> boolean_field(const char* key, bool T::*m, KeyDoc doc) {
+  return member_field(key, "boolean", m, read_bool, doc);
+}
+
+template <class T>
+Field<T> string_field(const char* key, std::string T::*m, KeyDoc doc) {
+  return member_field(key, "string", m, read_string, doc);
 }
 
 /// An optional number: written only when set.
@@ -152,30 +173,6 @@ Field<T> optional_number_field(const char* key, std::optional<double> T::*m, Key
           [m](const json& j, const std::string& p, T& v) { v.*m = read_number(j, p); },
           [m](const T& v) { return number((v.*m).value_or(0.0)); },
           [m](const T& v) { return (v.*m).has_value(); }};
-}
-
-template <class T>
-Field<T> integer_field(const char* key, int T::*m, KeyDoc doc) {
-  return {{key, "integer", doc},
-          [m](const json& j, const std::string& p, T& v) { v.*m = read_int(j, p); },
-          [m](const T& v) { return ojson(v.*m); },
-          {}};
-}
-
-template <class T>
-Field<T> boolean_field(const char* key, bool T::*m, KeyDoc doc) {
-  return {{key, "boolean", doc},
-          [m](const json& j, const std::string& p, T& v) { v.*m = read_bool(j, p); },
-          [m](const T& v) { return ojson(v.*m); },
-          {}};
-}
-
-template <class T>
-Field<T> string_field(const char* key, std::string T::*m, KeyDoc doc) {
-  return {{key, "string", doc},
-          [m](const json& j, const std::string& p, T& v) { v.*m = read_string(j, p); },
-          [m](const T& v) { return ojson(v.*m); },
-          {}};
 }
 
 /// Free text for the reader of the file: type checked, then dropped (never written).
