@@ -321,8 +321,8 @@ TEST(SceneIo, KeyReferenceOfTheDocsIsTheFieldTable) {
     std::ofstream(path) << generated;
     GTEST_SKIP() << "rewrote the key tables of " << path;
   }
-  EXPECT_TRUE(generated == page) << path << " disagrees with the scene field table; rerun with TDCR_UPDATE_DOCS=1 "
-                                 << "to regenerate its tables, then review the diff. Generated:\n"
+  EXPECT_TRUE(generated == page) << path << " disagrees with the scene field table; rerun this test with "
+                                 << "TDCR_UPDATE_DOCS=1 to regenerate its tables, then review the diff. Generated:\n"
                                  << generated;
 }
 
