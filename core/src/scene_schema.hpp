@@ -4,6 +4,7 @@
 // is spelled once.
 #pragma once
 
+#include <algorithm>
 #include <functional>
 #include <optional>
 #include <string>

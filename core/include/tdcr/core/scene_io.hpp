@@ -80,8 +80,9 @@ struct SceneKeyTable {
 };
 
 /// @brief The reference of every scene-file key, generated from the table that parse_scene and
-/// scene_to_json use; docs/scene-file.md holds these tables verbatim between
-/// `<!-- scene-keys: OBJECT -->` and `<!-- /scene-keys -->` (OBJECT `top` for the top level).
+/// scene_to_json use. docs/scene-file.md holds each table verbatim inside a pair of
+/// `scene-keys` HTML comments naming its object (`top` for the top level); test_scene_io
+/// compares them.
 std::vector<SceneKeyTable> scene_key_reference();
 
 }  // namespace tdcr
