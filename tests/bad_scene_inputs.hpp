@@ -1,6 +1,8 @@
 // The table of bad scene files shared by the scene-file tests (test_scene_io.cpp, through the C++
 // API) and the command-line tests (test_cli.cpp, through `tdcr solve`): each entry is a scene
 // file text, the field its InputError must name and the text (value) its message must contain.
+// Every entry is rejected by tdcr::parse_scene, except an unknown model name, which the models
+// layer rejects (tdcr::validate_scene): a program reading a scene file calls both.
 #pragma once
 
 #include <functional>

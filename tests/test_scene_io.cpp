@@ -1,10 +1,14 @@
 // Scene files: every bad input is an InputError naming the JSON path and the value; a scene
-// round-trips through scene_to_json; every example parses; the solution JSON contract.
+// round-trips through scene_to_json; every example parses; docs/scene-file.md's key reference is
+// the parser's field table; the solution JSON contract.
+#include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <functional>
 #include <limits>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -14,6 +18,7 @@
 #include "tdcr/core/error.hpp"
 #include "tdcr/core/paper_robot.hpp"
 #include "tdcr/core/scene_io.hpp"
+#include "tdcr/models/static_model.hpp"
 #include "bad_scene_inputs.hpp"
 
 namespace {
@@ -25,10 +30,12 @@ using namespace bad_scenes;
 
 class SceneBadInput : public ::testing::TestWithParam<BadInput> {};
 
+// What a program does with a scene file (the CLI too): parse it (keys, types, values), then let
+// the models layer check the model name and what that model can take.
 TEST_P(SceneBadInput, ThrowsInputErrorNamingFieldAndValue) {
   const BadInput& b = GetParam();
   try {
-    tdcr::parse_scene(b.text, "scene.json");
+    tdcr::validate_scene(tdcr::parse_scene(b.text, "scene.json"));
     FAIL() << "no InputError for " << b.text;
   } catch (const InputError& e) {
     EXPECT_EQ(e.field(), b.field) << e.what();
@@ -261,9 +268,83 @@ TEST(SceneIo, SceneDataFilesParse) {
   }
 }
 
+TEST(SceneIo, ModelNameIsTheModelsLayersToCheck) {
+  // Core knows no model names: the parser only checks that `model` is a string.
+  const tdcr::Scene s = tdcr::parse_scene(with("/model", "cosserat"));
+  EXPECT_EQ(s.model, "cosserat");
+  EXPECT_THROW(tdcr::validate_scene(s), InputError);
+  EXPECT_NO_THROW(tdcr::validate_scene(tdcr::parse_scene(with("/model", "auto"))));
+}
+
+/// docs/scene-file.md with every generated block (between `<!-- scene-keys: OBJECT -->` and
+/// `<!-- /scene-keys -->`) replaced by the table of scene_key_reference(); names the blocks the
+/// page lacks or has in excess in `problems`.
+std::string with_generated_tables(std::string page, std::string& problems) {
+  const std::string end_marker = "<!-- /scene-keys -->";
+  std::vector<std::string> names;
+  for (const tdcr::SceneKeyTable& t : tdcr::scene_key_reference()) {
+    const std::string name = t.object.empty() ? "top" : t.object;
+    names.push_back(name);
+    const std::string begin_marker = "<!-- scene-keys: " + name + " -->\n";
+    const auto begin = page.find(begin_marker);
+    const auto end = begin == std::string::npos ? begin : page.find(end_marker, begin);
+    if (end == std::string::npos) {
+      problems += "no block '" + begin_marker + "...' for the keys of '" + name + "'\n";
+      continue;
+    }
+    const auto from = begin + begin_marker.size();
+    page.replace(from, end - from, t.markdown);
+  }
+  for (auto at = page.find("<!-- scene-keys: "); at != std::string::npos; at = page.find("<!-- scene-keys: ", at + 1)) {
+    const auto close = page.find(" -->", at);
+    const std::string name = page.substr(at + 17, close - at - 17);
+    if (std::find(names.begin(), names.end(), name) == names.end())
+      problems += "block '" + name + "' names no object of the scene\n";
+  }
+  return page;
+}
+
+// The key reference of docs/scene-file.md is generated from the parser's field table: a key added,
+// removed or changed in the table and not in the page fails here. TDCR_UPDATE_DOCS=1 rewrites the
+// page's tables (then review the diff).
+TEST(SceneIo, KeyReferenceOfTheDocsIsTheFieldTable) {
+  const std::filesystem::path path = std::filesystem::path(TDCR_SOURCE_DIR) / "docs" / "scene-file.md";
+  std::ifstream in(path);
+  ASSERT_TRUE(in) << path;
+  std::stringstream text;
+  text << in.rdbuf();
+  const std::string page = text.str();
+  std::string problems;
+  const std::string generated = with_generated_tables(page, problems);
+  EXPECT_TRUE(problems.empty()) << problems;
+  if (generated != page && std::getenv("TDCR_UPDATE_DOCS")) {
+    std::ofstream(path) << generated;
+    GTEST_SKIP() << "rewrote the key tables of " << path;
+  }
+  EXPECT_TRUE(generated == page) << path << " disagrees with the scene field table; rerun this test with "
+                                 << "TDCR_UPDATE_DOCS=1 to regenerate its tables, then review the diff. Generated:\n"
+                                 << generated;
+}
+
+TEST(SceneIo, KeyReferenceListsEveryKeyOnce) {
+  std::string all;
+  for (const auto& t : tdcr::scene_key_reference()) all += t.markdown;
+  for (const char* path : {"`description`", "`robot.backbone.stiffness.GA`", "`robot.segments[i].tendons[k].y`",
+                           "`actuation.displacement_convention`", "`effects.prb.k_theta`",
+                           "`solver.max_continuation_steps`"}) {
+    const auto first = all.find(std::string("| ") + path + " |");
+    EXPECT_NE(first, std::string::npos) << path;
+    EXPECT_EQ(all.find(std::string("| ") + path + " |", first + 1), std::string::npos) << path;
+  }
+  // Defaults are those of the structs, as scene_to_json writes them.
+  EXPECT_NE(all.find("| `solver.rk4_steps` | integer |  | `8` |"), std::string::npos) << all;
+  EXPECT_NE(all.find("| `robot.backbone.youngs_modulus` | number | Pa | `2.11e11` |"), std::string::npos) << all;
+}
+
 tdcr::Solution sample_solution() {
   tdcr::Solution s;
   s.model = "vc";
+  s.model_fingerprint = 0x0123456789abcdefull;
   s.summary.termination = tdcr::TerminationType::Converged;
   s.summary.message = "KINSOL_SUCCESS";
   s.summary.iterations = 5;
@@ -291,6 +372,7 @@ TEST(SolutionJson, HasEveryContractKey) {
                         "tendon_displacements", "timing", "summary"})
     EXPECT_TRUE(j.contains(k)) << k;
   EXPECT_EQ(j["model"], "vc");
+  EXPECT_EQ(j["model_fingerprint"], "0123456789abcdef");
   EXPECT_EQ(j["status"], "converged");
   EXPECT_EQ(j["reason"], "converged: KINSOL_SUCCESS");
   EXPECT_EQ(j["iterations"], 5);

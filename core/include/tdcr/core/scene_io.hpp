@@ -2,8 +2,7 @@
 /// @brief Scene files (JSON) in and solutions (JSON) out. Every key and value is validated; an
 /// error names the JSON path and the value (InputError).
 ///
-/// Keys (docs/scene-file.md lists every key with unit, default, constraints and the models that
-/// honour it, the error messages and the CLI's JSON output):
+/// A scene file (docs/scene-file.md: the keys, the error messages and the CLI's JSON output):
 /// @code{.json}
 /// {"robot": {"backbone": {"youngs_modulus": 2.11e11, "poisson_ratio": 0.3, "outer_radius": 0.0004},
 ///            "segments": [{"length": 0.05, "disks": 10,
@@ -14,28 +13,9 @@
 ///  "model": "vc", "solver": {"integrator": "rk4"}}
 /// @endcode
 ///
-/// Every key (SI units; defaults are those of the C++ structs, see Backbone, Segment, Actuation,
-/// Loads, Effects, SolverOptions):
-/// - `robot` (required)
-///   - `backbone`: `youngs_modulus` (Pa), `poisson_ratio` or `shear_modulus` (Pa, not both),
-///     `outer_radius`, `inner_radius` (m), `density` (kg/m^3) or `mass_per_length` (kg/m, not
-///     both); or `stiffness`: {`EI`, `GJ`, `EA`, `GA`} (all four required) instead of the
-///     material and radii (then only `mass_per_length` gives a mass).
-///   - `segments` (required, non-empty): [{`length` (m, required), `disks` (integer, required),
-///     `tendons` (required, may be empty): [{`x`, `y`} (m, both required)], `disk_mass` (kg)}].
-/// - `actuation` (required): exactly one of `tensions` (N, >= 0) and `displacements` (m, positive
-///   when pulled), one value per tendon in global order; with displacements optionally
-///   `displacement_convention`: `"at_base"` (default) or `"per_segment"`.
-/// - `loads`: `tip_force` (N), `tip_moment` (N m), `gravity` (m/s^2): 3-vectors, base frame.
-/// - `effects`: `shear_extension` (bool), `disk_normal_force` (`"removed"` | `"kept"`),
-///   `tendon_path` (`"fully_constrained"` | `"partially_constrained"`), `prb`: {`gamma`: [4],
-///   `k_theta`: [3]}.
-/// - `model`: `"cc"` | `"ccsub"` | `"prb"` | `"vc"` | `"vcref"` | `"auto"`.
-/// - `solver`: `integrator` (`"rk4"` | `"cvode"`), `rk4_steps` (integer), `cvode_rtol`,
-///   `cvode_atol`, `function_tolerance`, `step_tolerance`, `max_iterations` (integer),
-///   `linear_solver` (`"auto"` | `"dense"` | `"klu"`), `continuation` (bool),
-///   `max_continuation_steps` (integer).
-/// - `description`: free text for the reader of the file; ignored.
+/// docs/scene-file.md lists every key (type, unit, default, constraints, the models that honour
+/// it); its tables are generated from the parser's own field table (scene_key_reference), and a
+/// test fails when the page and the table disagree.
 ///
 /// Rules: an unknown key at any level is an error (with the closest known key suggested), as is
 /// a duplicate key; numbers must be JSON numbers (not strings, not booleans) and finite
@@ -44,6 +24,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "tdcr/core/scene.hpp"
 #include "tdcr/core/solution.hpp"
@@ -52,6 +33,8 @@ namespace tdcr {
 
 /// @brief Parse a scene from JSON text. `source` names the origin in messages (file name).
 /// Throws InputError (field = JSON path such as `robot.segments[0].disks`) on any bad input.
+/// `model` is only checked to be a string here (core knows no model names): tdcr::validate_scene
+/// (models layer) checks it against the model registry.
 Scene parse_scene(const std::string& json_text, const std::string& source = "<string>");
 
 /// @brief Read and parse a scene file. A missing or unreadable file is an InputError whose
@@ -71,7 +54,8 @@ struct SolutionJsonOptions {
 };
 
 /// @brief The CLI's JSON contract, keys in this order:
-/// - `model` (string), `status` (`"converged"` or `"failed"`), `reason` (the termination name,
+/// - `model` (string), `model_fingerprint` (Solution::model_fingerprint as 16 lower-case hex
+///   digits: JSON numbers cannot hold 64 bits exactly), `status` (`"converged"` or `"failed"`), `reason` (the termination name,
 ///   then ": " and the summary message if any), `iterations`, `residual_norm`;
 /// - `tip`: {`position`: [3] (m, base frame), `rotation`: [[3], [3], [3]] (rows of R: rotation[i][j]
 ///   = R(i, j), columns are the tip frame's axes)}; both null when the solution has no frames;
@@ -85,5 +69,20 @@ struct SolutionJsonOptions {
 /// - `model_selection` (string): only if Solution::model_selection is not empty (model "auto").
 /// Non-finite numbers are written as null: the text is always valid JSON.
 std::string solution_to_json(const Solution& solution, const SolutionJsonOptions& options = {});
+
+/// @brief One table of the scene-file key reference.
+struct SceneKeyTable {
+  /// JSON path of the object whose keys the table lists: "" for the top level, `robot`,
+  /// `robot.segments[i]`, ... Nested objects without a table of their own are listed in their
+  /// parent's (`robot.backbone.stiffness.EI` in `robot.backbone`'s).
+  std::string object;
+  std::string markdown;  ///< The table: key, type, unit, default, constraints, honoured by.
+};
+
+/// @brief The reference of every scene-file key, generated from the table that parse_scene and
+/// scene_to_json use. docs/scene-file.md holds each table verbatim inside a pair of
+/// `scene-keys` HTML comments naming its object (`top` for the top level); test_scene_io
+/// compares them.
+std::vector<SceneKeyTable> scene_key_reference();
 
 }  // namespace tdcr

@@ -1,0 +1,259 @@
+// The scene-file field table: every key of a scene file, once, with how it is read and written
+// and its row of the reference (docs/scene-file.md, checked by test_scene_io). Value checks
+// (ranges, list lengths) are the structs' validate() functions; the constraint texts here
+// describe them. Model names are the models layer's (tdcr::validate_scene); core only checks
+// that `model` is a string.
+#include "scene_schema.hpp"
+
+namespace tdcr::detail {
+
+namespace {
+
+const Names<Actuation::DisplacementConvention> kConventions = {
+    {"at_base", Actuation::DisplacementConvention::AtBase},
+    {"per_segment", Actuation::DisplacementConvention::PerSegment}};
+const Names<DiskNormalForce> kDiskNormalForce = {{"removed", DiskNormalForce::Removed},
+                                                 {"kept", DiskNormalForce::Kept}};
+const Names<TendonPath> kTendonPath = {{"fully_constrained", TendonPath::FullyConstrained},
+                                       {"partially_constrained", TendonPath::PartiallyConstrained}};
+const Names<IntegratorKind> kIntegrators = {{"rk4", IntegratorKind::FixedStepRK4}, {"cvode", IntegratorKind::Cvode}};
+const Names<LinearSolverKind> kLinearSolvers = {
+    {"auto", LinearSolverKind::Automatic}, {"dense", LinearSolverKind::Dense}, {"klu", LinearSolverKind::SparseKLU}};
+
+// Who honours a key (the reference's last column).
+constexpr const char* kAll = "all";
+constexpr const char* kStatic = "CCsub, PRB, VC, VCref";
+constexpr const char* kGravity = "CCsub, PRB, VC, VCref (gravity)";
+constexpr const char* kNewton = "CCsub, PRB, VC, VCref";
+
+const Schema<BackboneStiffness>& stiffness_schema() {
+  using S = BackboneStiffness;
+  static const Schema<S> s({
+      number_field("EI", &S::EI, {"N m^2", nullptr, "> 0", kAll}).required(),
+      number_field("GJ", &S::GJ, {"N m^2", nullptr, "> 0", kStatic}).required(),
+      number_field("EA", &S::EA, {"N", nullptr, "> 0", "VC, VCref, CC (see `shear_extension`)"}).required(),
+      number_field("GA", &S::GA, {"N", nullptr, "> 0", "VC, VCref (see `shear_extension`)"}).required(),
+  });
+  return s;
+}
+
+const Schema<Backbone>& backbone_schema() {
+  using B = Backbone;
+  const auto material = [](const B& b) { return !b.stiffness; };
+  constexpr const char* kGivenByStiffness =
+      "the material and section are given by \"stiffness\"; give one or the other";
+  static const Schema<B> s(
+      {
+          number_field("youngs_modulus", &B::youngs_modulus, {"Pa", nullptr, "> 0; not with `stiffness`", kAll})
+              .when(material),
+          number_field("poisson_ratio", &B::poisson_ratio,
+                       {"", nullptr, "in (-1, 0.5); not with `shear_modulus` or `stiffness`",
+                        "CCsub, PRB, VC, VCref (through G)"})
+              .when([](const B& b) { return !b.stiffness && !b.shear_modulus; }),
+          optional_number_field("shear_modulus", &B::shear_modulus,
+                                {"Pa", "E / (2 (1 + nu))", "> 0; not with `poisson_ratio` or `stiffness`", kStatic})
+              .when([](const B& b) { return !b.stiffness && b.shear_modulus; }),
+          number_field("outer_radius", &B::outer_radius, {"m", nullptr, "> 0; not with `stiffness`", kAll})
+              .when(material),
+          number_field("inner_radius", &B::inner_radius,
+                       {"m", "`0` (solid)", "0 <= value < `outer_radius`; not with `stiffness`", kAll})
+              .when(material),
+          number_field("density", &B::density,
+                       {"kg/m^3", nullptr, ">= 0; not with `mass_per_length` or `stiffness`", kGravity})
+              .when([](const B& b) { return !b.stiffness && !b.mass_per_length; }),
+          optional_number_field("mass_per_length", &B::mass_per_length,
+                                {"kg/m", "density times area", ">= 0; not with `density`", kGravity}),
+          optional_object_field("stiffness", &B::stiffness, stiffness_schema(),
+                                {"", "from the material",
+                                 "all four keys below; excludes the material and radii keys and `density`", kAll}),
+      },
+      {
+          {"stiffness", "youngs_modulus", kGivenByStiffness},
+          {"stiffness", "poisson_ratio", kGivenByStiffness},
+          {"stiffness", "shear_modulus", kGivenByStiffness},
+          {"stiffness", "outer_radius", kGivenByStiffness},
+          {"stiffness", "inner_radius", kGivenByStiffness},
+          {"stiffness", "density",
+           "with \"stiffness\" the section area is unknown; give \"mass_per_length\" instead"},
+          {"poisson_ratio", "shear_modulus", "give either poisson_ratio or shear_modulus, not both"},
+          {"density", "mass_per_length", "give either density or mass_per_length, not both"},
+      });
+  return s;
+}
+
+const Schema<TendonSpec>& tendon_schema() {
+  static const Schema<TendonSpec> s({
+      number_field("x", &TendonSpec::x, {"m", nullptr, "finite", kAll}).required(),
+      number_field("y", &TendonSpec::y, {"m", nullptr, "finite; (x, y) at least 1e-9 m from the axis", kAll})
+          .required(),
+  });
+  return s;
+}
+
+const Schema<Segment>& segment_schema() {
+  using S = Segment;
+  static const Schema<S> s({
+      number_field("length", &S::length, {"m", nullptr, "> 0", kAll}).required(),
+      integer_field("disks", &S::disks, {"", nullptr, ">= 1", kAll}).required(),
+      objects_field("tendons", &S::tendons, tendon_schema(), "k", nullptr,
+                    {"", nullptr, "may be empty (a passive segment)", kAll})
+          .required(),
+      number_field("disk_mass", &S::disk_mass, {"kg", nullptr, ">= 0", kGravity}),
+  });
+  return s;
+}
+
+const Schema<Robot>& robot_schema() {
+  static const Schema<Robot> s({
+      object_field("backbone", &Robot::backbone, backbone_schema(),
+                   {"", "the paper's rod", "see [robot.backbone](#scene_backbone)", kAll})
+          .own_table(),
+      objects_field("segments", &Robot::segments, segment_schema(), "i", "segment",
+                    {"", nullptr, "at least one; see [robot.segments](#scene_segments)", kAll})
+          .required()
+          .own_table(),
+  });
+  return s;
+}
+
+const Schema<Actuation>& actuation_schema() {
+  using A = Actuation;
+  // The two lists fill the same vector; the key says what its values are.
+  const auto values = [](const char* key, A::Kind kind, KeyDoc doc) {
+    return Field<A>{{key, "array of numbers", doc},
+                    [kind](const json& j, const std::string& p, A& a) {
+                      a.kind = kind;
+                      a.values = read_numbers(j, p);
+                    },
+                    [](const A& a) { return numbers_json(a.values); },
+                    [kind](const A& a) { return a.kind == kind; }};
+  };
+  static const Schema<A> s(
+      {
+          values("tensions", A::Kind::Tensions, {"N", "", "one per tendon; each finite and >= 0", kAll}),
+          values("displacements", A::Kind::Displacements, {"m", "", "one per tendon; each finite", "CC only"}),
+          choice_field("displacement_convention", &A::convention, kConventions,
+                       {"", "`\"at_base\"`", "`\"at_base\"` or `\"per_segment\"`; only with `displacements`",
+                        "CC (input); all (reported displacements)"})
+              .when([](const A& a) { return a.kind == A::Kind::Displacements; }),
+      },
+      {
+          {"tensions", "displacements", "give either tensions or displacements, not both"},
+          {"tensions", "displacement_convention", "applies to displacements only, not to tensions"},
+      },
+      [](const JsonObject& o, const A&) {
+        if (!o.has("tensions") && !o.has("displacements"))
+          throw InputError(o.path(), text_of(o.value()), "must give either \"tensions\" or \"displacements\"");
+      });
+  return s;
+}
+
+const Schema<Loads>& loads_schema() {
+  static const Schema<Loads> s({
+      vec3_field("tip_force", &Loads::tip_force, {"N", nullptr, "finite", kStatic}),
+      vec3_field("tip_moment", &Loads::tip_moment, {"N m", nullptr, "finite", kStatic}),
+      vec3_field("gravity", &Loads::gravity, {"m/s^2", nullptr, "finite", kStatic}),
+  });
+  return s;
+}
+
+const Schema<PrbParameters>& prb_schema() {
+  using P = PrbParameters;
+  static const Schema<P> s({
+      numbers_field("gamma", &P::gamma, {"", "Table 1 / 0.999", "link length factors gamma_0..3, each > 0", "PRB"}),
+      numbers_field("k_theta", &P::k_theta,
+                    {"", nullptr, "spring factors K_Theta_1..3 (k_q = K_Theta_q EI / l, Eq. 49), each > 0", "PRB"}),
+  });
+  return s;
+}
+
+const Schema<Effects>& effects_schema() {
+  using E = Effects;
+  static const Schema<E> s({
+      boolean_field("shear_extension", &E::shear_extension,
+                    {"", nullptr,
+                     "`true`: Cosserat rod with shear and extension; `false`: inextensible, unshearable "
+                     "(Kirchhoff) rod",
+                     "VC, VCref; CC with tension input (axial strain 1 - sum T / EA). CCsub and PRB are "
+                     "inextensible."}),
+      choice_field("disk_normal_force", &E::disk_normal_force, kDiskNormalForce,
+                   {"", nullptr,
+                    "`\"removed\"`: frictionless disks, the tendon force component along the disk normal is "
+                    "removed at disks a tendon passes through (paper Eq. 58); `\"kept\"`: the full force of "
+                    "Eq. 32-33",
+                    "CCsub, PRB, VCref (VC and CC have no discrete disk forces)"}),
+      choice_field("tendon_path", &E::tendon_path, kTendonPath,
+                   {"", nullptr,
+                    "`\"fully_constrained\"`: tendons parallel to the backbone (Eq. 14-18); "
+                    "`\"partially_constrained\"`: straight chords between disks (Eq. 20-23)",
+                    "CC (displacement input and reported displacements)"}),
+      object_field("prb", &E::prb, prb_schema(), {"", "Table 1", "the two keys below", "PRB"}),
+  });
+  return s;
+}
+
+const Schema<SolverOptions>& solver_schema() {
+  using S = SolverOptions;
+  constexpr const char* kOde = "VC, VCref";
+  constexpr const char* kRk4 = "VC, VCref (with `\"rk4\"`)";
+  constexpr const char* kCvode = "VC, VCref (with `\"cvode\"`)";
+  static const Schema<S> s({
+      choice_field("integrator", &S::integrator, kIntegrators,
+                   {"", nullptr,
+                    "`\"rk4\"` (fixed-step RK4, fast) or `\"cvode\"` (SUNDIALS CVODE, Adams, error controlled)", kOde}),
+      integer_field("rk4_steps", &S::rk4_steps, {"", nullptr, ">= 1; minimum RK4 steps per disk interval", kRk4}),
+      number_field("rk4_max_step", &S::rk4_max_step,
+                   {"m", nullptr,
+                    "> 0; longest RK4 step: a disk interval longer than `rk4_steps` times this takes more steps",
+                    kRk4}),
+      number_field("cvode_rtol", &S::cvode_rtol, {"", nullptr, "> 0", kCvode}),
+      number_field("cvode_atol", &S::cvode_atol, {"state units", nullptr, "> 0", kCvode}),
+      number_field("function_tolerance", &S::function_tolerance,
+                   {"", nullptr, "> 0; Newton stops when the scaled residual max-norm is below it", kNewton}),
+      number_field("step_tolerance", &S::step_tolerance,
+                   {"", nullptr,
+                    "> 0; KINSOL's scaled step tolerance (a step-size stop counts as converged only if the "
+                    "residual tolerance holds)",
+                    kNewton}),
+      integer_field("max_iterations", &S::max_iterations, {"", nullptr, ">= 1; Newton iterations per solve", kNewton}),
+      choice_field("linear_solver", &S::linear_solver, kLinearSolvers,
+                   {"", nullptr, "`\"auto\"`, `\"dense\"` or `\"klu\"`",
+                    "VC, VCref (CCsub and PRB always use dense LU)"}),
+      boolean_field("continuation", &S::continuation,
+                    {"", nullptr, "load continuation when a direct solve fails", kNewton}),
+      integer_field("max_continuation_steps", &S::max_continuation_steps,
+                    {"", nullptr, ">= 1; at most this many Newton solves (converged or failed steps)", kNewton}),
+  });
+  return s;
+}
+
+}  // namespace
+
+const Schema<Scene>& scene_schema() {
+  static const Schema<Scene> s({
+      note_field<Scene>("description", {"", "none", "any text; ignored", "(for the reader)"}),
+      object_field("robot", &Scene::robot, robot_schema(), {"", nullptr, "see [robot](#scene_robot)", kAll})
+          .required()
+          .own_table(),
+      object_field("actuation", &Scene::actuation, actuation_schema(),
+                   {"", nullptr, "see [actuation](#scene_actuation)", kAll})
+          .required()
+          .own_table(),
+      object_field("loads", &Scene::loads, loads_schema(), {"", "no loads", "see [loads](#scene_loads)", kStatic})
+          .own_table(),
+      object_field("effects", &Scene::effects, effects_schema(),
+                   {"", "the paper code's", "see [effects](#scene_effects)", "see the table"})
+          .own_table(),
+      string_field("model", &Scene::model,
+                   {"", nullptr,
+                    "a model name of the registry (`tdcr::model_names()`) or `\"auto\"`; checked by "
+                    "`tdcr::validate_scene`",
+                    ""}),
+      object_field("solver", &Scene::solver, solver_schema(),
+                   {"", "the defaults below", "see [solver](#scene_solver)", "see the table"})
+          .own_table(),
+  });
+  return s;
+}
+
+}  // namespace tdcr::detail

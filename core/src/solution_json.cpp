@@ -1,0 +1,96 @@
+// The CLI's JSON contract for a solution (solution_to_json, scene_io.hpp; docs/scene-file.md).
+#include <cinttypes>
+#include <cstdio>
+
+#include "json_writer.hpp"
+#include "tdcr/core/scene_io.hpp"
+
+namespace tdcr {
+
+namespace {
+
+using detail::number;
+using detail::numbers_json;
+using detail::ojson;
+using detail::vec_json;
+
+/// Rotation as a list of rows: rotation[i][j] = R(i, j).
+ojson rotation_json(const Mat3& R) {
+  ojson rows = ojson::array();
+  for (int i = 0; i < 3; ++i) rows.push_back(vec_json(R.row(i).transpose()));
+  return rows;
+}
+
+ojson frame_json(const Frame& f) {
+  return ojson{{"position", vec_json(f.p)}, {"rotation", rotation_json(f.R)}};
+}
+
+ojson summary_json(const SolverSummary& s) {
+  return ojson{{"termination", to_string(s.termination)},
+               {"message", s.message},
+               {"solver_flag", s.solver_flag},
+               {"iterations", s.iterations},
+               {"residual_evaluations", s.residual_evaluations},
+               {"jacobian_evaluations", s.jacobian_evaluations},
+               {"residual_norm", number(s.residual_norm)},
+               {"physical_residual", number(s.physical_residual)},
+               {"unknowns", s.unknowns},
+               {"continuation_steps", s.continuation_steps},
+               {"linear_solver", s.linear_solver},
+               {"integrator", s.integrator},
+               {"solve_time_s", number(s.solve_time_s)}};
+}
+
+ojson backbone_json(const std::vector<BackboneSample>& samples) {
+  ojson a = ojson::array();
+  for (const auto& b : samples)
+    a.push_back(ojson{{"s", number(b.s)},
+                      {"position", vec_json(b.frame.p)},
+                      {"rotation", rotation_json(b.frame.R)},
+                      {"n", vec_json(b.n)},
+                      {"m", vec_json(b.m)}});
+  return a;
+}
+
+/// 16 lower-case hex digits: JSON numbers cannot carry 64 bits exactly.
+std::string hex64(std::uint64_t v) {
+  char buf[17];
+  std::snprintf(buf, sizeof buf, "%016" PRIx64, v);
+  return buf;
+}
+
+}  // namespace
+
+std::string solution_to_json(const Solution& solution, const SolutionJsonOptions& options) {
+  const SolverSummary& s = solution.summary;
+  std::string reason = to_string(s.termination);
+  if (!s.message.empty()) reason += ": " + s.message;
+
+  ojson tip = {{"position", nullptr}, {"rotation", nullptr}};
+  if (!solution.disk_frames.empty()) tip = frame_json(solution.tip());
+
+  ojson j = ojson::object();
+  j["model"] = solution.model;
+  j["model_fingerprint"] = hex64(solution.model_fingerprint);
+  j["status"] = s.converged() ? "converged" : "failed";
+  j["reason"] = reason;
+  j["iterations"] = s.iterations;
+  j["residual_norm"] = number(s.residual_norm);
+  j["tip"] = tip;
+  if (options.include_disks) {
+    ojson disks = ojson::array();
+    for (const Frame& f : solution.disk_frames) disks.push_back(frame_json(f));
+    j["disks"] = disks;
+  }
+  j["tendon_displacements"] = numbers_json(solution.tendon_displacements);
+  j["tensions"] = numbers_json(solution.tensions);
+  if (options.include_backbone) j["backbone"] = backbone_json(solution.backbone);
+  j["timing"] = {{"repeat", options.repeat},
+                 {"median_us", number(options.median_us)},
+                 {"min_us", number(options.min_us)}};
+  j["summary"] = summary_json(s);
+  if (!solution.model_selection.empty()) j["model_selection"] = solution.model_selection;
+  return detail::pretty(j);
+}
+
+}  // namespace tdcr
