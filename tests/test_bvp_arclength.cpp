@@ -392,6 +392,7 @@ TEST(BvpArclength, OptionsValidationNamesTheField) {
   EXPECT_EQ(field_of([](ArclengthOptions& o) { o.snap_overshoot = 2.0; }), "arclength.snap_overshoot");
   EXPECT_EQ(field_of([](ArclengthOptions& o) { o.snap_perturbation = 0.0; }), "arclength.snap_perturbation");
   EXPECT_EQ(field_of([](ArclengthOptions& o) { o.snap_tries = 0; }), "arclength.snap_tries");
+  EXPECT_EQ(field_of([](ArclengthOptions& o) { o.snap_max_iterations = 0; }), "arclength.snap_max_iterations");
 
   // arclength_continuation() validates too, before touching x.
   FnSystem s = s_curve();

@@ -45,6 +45,7 @@ void ArclengthOptions::validate() const {
   if (!(snap_overshoot > 0.0 && snap_overshoot < 1.0)) fail("snap_overshoot", snap_overshoot, "must be in (0, 1)");
   positive("snap_perturbation", snap_perturbation);
   if (snap_tries < 1) fail("snap_tries", snap_tries, "must be at least 1");
+  if (snap_max_iterations < 1) fail("snap_max_iterations", snap_max_iterations, "must be at least 1");
 }
 
 std::string to_string(ArclengthEventType t) {
@@ -111,7 +112,7 @@ class Run {
     return (a - b).cwiseProduct(w_).norm();
   }
   void count(const NewtonResult& r, bool natural);
-  bool natural_solve(double lambda, Eigen::VectorXd& x);
+  bool natural_solve(double lambda, Eigen::VectorXd& x, const NewtonOptions* options = nullptr);
   bool correct(const Point& from, double sigma, const Eigen::VectorXd& guess, Point& out);
   bool tangent(Point& p, const Eigen::VectorXd& border) {
     return bordered_.tangent(p.y, border, p.t, p.det_sign, p.det_log);
@@ -158,9 +159,9 @@ void Run::count(const NewtonResult& r, bool natural) {
   res_.last = r;
 }
 
-bool Run::natural_solve(double lambda, Eigen::VectorXd& x) {
+bool Run::natural_solve(double lambda, Eigen::VectorXd& x, const NewtonOptions* options) {
   sys_.set_parameter(lambda);
-  count(newton_.solve(sys_, x, nopt_), true);
+  count(newton_.solve(sys_, x, options ? *options : nopt_), true);
   return res_.last.converged() && x.allFinite();
 }
 
@@ -277,11 +278,13 @@ bool Run::snap(const Point& fold) {
     return false;
   }
   phi_ /= norm;
+  NewtonOptions attempt = nopt_;
+  attempt.max_iterations = std::min(nopt_.max_iterations, opt_.snap_max_iterations);
   double amplitude = opt_.snap_perturbation;
   for (int k = 0; k < opt_.snap_tries; ++k, amplitude *= 2.0) {
     for (double sign : {1.0, -1.0}) {
       xn_ = fold.y.head(n_) + sign * amplitude * phi_.cwiseQuotient(w_.head(n_));
-      if (!natural_solve(landing, xn_)) continue;
+      if (!natural_solve(landing, xn_, &attempt)) continue;
       const double jump = (xn_ - fold.y.head(n_)).cwiseProduct(w_.head(n_)).norm();
       cur_.y << xn_, landing;
       cur_.s = fold.s;

@@ -2,6 +2,7 @@
 /// @brief The bordered system of pseudo-arclength continuation and its augmented Jacobian.
 #include "bordered_system.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace tdcr::bvp::detail {
@@ -27,6 +28,7 @@ BorderedSystem::BorderedSystem(ParameterizedSystem& inner, double lambda_scale)
   rhs_[n] = 1.0;
   M_.resize(n + 1, n + 1);
   lu_ = Eigen::PartialPivLU<Eigen::MatrixXd>(n + 1);
+  visited_.assign(static_cast<size_t>(n) + 1, 0);
   if (!sparse_) {
     fd_.prepare(n);
     return;
@@ -150,7 +152,19 @@ bool BorderedSystem::tangent(const Eigen::VectorXd& y, const Eigen::VectorXd& bo
   M_.array().colwise() *= fs_.array();
   M_.array().rowwise() *= w_inv_.transpose().array();
   lu_.compute(M_);
-  det_sign = lu_.permutationP().determinant();
+  // Parity of the row permutation: a cycle of length L is L - 1 transpositions
+  // (permutationP().determinant() would allocate its own mask).
+  det_sign = 1;
+  const auto& perm = lu_.permutationP().indices();
+  std::fill(visited_.begin(), visited_.end(), 0);
+  for (Eigen::Index i = 0; i < n1; ++i) {
+    if (visited_[i]) continue;
+    for (Eigen::Index k = perm[i]; k != i; k = perm[k]) {
+      visited_[k] = 1;
+      det_sign = -det_sign;
+    }
+    visited_[i] = 1;
+  }
   det_log = 0.0;
   const auto d = lu_.matrixLU().diagonal();
   for (Eigen::Index i = 0; i < n1; ++i) {

@@ -63,6 +63,7 @@ class BorderedSystem final : public ResidualSystem {
   std::vector<int> inner_pos_;   // bordered CSC position of every inner entry
   std::vector<double> inner_values_;
   std::vector<double> values_;   // bordered values for tangent() in the sparse case
+  std::vector<char> visited_;    // permutation parity in tangent()
   FiniteDifferenceWorkspace fd_;
   Eigen::VectorXd w_, w_inv_, tw_, tw_saved_, y_pred_, fs_;
   Eigen::VectorXd f_, f_pert_, col_, rhs_;

@@ -87,6 +87,9 @@ struct ArclengthOptions {
   /// after every pair of failed attempts (one per direction), snap_tries times.
   double snap_perturbation = 0.05;
   int snap_tries = 8;  ///< Snap: number of amplitudes tried.
+  /// Snap: Newton iteration limit of each attempt (capped by the Newton options' own limit); an
+  /// attempt that starts in the basin of the vanished equilibrium only creeps, so cut it short.
+  int snap_max_iterations = 30;
   /// The scalar stored per path point, from (x, lambda); empty = the 2-norm of x.
   std::function<double(const Eigen::VectorXd&, double)> output;
 
@@ -94,7 +97,7 @@ struct ArclengthOptions {
   static ArclengthOptions from(const SolverOptions& options);
   /// @brief Throws InputError (field `arclength.<name>`) on inconsistent values: start ==
   /// target, non-finite values, steps not positive or min_step > initial_step > max_step,
-  /// growth < 1, shrink outside (0, 1), max_turn outside (0, pi], counts < 1, negative window,
+  /// growth < 1, shrink outside (0, 1), max_turn outside (0, pi], counts < 1 (snap_max_iterations included), negative window,
   /// event_tolerance outside (0, 1), snap_overshoot outside (0, 1), snap_perturbation <= 0.
   void validate() const;
 };
