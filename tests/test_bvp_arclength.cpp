@@ -86,6 +86,16 @@ FnSystem s_curve() {
   });
 }
 
+// From x = -1.2 on the lower branch to lambda = 1; the path records x.
+ArclengthOptions s_curve_path(FoldAction at_fold) {
+  ArclengthOptions o;
+  o.start = -1.2 * 1.2 * 1.2 + 1.2;
+  o.target = 1.0;
+  o.at_fold = at_fold;
+  o.output = [](const Vec& v, double) { return v[0]; };
+  return o;
+}
+
 ArclengthResult follow(tdcr::bvp::ParameterizedSystem& s, Vec& x, const ArclengthOptions& o,
                        const NewtonOptions& n = NewtonOptions()) {
   NewtonSolver newton;
@@ -100,12 +110,8 @@ ArclengthResult follow(tdcr::bvp::ParameterizedSystem& s, Vec& x, const Arclengt
 // every path point is a solution.
 TEST(BvpArclength, SCurveFollowsBothFolds) {
   FnSystem s = s_curve();
-  Vec x(1);
-  x[0] = -1.2;
-  ArclengthOptions o;
-  o.start = -1.2 * 1.2 * 1.2 + 1.2;
-  o.target = 1.0;
-  o.output = [](const Vec& v, double) { return v[0]; };
+  Vec x = Vec::Constant(1, -1.2);
+  const ArclengthOptions o = s_curve_path(FoldAction::Continue);
   const ArclengthResult r = follow(s, x, o);
   ASSERT_TRUE(r.converged()) << r.message;
   EXPECT_EQ(r.status, ArclengthStatus::Reached);
@@ -128,18 +134,29 @@ TEST(BvpArclength, SCurveFollowsBothFolds) {
   EXPECT_NE(r.message.find("reached"), std::string::npos);
 }
 
+// A target just below the first fold: the path meets it on the lower branch (the first
+// crossing), even when a step straddles the fold and comes back below the target on the
+// middle branch.
+TEST(BvpArclength, TargetJustBelowAFoldIsMetOnTheFirstBranch) {
+  for (double gap : {1e-7, 1e-3}) {
+    FnSystem s = s_curve();
+    Vec x = Vec::Constant(1, -1.2);
+    ArclengthOptions o = s_curve_path(FoldAction::Continue);
+    o.target = kFold - gap;
+    const ArclengthResult r = follow(s, x, o);
+    ASSERT_TRUE(r.converged()) << r.message;
+    EXPECT_NEAR(x[0] * x[0] * x[0] - x[0], o.target, 1e-12);
+    EXPECT_LT(x[0], -1.0 / std::sqrt(3.0)) << "landed on the middle branch";
+  }
+}
+
 // The same loading path with FoldAction::Snap: at the first fold lambda turns back before the
 // target, so the path jumps to the upper branch (x = 2/sqrt(3) at the fold load, a jump of
 // sqrt(3)), never visits the middle branch, and ends at the same answer.
 TEST(BvpArclength, SnapAtFoldLandsOnTheUpperBranch) {
   FnSystem s = s_curve();
-  Vec x(1);
-  x[0] = -1.2;
-  ArclengthOptions o;
-  o.start = -1.2 * 1.2 * 1.2 + 1.2;
-  o.target = 1.0;
-  o.at_fold = FoldAction::Snap;
-  o.output = [](const Vec& v, double) { return v[0]; };
+  Vec x = Vec::Constant(1, -1.2);
+  const ArclengthOptions o = s_curve_path(FoldAction::Snap);
   const ArclengthResult r = follow(s, x, o);
   ASSERT_TRUE(r.converged()) << r.message;
   EXPECT_NEAR(x[0], kPlastic, 1e-10);

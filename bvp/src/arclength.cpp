@@ -121,7 +121,7 @@ class Run {
   void record(ArclengthEventType type, const Point& p, bool refined, double jump = 0.0);
   double test_value(ArclengthEventType type, const Point& p, double ref_log) const;
   bool refine(ArclengthEventType type, Point& event);
-  bool finish(const Point& a, const Point& b);
+  bool finish(const Point& a, const Point& b, bool b_is_fold);
   bool snap(const Point& fold);
   bool step_events(bool& done);
   void reach(const Point& p) {
@@ -247,24 +247,56 @@ bool Run::refine(ArclengthEventType type, Point& event) {
   return false;
 }
 
-// The target lies between a and b: natural Newton at exactly the target from the linear
-// interpolation, then from the nearer end.
-bool Run::finish(const Point& a, const Point& b) {
+// The target lies between a and b. Unless b is a fold, natural Newton at exactly the target
+// from the linear interpolation; otherwise, or if that fails, first the point of the curve at
+// the target by regula falsi along a's tangent (so the answer stays on the branch between a and
+// b, even next to a fold where the natural Newton could pick the other root), then natural
+// Newton from there.
+bool Run::finish(const Point& a, const Point& b, bool b_is_fold) {
   const double theta = (opt_.target - lambda(a)) / (lambda(b) - lambda(a));
-  for (int attempt = 0; attempt < 2; ++attempt) {
-    if (attempt == 0)
-      phi_ = a.y.head(n_) + theta * (b.y.head(n_) - a.y.head(n_));
-    else
-      phi_ = theta < 0.5 ? a.y.head(n_) : b.y.head(n_);
-    if (!natural_solve(opt_.target, phi_)) continue;
-    probe_.y << phi_, opt_.target;
-    probe_.s = a.s + theta * (b.s - a.s);
-    probe_.t = a.t + theta * (b.t - a.t);
-    reach(probe_);
-    return true;
+  phi_ = a.y.head(n_) + theta * (b.y.head(n_) - a.y.head(n_));
+  bool ok = !b_is_fold && natural_solve(opt_.target, phi_);
+  if (!ok) {
+    a_ = a;
+    b_ = b;
+    double sa = 0.0, sb = a.t.dot((b.y - a.y).cwiseProduct(w_));
+    double ga = dir_ * (lambda(a) - opt_.target), gb = dir_ * (lambda(b) - opt_.target);
+    int side = 0;
+    bool located = false;
+    for (int it = 0; it < opt_.max_refine_iterations && !located; ++it) {
+      double sigma = (sa * gb - sb * ga) / (gb - ga);
+      if (!(sigma > sa && sigma < sb)) sigma = 0.5 * (sa + sb);
+      guess_ = a_.y + (sigma - sa) / (sb - sa) * (b_.y - a_.y);
+      if (!correct(a, sigma, guess_, probe_)) break;
+      const double g = dir_ * (lambda(probe_) - opt_.target);
+      located = std::abs(g) * w_[n_] <= 1e-13 || sb - sa <= 1e-14 * std::abs(sb);
+      if (located) best_ = probe_;
+      if (g < 0.0) {
+        sa = sigma;
+        ga = g;
+        std::swap(a_, probe_);
+        if (side == -1) gb *= 0.5;
+        side = -1;
+      } else {
+        sb = sigma;
+        gb = g;
+        std::swap(b_, probe_);
+        if (side == +1) ga *= 0.5;
+        side = +1;
+      }
+    }
+    phi_ = best_.y.head(n_);
+    ok = located && natural_solve(opt_.target, phi_);
   }
-  stall("Newton at the target from the interpolated point failed");
-  return false;
+  if (!ok) {
+    stall("Newton at the target failed, from the interpolated and the located point");
+    return false;
+  }
+  probe_.y << phi_, opt_.target;
+  probe_.s = a.s + theta * (b.s - a.s);
+  probe_.t = a.t + theta * (b.t - a.t);
+  reach(probe_);
+  return true;
 }
 
 // Jump from a fold to another branch at lambda slightly past it (see FoldAction::Snap).
@@ -333,7 +365,7 @@ bool Run::step_events(bool& done) {
     if (!seq[k]) continue;
     if (!before_target(lambda(*seq[k]))) {  // the target lies between last and seq[k]
       done = true;
-      finish(*last, *seq[k]);
+      finish(*last, *seq[k], seq[k] == &fold_);
       return false;
     }
     if (k == 3) break;
@@ -382,7 +414,7 @@ void Run::run(Eigen::VectorXd& x) {
       y_pred_ = prev_.y + sigma * prev_.t.cwiseQuotient(w_);
       xn_ = y_pred_.head(n_);
       ok = natural_solve(opt_.target, xn_) &&
-           (xn_ - y_pred_.head(n_)).cwiseProduct(w_.head(n_)).norm() <= sigma;
+           (xn_ - y_pred_.head(n_)).cwiseProduct(w_.head(n_)).norm() <= std::max(sigma, opt_.min_step);
       if (ok) {  // an accepted point at the target; step_events() finishes there
         cur_.y << xn_, opt_.target;
         cur_.s = prev_.s + sigma;

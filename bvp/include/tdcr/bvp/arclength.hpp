@@ -186,11 +186,13 @@ struct ArclengthResult {
 /// the linear interpolation between the two points finishes. A fold whose lambda passes the
 /// target counts as passing it (the path meets the target before turning back).
 ///
+/// system.set_parameter() is called before every residual evaluation of the bordered system
+/// (lambda is one of its unknowns), so it must be cheap and must not allocate.
 /// system.accept_step() is called once, on the returned x (the path compares unknowns across
 /// points, so they must keep one parameterisation meanwhile).
 ///
-/// Allocates per call (bordered system, LU, a few vectors, the path), not per step, apart from
-/// the growth of the path and event lists.
+/// Allocates per call (bordered system, LU, a few vectors), not per step, apart from the path
+/// and event lists and the messages of the Newton results.
 ///
 /// @param newton Reusable Newton workspace (rebuilt when switching between the bordered and
 ///        the natural system, i.e. at the start, at snaps and at the end).
