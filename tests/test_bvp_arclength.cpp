@@ -1,0 +1,431 @@
+// bvp::arclength_continuation: pseudo-arclength continuation through folds, fold and
+// bifurcation detection, snaps, the final solve at the target, failures and option checks.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "bvp_test_systems.hpp"
+#include "tdcr/bvp/arclength.hpp"
+#include "tdcr/core/error.hpp"
+
+using tdcr::bvp::ArclengthEventType;
+using tdcr::bvp::ArclengthOptions;
+using tdcr::bvp::ArclengthResult;
+using tdcr::bvp::ArclengthStatus;
+using tdcr::bvp::FoldAction;
+using tdcr::bvp::NewtonOptions;
+using tdcr::bvp::NewtonSolver;
+
+namespace {
+
+using Vec = Eigen::VectorXd;
+using Residual = std::function<bool(const Vec& x, double lambda, Vec& f)>;
+using Jacobian = std::function<void(const Vec& x, double lambda, Eigen::MatrixXd& J)>;
+
+// F(x; lambda) given by functions; an analytic dense Jacobian if `jac` is set, a declared
+// (dense) sparsity pattern with analytic sparse values if `sparse` is also set.
+class FnSystem : public tdcr::bvp::ParameterizedSystem {
+ public:
+  FnSystem(int n, Residual f, Jacobian jac = nullptr, bool sparse = false)
+      : n_(n), f_(std::move(f)), jac_(std::move(jac)), sparse_(sparse),
+        pattern_(tdcr::bvp::SparsityPattern::dense(n)), x_(n), fx_(n), J_(n, n) {}
+  int size() const override { return n_; }
+  void set_parameter(double lambda) override { lambda_ = lambda; }
+  bool residual(const Eigen::Ref<const Vec>& x, Eigen::Ref<Vec> f) override {
+    ++evaluations;
+    x_ = x;
+    if (!f_(x_, lambda_, fx_)) return false;
+    f = fx_;
+    return true;
+  }
+  const tdcr::bvp::SparsityPattern* sparsity() const override { return sparse_ ? &pattern_ : nullptr; }
+  bool has_jacobian() const override { return static_cast<bool>(jac_); }
+  bool jacobian(const Eigen::Ref<const Vec>& x, const Eigen::Ref<const Vec>&,
+                Eigen::Ref<Eigen::MatrixXd> J) override {
+    x_ = x;
+    jac_(x_, lambda_, J_);
+    J = J_;
+    return true;
+  }
+  bool sparse_jacobian(const Eigen::Ref<const Vec>& x, const Eigen::Ref<const Vec>&, double* v) override {
+    x_ = x;
+    jac_(x_, lambda_, J_);
+    for (int j = 0; j < n_; ++j)
+      for (int k = pattern_.col_ptr[j]; k < pattern_.col_ptr[j + 1]; ++k) v[k] = J_(pattern_.row_idx[k], j);
+    return true;
+  }
+  void accept_step(Vec&) override { ++accepted; }
+  int evaluations = 0;
+  int accepted = 0;
+
+ private:
+  int n_;
+  Residual f_;
+  Jacobian jac_;
+  bool sparse_;
+  tdcr::bvp::SparsityPattern pattern_;
+  double lambda_ = 0.0;
+  Vec x_, fx_;
+  Eigen::MatrixXd J_;
+};
+
+const double kFold = 2.0 / (3.0 * std::sqrt(3.0));  // folds of x^3 - x at lambda = +-kFold
+const double kPlastic = 1.324717957244746;            // the real root of x^3 - x - 1
+
+// The S-curve x^3 - x = lambda.
+FnSystem s_curve() {
+  return FnSystem(1, [](const Vec& x, double l, Vec& f) {
+    f[0] = x[0] * x[0] * x[0] - x[0] - l;
+    return true;
+  });
+}
+
+// From x = -1.2 on the lower branch to lambda = 1; the path records x.
+ArclengthOptions s_curve_path(FoldAction at_fold) {
+  ArclengthOptions o;
+  o.start = -1.2 * 1.2 * 1.2 + 1.2;
+  o.target = 1.0;
+  o.at_fold = at_fold;
+  o.output = [](const Vec& v, double) { return v[0]; };
+  return o;
+}
+
+ArclengthResult follow(tdcr::bvp::ParameterizedSystem& s, Vec& x, const ArclengthOptions& o,
+                       const NewtonOptions& n = NewtonOptions()) {
+  NewtonSolver newton;
+  return tdcr::bvp::arclength_continuation(newton, s, x, n, o);
+}
+
+}  // namespace
+
+// The S-curve from the lower branch (x = -1.2) to lambda = 1: the path walks around both folds
+// (up the lower branch, down the middle one, up the upper one) and ends on the only solution at
+// lambda = 1. Both folds are located to 1e-6 in lambda, none is taken for a bifurcation, and
+// every path point is a solution.
+TEST(BvpArclength, SCurveFollowsBothFolds) {
+  FnSystem s = s_curve();
+  Vec x = Vec::Constant(1, -1.2);
+  const ArclengthOptions o = s_curve_path(FoldAction::Continue);
+  const ArclengthResult r = follow(s, x, o);
+  ASSERT_TRUE(r.converged()) << r.message;
+  EXPECT_EQ(r.status, ArclengthStatus::Reached);
+  EXPECT_NEAR(x[0], kPlastic, 1e-10);
+  EXPECT_DOUBLE_EQ(r.parameter, 1.0);
+  EXPECT_EQ(s.accepted, 1);  // accept_step once, on the returned x
+  ASSERT_EQ(r.count(ArclengthEventType::Fold), 2) << r.message;
+  EXPECT_EQ(r.count(ArclengthEventType::Bifurcation), 0);
+  EXPECT_EQ(r.count(ArclengthEventType::Snap), 0);
+  EXPECT_NEAR(r.events[0].lambda, kFold, 1e-6);
+  EXPECT_NEAR(r.events[0].x[0], -1.0 / std::sqrt(3.0), 1e-4);
+  EXPECT_NEAR(r.events[1].lambda, -kFold, 1e-6);
+  EXPECT_NEAR(r.events[1].x[0], 1.0 / std::sqrt(3.0), 1e-4);
+  EXPECT_TRUE(r.events[0].refined && r.events[1].refined);
+  EXPECT_LT(r.events[0].index, r.events[1].index);
+  for (const auto& e : r.events) EXPECT_DOUBLE_EQ(r.path[e.index].lambda, e.lambda);
+  for (const auto& p : r.path) EXPECT_NEAR(p.value * p.value * p.value - p.value, p.lambda, 1e-9);
+  EXPECT_NEAR(r.path.back().lambda, 1.0, 0.0);
+  EXPECT_LE(r.steps, o.max_steps);
+  EXPECT_NE(r.message.find("reached"), std::string::npos);
+}
+
+// A target just below the first fold: the path meets it on the lower branch (the first
+// crossing), even when a step straddles the fold and comes back below the target on the
+// middle branch.
+TEST(BvpArclength, TargetJustBelowAFoldIsMetOnTheFirstBranch) {
+  for (double gap : {1e-7, 1e-3}) {
+    FnSystem s = s_curve();
+    Vec x = Vec::Constant(1, -1.2);
+    ArclengthOptions o = s_curve_path(FoldAction::Continue);
+    o.target = kFold - gap;
+    const ArclengthResult r = follow(s, x, o);
+    ASSERT_TRUE(r.converged()) << r.message;
+    EXPECT_NEAR(x[0] * x[0] * x[0] - x[0], o.target, 1e-12);
+    EXPECT_LT(x[0], -1.0 / std::sqrt(3.0)) << "landed on the middle branch";
+  }
+}
+
+// The same loading path with FoldAction::Snap: at the first fold lambda turns back before the
+// target, so the path jumps to the upper branch (x = 2/sqrt(3) at the fold load, a jump of
+// sqrt(3)), never visits the middle branch, and ends at the same answer.
+TEST(BvpArclength, SnapAtFoldLandsOnTheUpperBranch) {
+  FnSystem s = s_curve();
+  Vec x = Vec::Constant(1, -1.2);
+  const ArclengthOptions o = s_curve_path(FoldAction::Snap);
+  const ArclengthResult r = follow(s, x, o);
+  ASSERT_TRUE(r.converged()) << r.message;
+  EXPECT_NEAR(x[0], kPlastic, 1e-10);
+  ASSERT_EQ(r.events.size(), 2u) << r.message;
+  EXPECT_EQ(r.events[0].type, ArclengthEventType::Fold);
+  EXPECT_NEAR(r.events[0].lambda, kFold, 1e-6);
+  EXPECT_EQ(r.events[1].type, ArclengthEventType::Snap);
+  const double landing = kFold + 1e-4 * (o.target - o.start);
+  EXPECT_NEAR(r.events[1].lambda, landing, 1e-6);
+  const double x_land = r.events[1].x[0];
+  EXPECT_NEAR(x_land * x_land * x_land - x_land, r.events[1].lambda, 1e-10);
+  EXPECT_GT(x_land, 2.0 / std::sqrt(3.0));
+  EXPECT_NEAR(r.events[1].jump, std::sqrt(3.0), 1e-3);
+  EXPECT_EQ(r.events[1].index, r.events[0].index + 1);
+  for (const auto& p : r.path)  // lower branch up to the fold, then the upper branch
+    EXPECT_TRUE(p.value <= -1.0 / std::sqrt(3.0) + 1e-6 || p.value >= 2.0 / std::sqrt(3.0)) << p.value;
+}
+
+// A fold beyond which the curve never comes back: (x^2 + lambda)(x - 3) = 0 from x = -1 at
+// lambda = -1 towards lambda = 1. Followed around the fold at (0, 0) the path heads back down
+// the branch x = sqrt(-lambda) and leaves the parameter window (stalled, never reached); with
+// snaps it jumps to the separate branch x = 3 and reaches the target there.
+TEST(BvpArclength, SnapReachesADisconnectedBranch) {
+  auto f = [](const Vec& x, double l, Vec& out) {
+    out[0] = (x[0] * x[0] + l) * (x[0] - 3.0);
+    return true;
+  };
+  ArclengthOptions o;
+  o.start = -1.0;
+  o.target = 1.0;
+  {
+    FnSystem s(1, f);
+    Vec x = Vec::Constant(1, -1.0);
+    const ArclengthResult r = follow(s, x, o);
+    EXPECT_EQ(r.status, ArclengthStatus::Stalled) << r.message;
+    EXPECT_FALSE(r.converged());
+    EXPECT_NE(r.message.find("window"), std::string::npos) << r.message;
+    ASSERT_EQ(r.count(ArclengthEventType::Fold), 1);
+    EXPECT_NEAR(r.events[0].lambda, 0.0, 1e-6);
+    EXPECT_NEAR((x[0] * x[0] + r.parameter) * (x[0] - 3.0), 0.0, 1e-9);  // x solves at r.parameter
+  }
+  {
+    FnSystem s(1, f);
+    Vec x = Vec::Constant(1, -1.0);
+    o.at_fold = FoldAction::Snap;
+    const ArclengthResult r = follow(s, x, o);
+    ASSERT_TRUE(r.converged()) << r.message;
+    EXPECT_NEAR(x[0], 3.0, 1e-10);
+    ASSERT_EQ(r.count(ArclengthEventType::Snap), 1);
+    EXPECT_NEAR(r.events[1].jump, 3.0, 1e-6);
+  }
+}
+
+// Pitchfork x^3 - lambda x = 0 along the trivial branch x = 0 from lambda = -1 to 1: the
+// augmented determinant changes sign at lambda = 0 (a bifurcation), the tangent's lambda
+// component does not (no fold).
+TEST(BvpArclength, PitchforkIsABifurcationNotAFold) {
+  FnSystem s(1, [](const Vec& x, double l, Vec& f) {
+    f[0] = x[0] * x[0] * x[0] - l * x[0];
+    return true;
+  });
+  Vec x = Vec::Zero(1);
+  ArclengthOptions o;
+  o.start = -1.0;
+  o.target = 1.0;
+  const ArclengthResult r = follow(s, x, o);
+  ASSERT_TRUE(r.converged()) << r.message;
+  EXPECT_EQ(x[0], 0.0);
+  EXPECT_EQ(r.count(ArclengthEventType::Fold), 0);
+  ASSERT_EQ(r.count(ArclengthEventType::Bifurcation), 1) << r.message;
+  EXPECT_NEAR(r.events[0].lambda, 0.0, 1e-6);
+  EXPECT_TRUE(r.events[0].refined);
+
+  // The same with bifurcation detection off.
+  x.setZero();
+  o.detect_bifurcations = false;
+  EXPECT_TRUE(follow(s, x, o).events.empty());
+}
+
+// A linear system A x = lambda b: one predictor lands on the target and the solve there is
+// exact, so one or two steps reach x = target A^-1 b.
+TEST(BvpArclength, LinearSystemReachesTheTargetExactly) {
+  Eigen::Matrix3d A;
+  A << 4, 1, 0, 1, 3, 1, 0, 1, 2;
+  const Eigen::Vector3d b(1, -2, 3);
+  FnSystem s(3, [A, b](const Vec& x, double l, Vec& f) {
+    f = A * x - l * b;
+    return true;
+  });
+  Vec x = Vec::Zero(3);
+  ArclengthOptions o;
+  o.target = 2.0;
+  o.initial_step = o.max_step = 10.0;
+  const ArclengthResult r = follow(s, x, o);
+  ASSERT_TRUE(r.converged()) << r.message;
+  EXPECT_LE(r.steps, 2);
+  EXPECT_TRUE(r.events.empty());
+  const Vec exact = A.lu().solve(2.0 * b);
+  EXPECT_LT((x - exact).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_DOUBLE_EQ(r.path.back().lambda, 2.0);
+}
+
+namespace {
+// Two unknowns coupled through s = u + v, d = u - v: s^3 - s = lambda, d = s^2. The folds of
+// the S-curve in s show in both u and v.
+Residual coupled() {
+  return [](const Vec& x, double l, Vec& f) {
+    const double s = x[0] + x[1], d = x[0] - x[1];
+    f[0] = s * s * s - s - l;
+    f[1] = d - s * s;
+    return true;
+  };
+}
+void coupled_jacobian(const Vec& x, double, Eigen::MatrixXd& J) {
+  const double s = x[0] + x[1], a = 3.0 * s * s - 1.0;
+  J << a, a, 1.0 - 2.0 * s, -1.0 - 2.0 * s;
+}
+}  // namespace
+
+// The coupled 2-D fold, with finite-difference, analytic dense and analytic sparse (KLU)
+// Jacobians: the same folds to 1e-6, the same answer at the target.
+TEST(BvpArclength, CoupledTwoUnknownFold) {
+  const double s0 = -1.2, d0 = s0 * s0;
+  ArclengthOptions o;
+  o.start = s0 * s0 * s0 - s0;
+  o.target = 1.0;
+  for (int variant = 0; variant < 3; ++variant) {
+    SCOPED_TRACE(variant);
+    FnSystem sys(2, coupled(), variant > 0 ? Jacobian(coupled_jacobian) : Jacobian(), variant == 2);
+    NewtonOptions no;
+    if (variant == 2) no.linear_solver = tdcr::LinearSolverKind::SparseKLU;
+    Vec x(2);
+    x << (s0 + d0) / 2, (s0 - d0) / 2;
+    const ArclengthResult r = follow(sys, x, o, no);
+    ASSERT_TRUE(r.converged()) << r.message;
+    EXPECT_NEAR(x[0] + x[1], kPlastic, 1e-10);
+    EXPECT_NEAR(x[0] - x[1], kPlastic * kPlastic, 1e-9);
+    ASSERT_EQ(r.count(ArclengthEventType::Fold), 2) << r.message;
+    EXPECT_EQ(r.count(ArclengthEventType::Bifurcation), 0);
+    EXPECT_NEAR(r.events[0].lambda, kFold, 1e-6);
+    EXPECT_NEAR(r.events[1].lambda, -kFold, 1e-6);
+    const Vec& xf = r.events[0].x;
+    EXPECT_NEAR(xf[0] + xf[1], -1.0 / std::sqrt(3.0), 1e-4);
+    EXPECT_NEAR(xf[0] - xf[1], 1.0 / 3.0, 1e-4);
+  }
+}
+
+namespace {
+// Bratu with a load parameter (the tridiagonal test problem of the bvp tests).
+class BratuPath : public tdcr::bvp::ParameterizedSystem {
+ public:
+  BratuPath(int n, bool analytic) : b_(n, 0.0, analytic) {}
+  int size() const override { return b_.size(); }
+  void set_parameter(double lambda) override { b_.lambda = lambda; }
+  bool residual(const Eigen::Ref<const Vec>& u, Eigen::Ref<Vec> f) override { return b_.residual(u, f); }
+  const tdcr::bvp::SparsityPattern* sparsity() const override { return b_.sparsity(); }
+  bool has_jacobian() const override { return b_.has_jacobian(); }
+  bool sparse_jacobian(const Eigen::Ref<const Vec>& u, const Eigen::Ref<const Vec>& f, double* v) override {
+    return b_.sparse_jacobian(u, f, v);
+  }
+  void residual_scale(Eigen::Ref<Vec> s) const override { b_.residual_scale(s); }
+
+ private:
+  bvp_test::Bratu b_;
+};
+}  // namespace
+
+// Bratu towards lambda = 5, beyond its fold (3.51 for the continuous problem): the fold is
+// found (grouped finite differences and the analytic sparse Jacobian agree on it to 1e-6),
+// then the upper branch heads back to lambda -> 0 with growing u, so the step limit ends the
+// run (never reported as reached) with x a solution at the returned parameter.
+TEST(BvpArclength, BratuFoldThenStepLimit) {
+  double fold[2] = {0.0, 0.0};
+  for (int analytic = 0; analytic < 2; ++analytic) {
+    BratuPath s(20, analytic == 1);
+    Vec u = Vec::Zero(20);
+    ArclengthOptions o;
+    o.target = 5.0;
+    o.max_steps = 60;
+    const ArclengthResult r = follow(s, u, o);
+    EXPECT_EQ(r.status, ArclengthStatus::StepLimit) << r.message;
+    EXPECT_FALSE(r.converged());
+    EXPECT_NE(r.message.find("step_limit"), std::string::npos) << r.message;
+    EXPECT_EQ(r.steps, 60);
+    ASSERT_EQ(r.count(ArclengthEventType::Fold), 1) << r.message;
+    fold[analytic] = r.events[0].lambda;
+    EXPECT_NEAR(fold[analytic], 3.5138, 0.02);
+    s.set_parameter(r.parameter);
+    Vec f(20);
+    ASSERT_TRUE(s.residual(u, f));
+    EXPECT_LT(f.cwiseAbs().maxCoeff() * 21 * 21, 1e-9);
+  }
+  EXPECT_NEAR(fold[0], fold[1], 1e-6);
+}
+
+// Failures: a residual that cannot be evaluated beyond lambda = 0.5 (an integrator giving up)
+// stalls with the reason; a start x that solves nothing is refused; neither is "reached".
+TEST(BvpArclength, NonConvergenceIsReported) {
+  FnSystem s(1, [](const Vec& x, double l, Vec& f) {
+    if (l > 0.5) return false;
+    f[0] = x[0] - l;
+    return true;
+  });
+  Vec x = Vec::Zero(1);
+  const ArclengthResult r = follow(s, x, ArclengthOptions());
+  EXPECT_EQ(r.status, ArclengthStatus::Stalled);
+  EXPECT_FALSE(r.converged());
+  EXPECT_NE(r.message.find("min_step"), std::string::npos) << r.message;
+  EXPECT_LE(r.parameter, 0.5);
+  EXPECT_GT(r.parameter, 0.49);
+  EXPECT_NEAR(x[0], r.parameter, 1e-12);
+
+  FnSystem none(1, [](const Vec& x, double l, Vec& f) {
+    f[0] = x[0] * x[0] + 1.0 + l * l;
+    return true;
+  });
+  Vec y = Vec::Constant(1, 0.3);
+  const ArclengthResult q = follow(none, y, ArclengthOptions());
+  EXPECT_EQ(q.status, ArclengthStatus::Stalled);
+  EXPECT_FALSE(q.converged());
+  EXPECT_NE(q.message.find("start"), std::string::npos) << q.message;
+  EXPECT_EQ(y[0], 0.3);
+  EXPECT_EQ(none.accepted, 0);
+}
+
+// Inconsistent options name their field.
+TEST(BvpArclength, OptionsValidationNamesTheField) {
+  auto field_of = [](const std::function<void(ArclengthOptions&)>& set) -> std::string {
+    ArclengthOptions o;
+    set(o);
+    try {
+      o.validate();
+    } catch (const tdcr::InputError& e) {
+      return e.field();
+    }
+    return "";
+  };
+  EXPECT_EQ(field_of([](ArclengthOptions&) {}), "");
+  EXPECT_EQ(field_of([](ArclengthOptions& o) { o.target = o.start; }), "arclength.target");
+  EXPECT_EQ(field_of([](ArclengthOptions& o) { o.start = NAN; }), "arclength.start");
+  EXPECT_EQ(field_of([](ArclengthOptions& o) { o.min_step = -1.0; }), "arclength.min_step");
+  EXPECT_EQ(field_of([](ArclengthOptions& o) { o.min_step = 0.1; }), "arclength.min_step");
+  EXPECT_EQ(field_of([](ArclengthOptions& o) { o.initial_step = 1.0; }), "arclength.initial_step");
+  EXPECT_EQ(field_of([](ArclengthOptions& o) { o.growth = 0.5; }), "arclength.growth");
+  EXPECT_EQ(field_of([](ArclengthOptions& o) { o.shrink = 1.0; }), "arclength.shrink");
+  EXPECT_EQ(field_of([](ArclengthOptions& o) { o.max_turn = 4.0; }), "arclength.max_turn");
+  EXPECT_EQ(field_of([](ArclengthOptions& o) { o.max_steps = 0; }), "arclength.max_steps");
+  EXPECT_EQ(field_of([](ArclengthOptions& o) { o.window = -1.0; }), "arclength.window");
+  EXPECT_EQ(field_of([](ArclengthOptions& o) { o.event_tolerance = 0.0; }), "arclength.event_tolerance");
+  EXPECT_EQ(field_of([](ArclengthOptions& o) { o.snap_overshoot = 2.0; }), "arclength.snap_overshoot");
+  EXPECT_EQ(field_of([](ArclengthOptions& o) { o.snap_perturbation = 0.0; }), "arclength.snap_perturbation");
+  EXPECT_EQ(field_of([](ArclengthOptions& o) { o.snap_tries = 0; }), "arclength.snap_tries");
+  EXPECT_EQ(field_of([](ArclengthOptions& o) { o.snap_max_iterations = 0; }), "arclength.snap_max_iterations");
+
+  // arclength_continuation() validates too, before touching x.
+  FnSystem s = s_curve();
+  Vec x = Vec::Zero(1);
+  ArclengthOptions o;
+  o.shrink = 0.0;
+  NewtonSolver newton;
+  EXPECT_THROW(tdcr::bvp::arclength_continuation(newton, s, x, NewtonOptions(), o), tdcr::InputError);
+  EXPECT_EQ(s.evaluations, 0);
+}
+
+TEST(BvpArclength, NamesOfStatusesAndEvents) {
+  EXPECT_EQ(tdcr::bvp::to_string(ArclengthStatus::Reached), "reached");
+  EXPECT_EQ(tdcr::bvp::to_string(ArclengthStatus::Stalled), "stalled");
+  EXPECT_EQ(tdcr::bvp::to_string(ArclengthStatus::StepLimit), "step_limit");
+  EXPECT_EQ(tdcr::bvp::to_string(ArclengthEventType::Fold), "fold");
+  EXPECT_EQ(tdcr::bvp::to_string(ArclengthEventType::Bifurcation), "bifurcation");
+  EXPECT_EQ(tdcr::bvp::to_string(ArclengthEventType::Snap), "snap");
+}
