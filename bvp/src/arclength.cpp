@@ -198,6 +198,32 @@ void Run::record(ArclengthEventType type, const Point& p, bool refined, double j
   res_.events.push_back(std::move(e));
 }
 
+// A bracket [sa, sb] of a root of g for regula falsi with the Illinois modification (halve the
+// stale end's value when the same end moves twice), so convergence stays superlinear.
+struct IllinoisBracket {
+  double sa, sb, ga, gb;
+  int side = 0;
+  double next() const {
+    const double s = (sa * gb - sb * ga) / (gb - ga);
+    return s > sa && s < sb ? s : 0.5 * (sa + sb);
+  }
+  // Move the end whose g has the sign of g(sigma); true if that is the a end.
+  bool update(double sigma, double g) {
+    if ((g > 0.0) == (ga > 0.0)) {
+      sa = sigma;
+      ga = g;
+      if (side == -1) gb *= 0.5;
+      side = -1;
+      return true;
+    }
+    sb = sigma;
+    gb = g;
+    if (side == +1) ga *= 0.5;
+    side = +1;
+    return false;
+  }
+};
+
 // Fold: lambda component of the unit tangent. Bifurcation: det relative to ref_log (O(1) near
 // the bracket, whatever the size of the determinant).
 double Run::test_value(ArclengthEventType type, const Point& p, double ref_log) const {
@@ -211,17 +237,14 @@ bool Run::refine(ArclengthEventType type, Point& event) {
   const double ref = prev_.det_log;
   a_ = prev_;
   b_ = cur_;
-  double sa = 0.0, sb = cur_.s - prev_.s;
-  double ga = test_value(type, a_, ref), gb = test_value(type, b_, ref);
-  const double tol = opt_.event_tolerance * std::max(std::abs(ga), std::abs(gb));
-  const bool a_best = std::abs(ga) <= std::abs(gb);
+  IllinoisBracket br{0.0, cur_.s - prev_.s, test_value(type, a_, ref), test_value(type, b_, ref)};
+  const double tol = opt_.event_tolerance * std::max(std::abs(br.ga), std::abs(br.gb));
+  const bool a_best = std::abs(br.ga) <= std::abs(br.gb);
   event = a_best ? a_ : b_;
-  double best_g = a_best ? std::abs(ga) : std::abs(gb);
-  int side = 0;
+  double best_g = a_best ? std::abs(br.ga) : std::abs(br.gb);
   for (int it = 0; it < opt_.max_refine_iterations; ++it) {
-    double sigma = (sa * gb - sb * ga) / (gb - ga);
-    if (!(sigma > sa && sigma < sb)) sigma = 0.5 * (sa + sb);
-    guess_ = a_.y + (sigma - sa) / (sb - sa) * (b_.y - a_.y);
+    const double sigma = br.next();
+    guess_ = a_.y + (sigma - br.sa) / (br.sb - br.sa) * (b_.y - a_.y);
     if (!correct(prev_, sigma, guess_, probe_)) return false;
     const double g = test_value(type, probe_, ref);
     if (std::abs(g) < best_g) {
@@ -229,20 +252,8 @@ bool Run::refine(ArclengthEventType type, Point& event) {
       event = probe_;
     }
     if (best_g <= tol) return true;
-    if ((g > 0.0) == (ga > 0.0)) {
-      sa = sigma;
-      ga = g;
-      std::swap(a_, probe_);
-      if (side == -1) gb *= 0.5;
-      side = -1;
-    } else {
-      sb = sigma;
-      gb = g;
-      std::swap(b_, probe_);
-      if (side == +1) ga *= 0.5;
-      side = +1;
-    }
-    if (sb - sa <= 1e-14 * (cur_.s - prev_.s)) return true;
+    std::swap(br.update(sigma, g) ? a_ : b_, probe_);
+    if (br.sb - br.sa <= 1e-14 * (cur_.s - prev_.s)) return true;
   }
   return false;
 }
@@ -259,31 +270,17 @@ bool Run::finish(const Point& a, const Point& b, bool b_is_fold) {
   if (!ok) {
     a_ = a;
     b_ = b;
-    double sa = 0.0, sb = a.t.dot((b.y - a.y).cwiseProduct(w_));
-    double ga = dir_ * (lambda(a) - opt_.target), gb = dir_ * (lambda(b) - opt_.target);
-    int side = 0;
+    IllinoisBracket br{0.0, a.t.dot((b.y - a.y).cwiseProduct(w_)), dir_ * (lambda(a) - opt_.target),
+                       dir_ * (lambda(b) - opt_.target)};
     bool located = false;
     for (int it = 0; it < opt_.max_refine_iterations && !located; ++it) {
-      double sigma = (sa * gb - sb * ga) / (gb - ga);
-      if (!(sigma > sa && sigma < sb)) sigma = 0.5 * (sa + sb);
-      guess_ = a_.y + (sigma - sa) / (sb - sa) * (b_.y - a_.y);
+      const double sigma = br.next();
+      guess_ = a_.y + (sigma - br.sa) / (br.sb - br.sa) * (b_.y - a_.y);
       if (!correct(a, sigma, guess_, probe_)) break;
       const double g = dir_ * (lambda(probe_) - opt_.target);
-      located = std::abs(g) * w_[n_] <= 1e-13 || sb - sa <= 1e-14 * std::abs(sb);
+      located = std::abs(g) * w_[n_] <= 1e-13 || br.sb - br.sa <= 1e-14 * std::abs(br.sb);
       if (located) best_ = probe_;
-      if (g < 0.0) {
-        sa = sigma;
-        ga = g;
-        std::swap(a_, probe_);
-        if (side == -1) gb *= 0.5;
-        side = -1;
-      } else {
-        sb = sigma;
-        gb = g;
-        std::swap(b_, probe_);
-        if (side == +1) ga *= 0.5;
-        side = +1;
-      }
+      std::swap(br.update(sigma, g) ? a_ : b_, probe_);
     }
     phi_ = best_.y.head(n_);
     ok = located && natural_solve(opt_.target, phi_);
