@@ -39,6 +39,9 @@ class TendonRod final : public bvp::OdeSystem {
   void set(const SegmentLoads& segment) { seg_ = &segment; }
 
  private:
+  template <bool Shear, bool Gravity>
+  void eval(const double* y, double* dyds) const;
+
   const cosserat::Section* section_;
   const SegmentLoads* seg_;
   int tendon_count_;
