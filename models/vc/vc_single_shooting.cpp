@@ -1,6 +1,4 @@
 // VC by single shooting: unknowns n(0), m(0), residual the tip wrench (vc.hpp).
-#include <cmath>
-
 #include "tdcr/bvp/newton_solver.hpp"
 #include "vc/vc_shooting.hpp"
 
