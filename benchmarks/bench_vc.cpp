@@ -30,7 +30,7 @@ struct Row {
 };
 
 Row run(const std::string& name, const Scene& s, VcOptions opt, int repeat, const Solution& ref) {
-  VcModel model(s, opt);
+  VcModel model(s.robot, s.effects, opt);
   auto ws = model.make_workspace();
   std::vector<double> t;
   Solution sol;
@@ -38,7 +38,7 @@ Row run(const std::string& name, const Scene& s, VcOptions opt, int repeat, cons
   for (int i = 0; i < repeat; ++i) {
     rhs0 = static_cast<VcWorkspace&>(*ws).rhs_evaluations();
     const auto t0 = std::chrono::steady_clock::now();
-    sol = model.solve(*ws);  // cold solve: no warm start
+    sol = solve(model, *ws, s.input(), s.solver);  // cold solve: no warm start
     t.push_back(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
   }
   std::sort(t.begin(), t.end());
@@ -67,9 +67,9 @@ int main(int argc, char** argv) {
   tight.solver.cvode_rtol = 1e-12;
   tight.solver.cvode_atol = 1e-14;
   tight.solver.function_tolerance = 1e-13;
-  VcModel ref_model(tight);
+  VcModel ref_model(tight.robot, tight.effects);
   auto ref_ws = ref_model.make_workspace();
-  const Solution ref = ref_model.solve(*ref_ws);
+  const Solution ref = solve(ref_model, *ref_ws, tight.input(), tight.solver);
   if (!ref.converged()) {
     std::printf("reference solve failed: %s\n", ref.summary.message.c_str());
     return 1;

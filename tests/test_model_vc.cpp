@@ -1,5 +1,5 @@
-// The VC model (Cosserat rod, fully constrained tendons, single shooting) against results that
-// theory fixes (straight rod, circular arcs, linear beam theory, Euler elastica, symmetry, global
+// The VC model (Cosserat rod, fully constrained tendons, single and multiple shooting) against
+// results that theory fixes (straight rod, circular arcs, linear beam theory, Euler elastica, symmetry, global
 // equilibrium) and against the paper code's own VC results.
 #include <algorithm>
 #include <cmath>
@@ -15,7 +15,6 @@
 #include "tdcr/core/error.hpp"
 #include "tdcr/core/lie.hpp"
 #include "tdcr/core/paper_robot.hpp"
-#include "tdcr/models/cc.hpp"
 #include "tdcr/models/static_model.hpp"
 #include "tdcr/models/vc.hpp"
 
@@ -24,17 +23,15 @@ using namespace tdcr;
 namespace {
 
 Solution solve_vc(const Scene& s, VcOptions opt = {}, const Solution* warm = nullptr) {
-  VcModel m(s, opt);
+  VcModel m(s.robot, s.effects, opt);
   auto ws = m.make_workspace();
-  return m.solve(*ws, warm);
+  return solve(m, *ws, s.input(), s.solver, warm);
 }
 
 Solution solve_cc(const Scene& s) {
-  Scene c = s;
-  c.model = "cc";
-  const CcModel m(c.robot, c.effects);
-  auto ws = m.make_workspace();
-  return tdcr::solve(m, *ws, c.input(), c.solver);
+  auto m = make_model(ModelKind::CC, s);
+  auto ws = m->make_workspace();
+  return solve(*m, *ws, s.input(), s.solver);
 }
 
 Scene paper_scene(int n, std::vector<double> tensions) {
@@ -350,14 +347,13 @@ TEST(VcModel, WarmStartSavesIterations) {
   const double T = T_M();
   Scene s = paper_scene(10, {T, 0, 0.5 * T, 0});
   s.loads.tip_force = Vec3(0.2, 0, 0);
-  VcModel m0(s);
-  auto ws = m0.make_workspace();
-  const Solution first = m0.solve(*ws);
+  VcModel m(s.robot, s.effects);
+  auto ws = m.make_workspace();
+  const Solution first = solve(m, *ws, s.input(), s.solver);
   ASSERT_TRUE(first.converged());
   s.actuation.values[0] = 1.05 * T;
-  VcModel m1(s);
-  const Solution cold = m1.solve(*ws);
-  const Solution warm = m1.solve(*ws, &first);
+  const Solution cold = solve(m, *ws, s.input(), s.solver);
+  const Solution warm = solve(m, *ws, s.input(), s.solver, &first);
   ASSERT_TRUE(cold.converged() && warm.converged());
   EXPECT_LT(warm.summary.iterations, cold.summary.iterations);
   EXPECT_LT((warm.tip().p - cold.tip().p).norm(), 1e-10);
@@ -394,9 +390,9 @@ TEST(VcModel, GlobalEquilibriumThreeSegmentsWithGravity) {
   for (bool kinks : {true, false}) {
   VcOptions opt;
   opt.kink_forces = kinks;
-  VcModel model(s, opt);
+  VcModel model(s.robot, s.effects, opt);
   auto ws = model.make_workspace();
-  const Solution sol = model.solve(*ws);
+  const Solution sol = solve(model, *ws, s.input(), s.solver);
   ASSERT_TRUE(sol.converged()) << sol.summary.message;
 
   const Robot& robot = s.robot;
@@ -458,7 +454,9 @@ TEST(VcModel, GlobalEquilibriumThreeSegmentsWithGravity) {
 TEST(VcModel, RejectsDisplacementInput) {
   Scene s = paper_scene(5, {0, 0, 0, 0});
   s.actuation.kind = Actuation::Kind::Displacements;
-  EXPECT_THROW(VcModel m(s), InputError);
+  VcModel m(s.robot, s.effects);
+  auto ws = m.make_workspace();
+  EXPECT_THROW(solve(m, *ws, s.input(), s.solver), InputError);
 }
 
 namespace {
@@ -478,11 +476,11 @@ Scene long_soft_robot(int disks) {
 // n = 10, 2e-5 m at n = 20 (the model difference; the coiled answer was 0.5 m away). Bound 2e-4 m.
 TEST(VcModel, LongSoftRobotUnderGravityHangsLikeVcref) {
   const Scene s = long_soft_robot(20);
-  VcModel vc(s);
-  EXPECT_TRUE(vc.uses_multiple_shooting());
-  EXPECT_GT(vc.tension_parameter(), 1000.0);
+  VcModel vc(s.robot, s.effects);
+  EXPECT_TRUE(vc.uses_multiple_shooting(s.input()));
+  EXPECT_GT(vc.load_parameter(s.input()), 1000.0);
   auto ws = vc.make_workspace();
-  const Solution a = vc.solve(*ws);
+  const Solution a = solve(vc, *ws, s.input(), s.solver);
   ASSERT_TRUE(a.converged()) << a.summary.message;
   EXPECT_LE(a.summary.residual_norm, s.solver.function_tolerance);
   EXPECT_EQ(a.unknowns.size(), 18 * 60);
@@ -499,7 +497,7 @@ TEST(VcModel, LongSoftRobotUnderGravityHangsLikeVcref) {
   for (const Frame& f : a.disk_frames) EXPECT_LT(std::abs(f.p.x()), 1e-12);
   for (double d : a.tendon_displacements) EXPECT_TRUE(std::isfinite(d));
   // A warm re-solve from the answer stays on it, in one or two iterations.
-  const Solution again = vc.solve(*ws, &a);
+  const Solution again = solve(vc, *ws, s.input(), s.solver, &a);
   ASSERT_TRUE(again.converged());
   EXPECT_LE(again.summary.iterations, 2);
   EXPECT_LT((again.tip().p - a.tip().p).norm(), 1e-10);
@@ -516,7 +514,7 @@ TEST(VcModel, MultipleShootingMatchesSingleShooting) {
   VcOptions ss, ms;
   ss.formulation = VcFormulation::SingleShooting;
   ms.formulation = VcFormulation::MultipleShooting;
-  EXPECT_FALSE(VcModel(s).uses_multiple_shooting());
+  EXPECT_FALSE(VcModel(s.robot, s.effects).uses_multiple_shooting(s.input()));
   const Solution a = solve_vc(s, ss), b = solve_vc(s, ms);
   ASSERT_TRUE(a.converged() && b.converged()) << a.summary.message << " / " << b.summary.message;
   EXPECT_EQ(a.unknowns.size(), 6);
@@ -527,9 +525,9 @@ TEST(VcModel, MultipleShootingMatchesSingleShooting) {
   for (std::size_t k = 0; k < 4; ++k) EXPECT_NEAR(a.tendon_displacements[k], b.tendon_displacements[k], 1e-12);
   // Cross warm starts: a single-shooting answer seeds multiple shooting (from its disk states)
   // and the other way round (from its base reaction); both converge at once.
-  VcModel mm(s, ms), sm(s, ss);
+  VcModel mm(s.robot, s.effects, ms), sm(s.robot, s.effects, ss);
   auto w1 = mm.make_workspace(), w2 = sm.make_workspace();
-  const Solution c = mm.solve(*w1, &a), d = sm.solve(*w2, &b);
+  const Solution c = solve(mm, *w1, s.input(), s.solver, &a), d = solve(sm, *w2, s.input(), s.solver, &b);
   ASSERT_TRUE(c.converged() && d.converged());
   EXPECT_LE(c.summary.iterations, 1);
   EXPECT_LE(d.summary.iterations, 1);
@@ -542,13 +540,14 @@ TEST(VcModel, MultipleShootingMatchesSingleShooting) {
 TEST(VcModel, WarmStartAlongTrajectoryBeatsColdGuess) {
   int warm_its = 0, cold_its = 0;
   Solution prev;
+  const Scene s0 = paper_scene(10, {0, 0, 0, 0});
+  VcModel m(s0.robot, s0.effects);
+  auto ws = m.make_workspace();
   for (int i = 1; i <= 10; ++i) {
     Scene s = paper_scene(10, {T_M() * i / 10, 0, 0, 0});
     s.loads.tip_force = Vec3(0.05, 0, 0);
-    VcModel m(s);
-    auto ws = m.make_workspace();
-    const Solution cold = m.solve(*ws);
-    const Solution warm = m.solve(*ws, i > 1 ? &prev : nullptr);
+    const Solution cold = solve(m, *ws, s.input(), s.solver);
+    const Solution warm = solve(m, *ws, s.input(), s.solver, i > 1 ? &prev : nullptr);
     ASSERT_TRUE(cold.converged() && warm.converged());
     EXPECT_LT((cold.tip().p - warm.tip().p).norm(), 1e-10);
     cold_its += cold.summary.iterations;

@@ -16,6 +16,5 @@ std::unique_ptr<StaticModel> make_vc_model(const Robot& robot, const Effects& ef
 std::unique_ptr<StaticModel> make_vcref_model(const Robot& robot, const Effects& effects);
 
 // Transitional: scene-bound models.
-std::unique_ptr<LegacyStaticModel> make_legacy_vc_model(const Scene& scene);
 std::unique_ptr<LegacyStaticModel> make_legacy_vcref_model(const Scene& scene);
 }  // namespace tdcr::detail

@@ -21,7 +21,9 @@ struct ColdStart {
   /// Load the robot from rest (continuation from load factor 0) instead of a direct solve:
   /// under large external loads a direct solve can land on another equilibrium.
   bool from_rest = false;
-  double first_step = 0.0;  ///< First load step when from_rest (0: the continuation default).
+  /// First load step whenever the robot is loaded from rest, also after a failed warm-started
+  /// direct solve (0: the continuation default).
+  double first_step = 0.0;
   std::string reason;       ///< Why, for the summary message.
 };
 
@@ -49,9 +51,15 @@ class ModelProblem {
   /// Guess from a previous Solution of the same model (checked by the driver); false if it
   /// cannot be used (e.g. it did not converge to finite unknowns).
   virtual bool warm_guess(const Solution& previous, Eigen::VectorXd& x) = 0;
+  /// The residual at the returned unknowns, for the driver's final check (system parameter 1).
+  /// A model whose output pass also yields the residual (VC's single shooting: one shot that
+  /// records the frames) overrides it, so that extract() reuses that pass.
+  virtual bool final_residual(const Eigen::VectorXd& x, Eigen::Ref<Eigen::VectorXd> f) {
+    return system()->residual(x, f);
+  }
   /// Outputs at the returned unknowns x: frames, backbone samples, tendon displacements, the
-  /// tensions used. Called right after the driver evaluated system()->residual(x) at load
-  /// factor 1 (`evaluated`: it succeeded), so a system may reuse the state of that evaluation.
+  /// tensions used. Called right after the driver evaluated final_residual(x) at load factor 1
+  /// (`evaluated`: it succeeded), so a problem may reuse the state of that evaluation.
   /// May downgrade a converged summary (e.g. a final pass that fails to integrate).
   virtual void extract(const Eigen::VectorXd& x, bool evaluated, Solution& solution) = 0;
   /// Transitional (legacy_adapter.cpp): a model that still solves a whole scene itself does it

@@ -47,10 +47,11 @@ void direct_solve(detail::ModelProblem& P, bvp::ParameterizedSystem& sys, const 
 }
 
 // The converged flag must describe the returned unknowns: evaluate the residual at full load.
-bool final_check(bvp::ParameterizedSystem& sys, const Eigen::VectorXd& x, double tolerance, SolverSummary& sum) {
+bool final_check(detail::ModelProblem& P, bvp::ParameterizedSystem& sys, const Eigen::VectorXd& x, double tolerance,
+                 SolverSummary& sum) {
   sys.set_parameter(1.0);
   Eigen::VectorXd f(sys.size()), scale(sys.size());
-  const bool evaluated = sys.residual(x, f);
+  const bool evaluated = P.final_residual(x, f);
   if (!sum.converged()) return evaluated;
   sys.residual_scale(scale);
   const double scaled =
@@ -114,10 +115,10 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
       if (!sum.converged() && options.continuation) {
         sys->set_parameter(0.0);
         P.rest_state(x);
-        detail::continue_loads(P.newton(), *sys, x, nopt, options, sum, cold.first_step);
+        detail::continue_loads(P.newton(), *sys, x, nopt, options, sum, P.cold_start().first_step);
       }
     }
-    const bool evaluated = final_check(*sys, x, options.function_tolerance, sum);
+    const bool evaluated = final_check(P, *sys, x, options.function_tolerance, sum);
     sol.unknowns = x;
     P.extract(x, evaluated, sol);
   }

@@ -1,5 +1,8 @@
+// The Cosserat rod of cosserat_rod.hpp: state helpers, section, and the run-time dispatch of its
+// right-hand side (physics/cosserat_rhs.hpp).
 #include "tdcr/models/cosserat_rod.hpp"
 
+#include "physics/cosserat_rhs.hpp"
 #include "tdcr/core/lie.hpp"
 
 namespace tdcr::cosserat {
@@ -18,6 +21,8 @@ Frame frame_of(const double* y) { return Frame{rotation(y), position(y)}; }
 Section Section::from(const Robot& robot, const Effects& effects, const Vec3& weight) {
   Section s;
   const BackboneStiffness k = robot.backbone.effective_stiffness();
+  s.kbt = Vec3(k.EI, k.EI, k.GJ);
+  s.kse = Vec3(k.GA, k.GA, k.EA);
   s.inv_kbt = Vec3(1.0 / k.EI, 1.0 / k.EI, 1.0 / k.GJ);
   s.inv_kse = Vec3(1.0 / k.GA, 1.0 / k.GA, 1.0 / k.EA);
   s.shear_extension = effects.shear_extension;
@@ -32,20 +37,16 @@ Section Section::from(const Scene& scene) {
   return from(scene.robot, scene.effects, w);
 }
 
-void FreeRod::rhs(double, const double* y, double* dyds) const {
-  const Eigen::Map<const Mat3> R = rotation(y);
-  const Vec3 n = force(y);
-  const Vec3 u = section_.curvature(R, moment(y));
-  const Vec3 v = section_.strain(R, n);
-  const Vec3 dp = R * v;
-  position(dyds) = dp;
-  rotation(dyds) = R * lie::hat(u);
-  if (section_.gravity) {
-    force(dyds) = -section_.weight;
-  } else {
-    force(dyds).setZero();
-  }
-  moment(dyds) = -dp.cross(n);
+TendonLoad TendonLoad::make(const Vec3& r, double T) { return TendonLoad{r, lie::hat(r), T}; }
+
+Strains rod_rhs(const Section& section, const TendonLoad* tendons, int count, const double* y, double* dyds) {
+  if (section.shear_extension)
+    return section.gravity ? detail::rod_rhs<true, true>(section, tendons, count, y, dyds)
+                           : detail::rod_rhs<true, false>(section, tendons, count, y, dyds);
+  return section.gravity ? detail::rod_rhs<false, true>(section, tendons, count, y, dyds)
+                         : detail::rod_rhs<false, false>(section, tendons, count, y, dyds);
 }
+
+void FreeRod::rhs(double, const double* y, double* dyds) const { rod_rhs(section_, nullptr, 0, y, dyds); }
 
 }  // namespace tdcr::cosserat

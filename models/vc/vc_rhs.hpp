@@ -1,0 +1,51 @@
+// Private to models/vc: the tendon-loaded rod of one robot segment, the ODE VC integrates (the
+// rod of cosserat::rod_rhs with the segment's tensioned tendons, optionally with the tendon
+// lengths as extra states).
+#pragma once
+
+#include <vector>
+
+#include "tdcr/bvp/integrator.hpp"
+#include "tdcr/models/cosserat_rod.hpp"
+
+namespace tdcr::vc {
+
+/// A tendon whose length is integrated (every tendon through the segment, tensioned or not).
+struct LengthTerm {
+  Vec3 r = Vec3::Zero();  ///< Body-frame offset.
+  int index = 0;          ///< Global tendon index.
+};
+
+/// The tendon loads of one segment at the current load factor.
+struct SegmentLoads {
+  std::vector<cosserat::TendonLoad> tendons;      ///< Tensioned, running through the segment.
+  std::vector<int> tendon_index;                  ///< Global index of each of `tendons`.
+  std::vector<cosserat::TendonLoad> terminating;  ///< Tensioned, ending at the segment's end.
+  std::vector<int> terminating_index;             ///< Global index of each of `terminating`.
+  std::vector<LengthTerm> lengths;                ///< Every tendon running through the segment.
+};
+
+/// The rod of one segment: 18 states, plus one length per tendon (|q_k|, Eq. 56) if requested.
+/// Reads the section (its weight at the current load factor) and the segment's loads through
+/// pointers, so that rescaling the loads needs no rebuild.
+class TendonRod final : public bvp::OdeSystem {
+ public:
+  /// `section` and `segment` must outlive the rod; `tendon_count` length states if `lengths`.
+  TendonRod(const cosserat::Section& section, const SegmentLoads& segment, int tendon_count, bool lengths)
+      : section_(&section), seg_(&segment), tendon_count_(tendon_count), lengths_(lengths) {}
+  int dimension() const override { return cosserat::kStateSize + (lengths_ ? tendon_count_ : 0); }
+  void rhs(double s, const double* y, double* dyds) const override;
+  /// Integrate segment `segment` from now on.
+  void set(const SegmentLoads& segment) { seg_ = &segment; }
+
+ private:
+  template <bool Shear, bool Gravity>
+  void eval(const double* y, double* dyds) const;
+
+  const cosserat::Section* section_;
+  const SegmentLoads* seg_;
+  int tendon_count_;
+  bool lengths_;
+};
+
+}  // namespace tdcr::vc

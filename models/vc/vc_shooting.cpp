@@ -1,0 +1,204 @@
+// What VC's two formulations share: the bound loads, the disk point loads, a shot from the base
+// and the tendon displacements (vc_shooting.hpp).
+#include "vc/vc_shooting.hpp"
+
+#include "physics/tendon_path.hpp"
+
+namespace tdcr {
+
+VcWorkspace::Impl::Impl(const VcModel& model)
+    : segments(model.robot().segments.size()), tendon_count(static_cast<int>(model.routing().tendons.size())) {}
+
+VcWorkspace::Impl::~Impl() = default;
+
+namespace vc {
+
+namespace {
+
+bool same_integration(const SolverOptions& a, const SolverOptions& b) {
+  return a.integrator == b.integrator && a.rk4_steps == b.rk4_steps && a.rk4_max_step == b.rk4_max_step &&
+         a.cvode_rtol == b.cvode_rtol && a.cvode_atol == b.cvode_atol;
+}
+
+}  // namespace
+
+void bind_input(VcWorkspace::Impl& W, const VcModel& model, const ModelInput& input, const SolverOptions& options) {
+  const Robot& robot = model.robot();
+  const TendonRouting& rt = model.routing();
+  W.model = &model;
+  W.loads.bind(robot, rt, input);
+  W.lambda = 1.0;
+  W.per_segment = input.actuation.convention == Actuation::DisplacementConvention::PerSegment;
+  W.section = cosserat::Section::from(robot, model.effects(), W.loads.backbone_weight());
+  for (SegmentLoads& s : W.segments) {
+    s.tendons.clear();
+    s.tendon_index.clear();
+    s.terminating.clear();
+    s.terminating_index.clear();
+    s.lengths.clear();
+  }
+  for (const RoutedTendon& t : rt.tendons) {
+    const double T = W.loads.tension(t.index);
+    const cosserat::TendonLoad load = cosserat::TendonLoad::make(physics::tendon_offset(t, 0.0), T);
+    for (int i = 0; i <= t.segment; ++i) {
+      W.segments[i].lengths.push_back(LengthTerm{load.r, t.index});
+      if (T > 0.0) {
+        W.segments[i].tendons.push_back(load);
+        W.segments[i].tendon_index.push_back(t.index);
+      }
+    }
+    if (T > 0.0) {
+      W.segments[t.segment].terminating.push_back(load);
+      W.segments[t.segment].terminating_index.push_back(t.index);
+    }
+  }
+
+  if (W.shot_integrator && same_integration(W.integration, options)) return;
+  // New integration settings: new integrators, and the rods and formulations that use them.
+  if (W.shot_integrator) W.retired_rhs += W.shot_integrator->rhs_evaluations();
+  if (W.final_integrator) W.retired_rhs += W.final_integrator->rhs_evaluations();
+  W.integration = options;
+  W.shot_integrator = bvp::make_integrator(options);
+  const bool lengths_in_shots = options.integrator == IntegratorKind::Cvode;
+  W.final_integrator = lengths_in_shots ? nullptr : bvp::make_integrator(options);
+  W.shot_rod = std::make_unique<TendonRod>(W.section, W.segments[0], W.tendon_count, lengths_in_shots);
+  W.final_rod = std::make_unique<TendonRod>(W.section, W.segments[0], W.tendon_count, true);
+  W.y = Eigen::VectorXd::Zero(cosserat::kStateSize + W.tendon_count);
+  W.segment_lengths.assign(W.segments.size() * W.tendon_count, 0.0);
+  W.single.reset();
+  W.multiple.reset();
+}
+
+void set_load_factor(VcWorkspace::Impl& W, double lambda) {
+  if (W.lambda == lambda) return;
+  W.loads.set_load_factor(lambda);
+  W.section.weight = W.loads.backbone_weight();
+  for (SegmentLoads& s : W.segments) {
+    for (std::size_t k = 0; k < s.tendons.size(); ++k) s.tendons[k].T = W.loads.tension(s.tendon_index[k]);
+    for (std::size_t k = 0; k < s.terminating.size(); ++k)
+      s.terminating[k].T = W.loads.tension(s.terminating_index[k]);
+  }
+  W.lambda = lambda;
+}
+
+bool disk_point_loads(const VcWorkspace::Impl& W, int i, int j, double* y) {
+  const TendonRouting& rt = W.model->routing();
+  const cosserat::Section& S = W.section;
+  const int nseg = static_cast<int>(W.segments.size());
+  const SegmentLoads& seg = W.segments[i];
+  const int last = rt.segment_end_disk[i];
+  const bool terminates = j == last && !seg.terminating.empty();
+  const bool weighted = W.loads.has_disk_weight() && W.loads.disk_weight(j).squaredNorm() > 0.0;
+  if (!terminates && !weighted) return true;
+  // Point loads at disk j, with u, v just proximal of it.
+  const Mat3 R = cosserat::rotation(static_cast<const double*>(y));
+  const Vec3 u = S.curvature(R, cosserat::moment(y));
+  const Vec3 v = S.strain(R, cosserat::force(y));
+  if (terminates) {
+    // Eq. 40-41: tendon termination forces F_k = -T_k R t_k at p + R r_k.
+    Vec3 dn = Vec3::Zero(), dm = Vec3::Zero();
+    for (const cosserat::TendonLoad& t : seg.terminating) {
+      const Vec3 q = physics::tendon_tangent(v, u, t.r);
+      const Vec3 F = -(t.T / q.norm()) * (R * q);
+      dn += F;
+      dm += (R * t.r).cross(F);
+    }
+    cosserat::force(y) -= dn;
+    cosserat::moment(y) -= dm;
+  }
+  if (weighted) cosserat::force(y) -= W.loads.disk_weight(j);
+  // Kinks: the point loads make u, v jump, so every tensioned tendon continuing past disk j
+  // changes direction there and pulls on the backbone with T_k R (t_k+ - t_k-) at p + R r_k.
+  // t_k+ depends on the wrench after the kink: fixed-point iteration (its contraction factor is
+  // about T r^2 / EI, small for any sane tension).
+  const std::vector<cosserat::TendonLoad>* cont = nullptr;
+  if (j < last)
+    cont = &seg.tendons;
+  else if (i + 1 < nseg)
+    cont = &W.segments[i + 1].tendons;
+  if (!W.model->options().kink_forces || !cont || cont->empty()) return true;
+  const Vec3 n_base = cosserat::force(y), m_base = cosserat::moment(y);
+  Vec3 np = n_base, mp = m_base;
+  bool settled = false;
+  for (int it = 0; it < 100 && !settled; ++it) {
+    const Vec3 up = S.curvature(R, mp);
+    const Vec3 vp = S.strain(R, np);
+    Vec3 dn = Vec3::Zero(), dm = Vec3::Zero();
+    for (const cosserat::TendonLoad& t : *cont) {
+      const Vec3 qm = physics::tendon_tangent(v, u, t.r);
+      const Vec3 qp = physics::tendon_tangent(vp, up, t.r);
+      const Vec3 K = t.T * (R * (qp / qp.norm() - qm / qm.norm()));
+      dn += K;
+      dm += (R * t.r).cross(K);
+    }
+    const Vec3 n_new = n_base - dn, m_new = m_base - dm;
+    settled = (n_new - np).norm() <= 1e-15 * W.loads.force_scale() &&
+              (m_new - mp).norm() <= 1e-15 * W.loads.moment_scale();
+    np = n_new;
+    mp = m_new;
+  }
+  if (!settled) return false;
+  cosserat::force(y) = np;
+  cosserat::moment(y) = mp;
+  return true;
+}
+
+bool shoot(VcWorkspace::Impl& W, bvp::Integrator& integ, TendonRod& rod, const Vec6& x, Vec6& res,
+           const Record* rec) {
+  double* y = W.y.data();
+  const int dim = rod.dimension();
+  for (int i = 0; i < dim; ++i) y[i] = 0.0;
+  cosserat::rotation(y) = Mat3::Identity();
+  cosserat::force(y) = x.head<3>();
+  cosserat::moment(y) = x.tail<3>();
+  const TendonRouting& rt = W.model->routing();
+  if (rec) {
+    rec->frames->push_back(Frame{});
+    rec->samples->push_back(BackboneSample{0.0, Frame{}, x.head<3>(), x.tail<3>()});
+  }
+  const int nseg = static_cast<int>(W.segments.size());
+  const int K = W.tendon_count;
+  for (int i = 0; i < nseg; ++i) {
+    rod.set(W.segments[i]);
+    const int last = rt.segment_end_disk[i];
+    const int first = i == 0 ? 1 : rt.segment_end_disk[i - 1] + 1;
+    for (int j = first; j <= last; ++j) {
+      if (!integ.integrate(rod, rt.disk_s[j - 1], rt.disk_s[j], y)) return false;
+      if (!disk_point_loads(W, i, j, y)) return false;
+      if (rec) {
+        const Frame f = cosserat::frame_of(y);
+        rec->frames->push_back(f);
+        rec->samples->push_back(BackboneSample{rt.disk_s[j], f, Vec3(cosserat::force(y)), Vec3(cosserat::moment(y))});
+      }
+    }
+    if (rec && rec->segment_end_lengths && dim > cosserat::kStateSize)
+      for (int k = 0; k < K; ++k) (*rec->segment_end_lengths)[i * K + k] = y[cosserat::kStateSize + k];
+  }
+  res.head<3>() = cosserat::force(y);
+  res.tail<3>() = cosserat::moment(y);
+  if (W.loads.has_tip_wrench()) {
+    res.head<3>() -= W.loads.tip_force();
+    res.tail<3>() -= W.loads.tip_moment();
+  }
+  return res.allFinite();
+}
+
+void tendon_displacements(const VcWorkspace::Impl& W, const std::vector<double>& lengths,
+                          std::vector<double>& displacements) {
+  const TendonRouting& rt = W.model->routing();
+  const int K = W.tendon_count;
+  displacements.assign(K, 0.0);
+  for (const RoutedTendon& t : rt.tendons) {
+    double straight = rt.disk_s[t.end_disk];
+    double len = lengths[t.segment * K + t.index];
+    if (W.per_segment && t.segment > 0) {
+      straight -= rt.segment_end_s[t.segment - 1];
+      len -= lengths[(t.segment - 1) * K + t.index];
+    }
+    displacements[t.index] = straight - len;
+  }
+}
+
+}  // namespace vc
+
+}  // namespace tdcr

@@ -1,0 +1,84 @@
+// Private to models/vc: a VC workspace bound to one input, and what both formulations share
+// (the loads at the current load factor, the disk point loads, a shot from the base, the tendon
+// displacements).
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "common/model_problem.hpp"
+#include "physics/load_case.hpp"
+#include "tdcr/bvp/integrator.hpp"
+#include "tdcr/models/cosserat_rod.hpp"
+#include "tdcr/models/vc.hpp"
+#include "vc/vc_rhs.hpp"
+
+namespace tdcr {
+
+using Vec6 = Eigen::Matrix<double, 6, 1>;
+
+struct VcWorkspace::Impl {
+  explicit Impl(const VcModel& model);
+  ~Impl();
+
+  // The bound input (bind_input), its loads at load factor `lambda` (set_load_factor).
+  const VcModel* model = nullptr;  ///< The owner, while a solve runs.
+  physics::LoadCase loads;
+  cosserat::Section section;              ///< Backbone weight at the current load factor.
+  std::vector<vc::SegmentLoads> segments;  ///< One per segment, never resized (rods point in).
+  double lambda = 1.0;
+  bool per_segment = false;  ///< DisplacementConvention::PerSegment.
+  int tendon_count = 0;
+
+  // Integration, rebuilt when the integration options change.
+  SolverOptions integration;
+  std::unique_ptr<bvp::Integrator> shot_integrator;
+  std::unique_ptr<bvp::Integrator> final_integrator;  ///< Null with CVODE (lengths in every shot).
+  long retired_rhs = 0;                               ///< Evaluations of replaced integrators.
+  std::unique_ptr<vc::TendonRod> shot_rod;            ///< Lengths only with CVODE.
+  std::unique_ptr<vc::TendonRod> final_rod;           ///< With lengths.
+  Eigen::VectorXd y;                                  ///< 18 + tendon_count.
+  std::vector<double> segment_lengths;                ///< [segment * tendon_count + k] at segment ends.
+
+  // The formulations, built on first use.
+  std::unique_ptr<detail::ModelProblem> single;
+  std::unique_ptr<detail::ModelProblem> multiple;
+
+  bool lengths_in_shots() const { return !final_integrator; }
+  bvp::Integrator& final_pass_integrator() { return final_integrator ? *final_integrator : *shot_integrator; }
+};
+
+namespace vc {
+
+/// What a shot records.
+struct Record {
+  std::vector<Frame>* frames = nullptr;
+  std::vector<BackboneSample>* samples = nullptr;
+  std::vector<double>* segment_end_lengths = nullptr;  ///< [segment * K + k]; needs length states.
+};
+
+/// Bind the workspace to `input` and `options`: loads at load factor 1, section, integrators.
+void bind_input(VcWorkspace::Impl& W, const VcModel& model, const ModelInput& input, const SolverOptions& options);
+/// Scale every load by `lambda` (allocation-free).
+void set_load_factor(VcWorkspace::Impl& W, double lambda);
+/// Point loads at disk j, the end of an interval of segment i, applied to the rod state y (its
+/// first 18 values): tendon terminations (Eq. 40-41), the disk's weight and the kink forces of
+/// passing tendons. False if the kink fixed-point iteration did not settle.
+bool disk_point_loads(const VcWorkspace::Impl& W, int i, int j, double* y);
+/// One shot from the base with unknowns x = (n(0), m(0)) through W.y: false if the integration
+/// failed, else `res` = (n(L+) - F_tip, m(L+) - M_tip).
+bool shoot(VcWorkspace::Impl& W, bvp::Integrator& integrator, TendonRod& rod, const Vec6& x, Vec6& res,
+           const Record* rec);
+/// Tendon displacements (Eq. 56) from the tendon lengths at every segment end.
+void tendon_displacements(const VcWorkspace::Impl& W, const std::vector<double>& segment_lengths,
+                          std::vector<double>& displacements);
+
+/// The formulations (vc_single_shooting.cpp, vc_multiple_shooting.cpp) on a workspace.
+std::unique_ptr<detail::ModelProblem> make_single_shooting(VcWorkspace::Impl& W);
+std::unique_ptr<detail::ModelProblem> make_multiple_shooting(VcWorkspace::Impl& W);
+
+}  // namespace vc
+
+}  // namespace tdcr

@@ -1,0 +1,180 @@
+// VC by single shooting: unknowns n(0), m(0), residual the tip wrench (vc.hpp).
+#include "tdcr/bvp/newton_solver.hpp"
+#include "vc/vc_shooting.hpp"
+
+namespace tdcr::vc {
+
+namespace {
+
+/// Bound on the scaled Newton step (KINSOL mxnewtstep): by global equilibrium |n(0)| <= F_s and
+/// |m(0)| <~ M_s, so the solution lies within a scaled distance of about sqrt(6) of the origin;
+/// longer steps only overshoot into strongly coiled shapes (where RK4 fails or a wrong
+/// equilibrium waits).
+constexpr double kMaxNewtonStep = 1.0;
+
+/// The shooting residual as Newton sees it; its parameter is the load factor.
+class ShootingSystem final : public bvp::ParameterizedSystem {
+ public:
+  explicit ShootingSystem(VcWorkspace::Impl& W) : W_(W) {}
+  int size() const override { return 6; }
+  bool residual(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> f) override {
+    const Vec6 xx = x;
+    Vec6 r;
+    if (!shoot(W_, *W_.shot_integrator, *W_.shot_rod, xx, r, nullptr)) return false;
+    f = r;
+    return true;
+  }
+  // Forward-difference Jacobian by the solver (6 extra shots), with increments
+  // sqrt(max(eps, relative_noise)): sqrt(eps) for RK4, sqrt(rtol) for CVODE.
+  double relative_noise() const override { return W_.shot_integrator->relative_noise(); }
+  void residual_scale(Eigen::Ref<Eigen::VectorXd> s) const override {
+    s.head<3>().setConstant(1.0 / W_.loads.force_scale());
+    s.tail<3>().setConstant(1.0 / W_.loads.moment_scale());
+  }
+  void unknown_scale(Eigen::Ref<Eigen::VectorXd> s) const override { residual_scale(s); }
+  void set_parameter(double lambda) override { set_load_factor(W_, lambda); }
+
+ private:
+  VcWorkspace::Impl& W_;
+};
+
+class SingleShooting final : public detail::ModelProblem {
+ public:
+  explicit SingleShooting(VcWorkspace::Impl& W) : W_(W), system_(W) {}
+  bvp::ParameterizedSystem* system() override { return &system_; }
+  bvp::NewtonSolver& newton() override { return newton_; }
+  void adjust(bvp::NewtonOptions& options) const override { options.max_newton_step = kMaxNewtonStep; }
+  void cold_guess(Eigen::VectorXd& x) override { x = guess(W_.model->options().initial_guess); }
+  bool alternative_guess(Eigen::VectorXd& x) override {
+    // The equilibrium guess overestimates the lever of tip forces on strongly bent robots,
+    // zeros ignore the tendons.
+    x = guess(W_.model->options().initial_guess == VcInitialGuess::Equilibrium ? VcInitialGuess::Zero
+                                                                               : VcInitialGuess::Equilibrium);
+    return true;
+  }
+  // The unloaded robot is straight: n = m = 0 exactly.
+  void rest_state(Eigen::VectorXd& x) override { x = Eigen::VectorXd::Zero(6); }
+  bool warm_guess(const Solution& previous, Eigen::VectorXd& x) override {
+    Vec6 r;
+    if (warm_reaction(previous, r)) {
+      x = r;
+      return true;
+    }
+    if (previous.unknowns.size() == 6 && previous.unknowns.allFinite()) {
+      x = previous.unknowns;
+      return true;
+    }
+    return false;
+  }
+  // The final pass records frames, samples and tendon lengths, and its end wrench is the residual.
+  bool final_residual(const Eigen::VectorXd& x, Eigen::Ref<Eigen::VectorXd> f) override {
+    frames_.clear();
+    samples_.clear();
+    const Record rec{&frames_, &samples_, &W_.segment_lengths};
+    Vec6 r;
+    const bool ok = shoot(W_, W_.final_pass_integrator(), *W_.final_rod, Vec6(x), r, &rec);
+    if (ok) f = r;
+    return ok;
+  }
+  void extract(const Eigen::VectorXd&, bool evaluated, Solution& sol) override {
+    sol.tensions = W_.loads.full_tensions();
+    if (!evaluated) {
+      if (sol.summary.converged()) {
+        sol.summary.termination = TerminationType::IntegrationFailed;
+        sol.summary.message += "; the final pass at the solution failed to integrate";
+      }
+      return;
+    }
+    sol.disk_frames = frames_;
+    sol.backbone = samples_;
+    tendon_displacements(W_, W_.segment_lengths, sol.tendon_displacements);
+  }
+  std::string integrator_name() const override { return W_.shot_integrator->name(); }
+
+ private:
+  // The cold-start guess at load factor 1 (VcInitialGuess).
+  Vec6 guess(VcInitialGuess which) const {
+    Vec6 x = Vec6::Zero();
+    if (which == VcInitialGuess::Zero) return x;
+    const physics::LoadCase& L = W_.loads;
+    const TendonRouting& rt = W_.model->routing();
+    const double length = W_.model->robot().total_length();
+    double sum_T = 0.0;
+    Vec3 tm = Vec3::Zero();
+    for (const RoutedTendon& t : rt.tendons) {
+      const double T = L.tension(t.index);
+      sum_T += T;
+      tm += T * Vec3::UnitZ().cross(t.r);
+    }
+    // Weights of the straight robot and their moments about the base.
+    Vec3 weight = Vec3::Zero(), weight_moment = Vec3::Zero();
+    if (L.has_disk_weight())
+      for (int j = 1; j < rt.disk_count(); ++j) {
+        weight += L.disk_weight(j);
+        weight_moment += (rt.disk_s[j] * Vec3::UnitZ()).cross(L.disk_weight(j));
+      }
+    if (L.has_backbone_weight()) {
+      weight += length * L.backbone_weight();
+      weight_moment += (0.5 * length * length * Vec3::UnitZ()).cross(L.backbone_weight());
+    }
+    x.head<3>() = L.tip_force() + weight - sum_T * Vec3::UnitZ();
+    x.tail<3>() = L.tip_moment() + (length * Vec3::UnitZ()).cross(L.tip_force()) + weight_moment + tm;
+    return x;
+  }
+
+  // The base reaction of the previous shape under the bound loads (VcModel's warm start).
+  bool warm_reaction(const Solution& previous, Vec6& x) const {
+    const physics::LoadCase& L = W_.loads;
+    const TendonRouting& rt = W_.model->routing();
+    const cosserat::Section& S = W_.section;
+    const int nd = rt.disk_count();
+    if (static_cast<int>(previous.disk_frames.size()) != nd || static_cast<int>(previous.backbone.size()) != nd)
+      return false;
+    // Tendon directions at the base from the previous strains (R(0) = I).
+    const Vec3 u0 = S.curvature(Mat3::Identity(), previous.backbone[0].m);
+    const Vec3 v0 = S.strain(Mat3::Identity(), previous.backbone[0].n);
+    Vec3 n = L.tip_force(), m = L.tip_moment() + previous.disk_frames.back().p.cross(L.tip_force());
+    for (const RoutedTendon& t : rt.tendons) {
+      const double T = L.tension(t.index);
+      if (T <= 0.0) continue;
+      const Vec3 pull = T * (v0 + u0.cross(t.r)).normalized();  // the tendon's pull on the robot at the base
+      n -= pull;
+      m -= t.r.cross(pull);
+    }
+    if (L.has_disk_weight())
+      for (int j = 1; j < nd; ++j) {
+        n += L.disk_weight(j);
+        m += previous.disk_frames[j].p.cross(L.disk_weight(j));
+      }
+    if (L.has_backbone_weight()) {
+      // Integral of p over the backbone: trapezoid between disks with the end correction
+      // h^2/12 (p'(a) - p'(b)), p' ~ R e_z (fourth order, Euler-Maclaurin).
+      Vec3 integral = Vec3::Zero();
+      for (int j = 1; j < nd; ++j) {
+        const Frame& a = previous.disk_frames[j - 1];
+        const Frame& b = previous.disk_frames[j];
+        const double h = rt.disk_s[j] - rt.disk_s[j - 1];
+        integral += 0.5 * h * (a.p + b.p) + (h * h / 12.0) * (a.R.col(2) - b.R.col(2));
+      }
+      n += W_.model->robot().total_length() * L.backbone_weight();
+      m += integral.cross(L.backbone_weight());
+    }
+    x.head<3>() = n;
+    x.tail<3>() = m;
+    return x.allFinite();
+  }
+
+  VcWorkspace::Impl& W_;
+  ShootingSystem system_;
+  bvp::NewtonSolver newton_;
+  std::vector<Frame> frames_;
+  std::vector<BackboneSample> samples_;
+};
+
+}  // namespace
+
+std::unique_ptr<detail::ModelProblem> make_single_shooting(VcWorkspace::Impl& W) {
+  return std::make_unique<SingleShooting>(W);
+}
+
+}  // namespace tdcr::vc
