@@ -21,9 +21,9 @@ namespace tdcr {
 namespace {
 
 Solution run(const Scene& scene, const Solution* warm = nullptr) {
-  VcrefModel model(scene);
+  VcrefModel model(scene.robot, scene.effects);
   auto ws = model.make_workspace();
-  return model.solve(*ws, warm);
+  return tdcr::solve(model, *ws, scene.input(), scene.solver, warm);
 }
 
 double angle_deg(const Mat3& A, const Mat3& B) { return lie::rotation_angle(A, B) * 180.0 / M_PI; }
@@ -241,7 +241,7 @@ TEST(Vcref, SparseJacobianMatchesFiniteDifferences) {
     s.robot.backbone.density = 8000.0;
     for (auto& seg : s.robot.segments) seg.disk_mass = 0.002;
     s.loads.gravity = Vec3(0.0, -9.81, -3.0);
-    VcrefModel model(s);
+    VcrefModel model(s.robot, s.effects);
     auto ws = model.make_workspace();
     // Unknown scales (vcref.hpp): positions L, rotations 1, forces F_s, moments F_s L.
     double weight = 0.0;
@@ -258,15 +258,15 @@ TEST(Vcref, SparseJacobianMatchesFiniteDifferences) {
       cs[i] = k < 3 ? 0.1 : k < 6 ? 1.0 : k < 9 ? Fs : Fs * 0.1;
     }
     for (double pert : {0.0, 0.05}) {
-      const bvp::JacobianCheck c = model.check_jacobian(*ws, nullptr, pert);
+      const bvp::JacobianCheck c = model.check_jacobian(*ws, s.input(), s.solver, nullptr, pert);
       ASSERT_TRUE(c.evaluated);
       EXPECT_LT(row_relative_error(c, cs), 1e-5) << "perturbation " << pert;
       // The pattern is not too sparse: a dropped entry would be 0 in the analytic matrix.
       EXPECT_GT(c.analytic.cwiseAbs().maxCoeff(), 0.0);
     }
-    const Solution sol = model.solve(*ws);
+    const Solution sol = tdcr::solve(model, *ws, s.input(), s.solver);
     ASSERT_TRUE(sol.converged()) << sol.summary.message;
-    const bvp::JacobianCheck c = model.check_jacobian(*ws, &sol, 0.0);
+    const bvp::JacobianCheck c = model.check_jacobian(*ws, s.input(), s.solver, &sol, 0.0);
     EXPECT_LT(row_relative_error(c, cs), 1e-5);
   }
 }
@@ -386,19 +386,18 @@ TEST(Vcref, GlobalEquilibriumThreeSegments) {
 // Warm start from the answer: converged at once, same shape; and with a nearby load.
 TEST(Vcref, WarmStart) {
   Scene s = loaded_scene(10);
-  VcrefModel model(s);
+  VcrefModel model(s.robot, s.effects);
   auto ws = model.make_workspace();
-  const Solution cold = model.solve(*ws);
+  const Solution cold = tdcr::solve(model, *ws, s.input(), s.solver);
   ASSERT_TRUE(cold.converged());
-  const Solution warm = model.solve(*ws, &cold);
+  const Solution warm = tdcr::solve(model, *ws, s.input(), s.solver, &cold);
   ASSERT_TRUE(warm.converged());
   EXPECT_LE(warm.summary.iterations, 1);
   EXPECT_LT((warm.tip().p - cold.tip().p).norm(), 1e-11);
   Scene s2 = s;
   s2.actuation.values[0] *= 1.05;
-  VcrefModel model2(s2);
-  const Solution w2 = model2.solve(*ws, &cold);
-  const Solution c2 = model2.solve(*ws);
+  const Solution w2 = tdcr::solve(model, *ws, s2.input(), s2.solver, &cold);
+  const Solution c2 = tdcr::solve(model, *ws, s2.input(), s2.solver);
   ASSERT_TRUE(w2.converged() && c2.converged());
   EXPECT_LT(w2.summary.iterations, c2.summary.iterations);
   EXPECT_LT((w2.tip().p - c2.tip().p).norm(), 1e-10);
@@ -408,8 +407,10 @@ TEST(Vcref, WarmStart) {
 TEST(Vcref, RejectsDisplacementInput) {
   Scene s = paper::scene(3, 2);
   s.actuation.kind = Actuation::Kind::Displacements;
+  VcrefModel m(s.robot, s.effects);
+  auto ws = m.make_workspace();
   try {
-    VcrefModel m(s);
+    tdcr::solve(m, *ws, s.input(), s.solver);
     FAIL() << "no exception";
   } catch (const InputError& e) {
     EXPECT_EQ(e.field(), "actuation.kind");
@@ -471,11 +472,11 @@ Scene scaled_loads(const Scene& s0, double factor) {
 // each solve warm-started from the last (a warm start never loads from rest by itself).
 Solution fine_loading_path(const Scene& scene, int steps) {
   Solution prev;
+  VcrefModel model(scene.robot, scene.effects);
+  auto ws = model.make_workspace();
   for (int k = 1; k <= steps; ++k) {
     const Scene s = scaled_loads(scene, static_cast<double>(k) / steps);
-    VcrefModel model(s);
-    auto ws = model.make_workspace();
-    Solution sol = model.solve(*ws, k > 1 ? &prev : nullptr);
+    Solution sol = tdcr::solve(model, *ws, s.input(), s.solver, k > 1 ? &prev : nullptr);
     EXPECT_TRUE(sol.converged()) << "step " << k << ": " << sol.summary.message;
     if (!sol.converged()) return sol;
     EXPECT_EQ(sol.summary.continuation_steps, 0) << "step " << k;
@@ -488,10 +489,10 @@ Solution fine_loading_path(const Scene& scene, int steps) {
 Solution direct_cold(const Scene& s) {
   VcrefOptions o;
   o.load_threshold = o.compression_threshold = std::numeric_limits<double>::infinity();
-  VcrefModel model(s, o);
-  EXPECT_FALSE(model.loads_from_rest());
+  VcrefModel model(s.robot, s.effects, o);
+  EXPECT_FALSE(model.loads_from_rest(s.input()));
   auto ws = model.make_workspace();
-  return model.solve(*ws);
+  return tdcr::solve(model, *ws, s.input(), s.solver);
 }
 
 // The long soft robot under gravity of the hard-case suite (case 14: 3 x 0.2 m, E = 1e9 Pa,
@@ -505,11 +506,11 @@ Scene long_soft_robot(double gravity_fraction) { return test_scenes::long_soft_r
 
 TEST(VcrefLargeLoads, LongSoftRobotUnderGravityFollowsTheLoadingPath) {
   const Scene s = long_soft_robot(0.03);
-  VcrefModel model(s);
-  EXPECT_NEAR(model.load_parameter(), 26.06, 0.01);
-  EXPECT_TRUE(model.loads_from_rest());
+  VcrefModel model(s.robot, s.effects);
+  EXPECT_NEAR(model.load_parameter(s.input()), 26.06, 0.01);
+  EXPECT_TRUE(model.loads_from_rest(s.input()));
   auto ws = model.make_workspace();
-  const Solution sol = model.solve(*ws);
+  const Solution sol = tdcr::solve(model, *ws, s.input(), s.solver);
   ASSERT_TRUE(sol.converged()) << sol.summary.message;
   EXPECT_GT(sol.summary.continuation_steps, 0);
   const Solution ref = fine_loading_path(s, 200);
@@ -537,13 +538,13 @@ TEST(VcrefLargeLoads, PaperRobotUnderCompressiveTipForceFollowsTheLoadingPath) {
   for (int c : {1, 2}) {
     Scene s = paper::scene(10, c);
     s.loads.tip_force = Vec3(2.0, 0.0, -2.0);
-    VcrefModel model(s);
+    VcrefModel model(s.robot, s.effects);
     const double EI = s.robot.backbone.effective_stiffness().EI;
-    EXPECT_NEAR(model.load_parameter(), 0.01 * std::sqrt(8.0) / EI, 1e-9);
-    EXPECT_NEAR(model.compression_parameter(), 0.01 * 2.0 / EI, 1e-9);
-    EXPECT_TRUE(model.loads_from_rest());
+    EXPECT_NEAR(model.load_parameter(s.input()), 0.01 * std::sqrt(8.0) / EI, 1e-9);
+    EXPECT_NEAR(model.compression_parameter(s.input()), 0.01 * 2.0 / EI, 1e-9);
+    EXPECT_TRUE(model.loads_from_rest(s.input()));
     auto ws = model.make_workspace();
-    const Solution sol = model.solve(*ws);
+    const Solution sol = tdcr::solve(model, *ws, s.input(), s.solver);
     ASSERT_TRUE(sol.converged()) << sol.summary.message;
     const Solution ref = fine_loading_path(s, 200);
     ASSERT_TRUE(ref.converged());
@@ -571,18 +572,18 @@ TEST(VcrefLargeLoads, PaperRobotUnderCompressiveTipForceFollowsTheLoadingPath) {
 // first, and the thresholds are validated.
 TEST(VcrefLargeLoads, RuleDecidedOnceFromExternalLoads) {
   Scene s = paper::scene(10, 16);  // all four tendons at T_M
-  EXPECT_EQ(VcrefModel(s).load_parameter(), 0.0);
-  EXPECT_FALSE(VcrefModel(s).loads_from_rest());
+  EXPECT_EQ(VcrefModel(s.robot, s.effects).load_parameter(s.input()), 0.0);
+  EXPECT_FALSE(VcrefModel(s.robot, s.effects).loads_from_rest(s.input()));
   const double tm = paper::max_tension(s.robot);
   const double EI = s.robot.backbone.effective_stiffness().EI;
   const double linear = 1e-3 * 1e-3 / (3 * EI);  // F L^3 / 3 EI of a 1 mN tip force alone
   for (double k : {3.0, 30.0}) {
     s.actuation.values.assign(4, k * tm);
     s.loads.tip_force = Vec3(1e-3, 0, 0);
-    VcrefModel m(s);
-    EXPECT_FALSE(m.loads_from_rest());
+    VcrefModel m(s.robot, s.effects);
+    EXPECT_FALSE(m.loads_from_rest(s.input()));
     auto ws = m.make_workspace();
-    const Solution sol = m.solve(*ws);
+    const Solution sol = tdcr::solve(m, *ws, s.input(), s.solver);
     ASSERT_TRUE(sol.converged()) << sol.summary.message;
     const Solution ref = fine_loading_path(s, 20);
     ASSERT_TRUE(ref.converged());
@@ -596,25 +597,25 @@ TEST(VcrefLargeLoads, RuleDecidedOnceFromExternalLoads) {
   }
   Scene sc2 = paper::scene(10, 2);
   sc2.loads.tip_force = Vec3(0.5, 0, 0);  // scenario 2, f = 1: L^2 F / EI = 1.18
-  EXPECT_FALSE(VcrefModel(sc2).loads_from_rest());
+  EXPECT_FALSE(VcrefModel(sc2.robot, sc2.effects).loads_from_rest(sc2.input()));
   const Scene heavy = long_soft_robot(1.0);
-  VcrefModel m(heavy);
-  EXPECT_NEAR(m.load_parameter(), 868.6, 0.1);
+  VcrefModel m(heavy.robot, heavy.effects);
+  EXPECT_NEAR(m.load_parameter(heavy.input()), 868.6, 0.1);
   auto ws = m.make_workspace();
-  const Solution cold = m.solve(*ws);
+  const Solution cold = tdcr::solve(m, *ws, heavy.input(), heavy.solver);
   ASSERT_TRUE(cold.converged()) << cold.summary.message;
   EXPECT_GT(cold.summary.continuation_steps, 0);
   EXPECT_LT(cold.tip().p.y(), -0.55);  // hangs (-0.588 m)
-  const Solution warm = m.solve(*ws, &cold);
+  const Solution warm = tdcr::solve(m, *ws, heavy.input(), heavy.solver, &cold);
   ASSERT_TRUE(warm.converged());
   EXPECT_EQ(warm.summary.continuation_steps, 0);
   EXPECT_LE(warm.summary.iterations, 1);
   VcrefOptions bad;
   bad.load_threshold = 0.0;
-  EXPECT_THROW(VcrefModel(heavy, bad), InputError);
+  EXPECT_THROW(VcrefModel(heavy.robot, heavy.effects, bad), InputError);
   bad = VcrefOptions();
   bad.compression_threshold = std::nan("");
-  EXPECT_THROW(VcrefModel(heavy, bad), InputError);
+  EXPECT_THROW(VcrefModel(heavy.robot, heavy.effects, bad), InputError);
 }
 
 }  // namespace

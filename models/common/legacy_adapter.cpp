@@ -83,9 +83,6 @@ std::unique_ptr<StaticModel> make_prb_model(const Robot& r, const Effects& e) {
 std::unique_ptr<StaticModel> make_vc_model(const Robot& r, const Effects& e) {
   return std::make_unique<LegacyModelAdapter>(ModelKind::VC, r, e, make_legacy_vc_model);
 }
-std::unique_ptr<StaticModel> make_vcref_model(const Robot& r, const Effects& e) {
-  return std::make_unique<LegacyModelAdapter>(ModelKind::VCref, r, e, make_legacy_vcref_model);
-}
 }  // namespace detail
 
 }  // namespace tdcr

@@ -20,5 +20,4 @@ std::unique_ptr<LegacyStaticModel> make_legacy_cc_model(const Scene& scene);
 std::unique_ptr<LegacyStaticModel> make_legacy_ccsub_model(const Scene& scene);
 std::unique_ptr<LegacyStaticModel> make_legacy_prb_model(const Scene& scene);
 std::unique_ptr<LegacyStaticModel> make_legacy_vc_model(const Scene& scene);
-std::unique_ptr<LegacyStaticModel> make_legacy_vcref_model(const Scene& scene);
 }  // namespace tdcr::detail
