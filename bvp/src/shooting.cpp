@@ -46,9 +46,53 @@ int last_junction(int k, int n, int c) { return std::min(n - 1, k + 1 + c); }
 
 }  // namespace
 
-ShootingSystem::ShootingSystem(ShootingProblem& problem, Integrator& integrator)
-    : ShootingSystem(static_cast<const ShootingProblem&>(problem), integrator) {
-  mutable_problem_ = &problem;
+std::shared_ptr<const ShootingStructure> ShootingStructure::of(const ShootingProblem& problem) {
+  const int m = problem.state_dimension(), n = problem.intervals(), c = problem.coupling();
+  if (m < 1) throw std::invalid_argument("ShootingSystem: state dimension must be >= 1");
+  if (n < 1) throw std::invalid_argument("ShootingSystem: need at least one interval");
+  if (c < 0) throw std::invalid_argument("ShootingSystem: coupling must be >= 0");
+  auto s = std::make_shared<ShootingStructure>();
+  s->offset.assign(n + 1, 0);
+  for (int k = 0; k < n; ++k) {
+    const int d = problem.unknown_dimension(k);
+    if (d < 0 || d > m)
+      throw std::invalid_argument("ShootingSystem: node " + std::to_string(k) + " has " + std::to_string(d) +
+                                  " unknowns, expected 0.." + std::to_string(m));
+    s->offset[k + 1] = s->offset[k] + d;
+  }
+  const std::vector<int>& off = s->offset;
+  const int size = off[n];
+  s->row_block.resize(size);
+  for (int b = 0; b < n; ++b) std::fill(s->row_block.begin() + off[b], s->row_block.begin() + off[b + 1], b);
+  // Column (k, j) holds the rows of every block reading node k that depend on unknown j, in
+  // CSC order directly (blocks visited in ascending order, rows ascending within a block).
+  SparsityPattern& p = s->pattern;
+  p.rows = p.cols = size;
+  p.col_ptr.assign(1, 0);
+  p.col_ptr.reserve(size + 1);
+  auto add_rows = [&](int b, int k, int j) {
+    const std::pair<int, int> r = problem.dependent_rows(b, k, j);
+    const int rows = off[b + 1] - off[b];
+    for (int q = std::max(0, r.first); q < std::min(rows, r.second); ++q) p.row_idx.push_back(off[b] + q);
+  };
+  for (int k = 0; k < n; ++k)
+    for (int j = 0; j < off[k + 1] - off[k]; ++j) {
+      if (boundary_reads(k, n, c)) add_rows(0, k, j);
+      for (int b = first_junction(k, c); b <= last_junction(k, n, c); ++b) add_rows(b, k, j);
+      p.col_ptr.push_back(static_cast<int>(p.row_idx.size()));
+    }
+  return s;
+}
+
+ShootingSystem::ShootingSystem(ShootingProblem& problem, Integrator& integrator,
+                               std::shared_ptr<const ShootingStructure> structure)
+    : problem_(problem),
+      mutable_problem_(&problem),
+      integrator_(&integrator),
+      m_(problem.state_dimension()),
+      n_(problem.intervals()),
+      structure_(structure ? std::move(structure) : ShootingStructure::of(problem)) {
+  check_problem();
 }
 
 ShootingSystem::ShootingSystem(const ShootingProblem& problem, Integrator& integrator)
@@ -56,30 +100,27 @@ ShootingSystem::ShootingSystem(const ShootingProblem& problem, Integrator& integ
       integrator_(&integrator),
       m_(problem.state_dimension()),
       n_(problem.intervals()),
-      c_(problem.coupling()) {
-  if (m_ < 1) throw std::invalid_argument("ShootingSystem: state dimension must be >= 1");
-  if (n_ < 1) throw std::invalid_argument("ShootingSystem: need at least one interval");
-  if (c_ < 0) throw std::invalid_argument("ShootingSystem: coupling must be >= 0");
-  offset_.assign(n_ + 1, 0);
+      structure_(ShootingStructure::of(problem)) {
+  check_problem();
+}
+
+void ShootingSystem::check_problem() {
+  offset_ = structure_->offset.data();
+  if (static_cast<int>(structure_->offset.size()) != n_ + 1)
+    throw std::invalid_argument("ShootingSystem: the structure is of another problem");
   for (int k = 0; k < n_; ++k) {
-    if (problem.ode(k).dimension() != m_)
+    if (problem_.ode(k).dimension() != m_)
       throw std::invalid_argument("ShootingSystem: ODE of interval " + std::to_string(k) +
-                                  " has dimension " + std::to_string(problem.ode(k).dimension()) +
+                                  " has dimension " + std::to_string(problem_.ode(k).dimension()) +
                                   ", expected " + std::to_string(m_));
-    const double a = problem.node(k), b = problem.node(k + 1);
+    const double a = problem_.node(k), b = problem_.node(k + 1);
     if (!std::isfinite(a) || !std::isfinite(b) || a == b ||
-        (k > 0 && (b - a) * (problem.node(1) - problem.node(0)) < 0.0))
+        (k > 0 && (b - a) * (problem_.node(1) - problem_.node(0)) < 0.0))
       throw std::invalid_argument("ShootingSystem: nodes must be finite and strictly monotone");
-    const int d = problem.unknown_dimension(k);
-    if (d < 0 || d > m_)
-      throw std::invalid_argument("ShootingSystem: node " + std::to_string(k) + " has " + std::to_string(d) +
-                                  " unknowns, expected 0.." + std::to_string(m_));
-    offset_[k + 1] = offset_[k] + d;
+    if (offset_[k + 1] - offset_[k] != problem_.unknown_dimension(k))
+      throw std::invalid_argument("ShootingSystem: the structure is of another problem");
   }
   size_ = offset_[n_];
-  row_block_.resize(size_);
-  for (int b = 0; b < n_; ++b) std::fill(row_block_.begin() + offset_[b], row_block_.begin() + offset_[b + 1], b);
-  build_pattern();
   const size_t total = static_cast<size_t>(n_) * m_;
   x_.assign(size_, 0.0);
   starts_.assign(total, 0.0);
@@ -99,26 +140,6 @@ void ShootingSystem::refresh_scale() const {
     problem_.unknown_scale(k, sbuf_.data());
     std::copy(sbuf_.begin(), sbuf_.begin() + (offset_[k + 1] - offset_[k]), scale_.begin() + offset_[k]);
   }
-}
-
-// Column (k, j) holds the rows of every block reading node k that depend on unknown j, in CSC
-// order directly (blocks visited in ascending order, rows ascending within a block).
-void ShootingSystem::build_pattern() {
-  pattern_.rows = pattern_.cols = size_;
-  pattern_.col_ptr.assign(1, 0);
-  pattern_.col_ptr.reserve(size_ + 1);
-  pattern_.row_idx.clear();
-  auto add_rows = [&](int b, int k, int j) {
-    const std::pair<int, int> r = problem_.dependent_rows(b, k, j);
-    const int rows = offset_[b + 1] - offset_[b];
-    for (int q = std::max(0, r.first); q < std::min(rows, r.second); ++q) pattern_.row_idx.push_back(offset_[b] + q);
-  };
-  for (int k = 0; k < n_; ++k)
-    for (int j = 0; j < offset_[k + 1] - offset_[k]; ++j) {
-      if (boundary_reads(k, n_, c_)) add_rows(0, k, j);
-      for (int b = first_junction(k, c_); b <= last_junction(k, n_, c_); ++b) add_rows(b, k, j);
-      pattern_.col_ptr.push_back(static_cast<int>(pattern_.row_idx.size()));
-    }
 }
 
 void ShootingSystem::eval_block(int block, const ShootingNodes& nodes, double* r) const {
@@ -171,43 +192,54 @@ bool ShootingSystem::sparse_jacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
   std::copy(starts_.begin(), starts_.end(), pstarts_.begin());
   std::copy(ends_.begin(), ends_.end(), pends_.begin());
   const ShootingNodes perturbed(pstarts_.data(), pends_.data(), m_, n_);
+  const SparsityPattern& pattern = structure_->pattern;
+  const int* row_block = structure_->row_block.data();
   const double noise = integrator_->relative_noise();
   for (int k = 0; k < n_; ++k) {
     const size_t off = static_cast<size_t>(k) * m_;
+    const double* y0 = starts_.data() + off;
+    const double* e0 = ends_.data() + off;
+    double* py = pstarts_.data() + off;
+    double* pe = pends_.data() + off;
     const int d = offset_[k + 1] - offset_[k];
     std::copy(x.data() + offset_[k], x.data() + offset_[k + 1], xnode_.begin());
     for (int j = 0; j < d; ++j) {
       const int col = offset_[k] + j;
-      if (pattern_.col_ptr[col] == pattern_.col_ptr[col + 1]) continue;
+      int idx = pattern.col_ptr[col];
+      const int end = pattern.col_ptr[col + 1];
+      if (idx == end) continue;
       const double h = problem_.increment(k, j, xnode_[j], scale_[col], noise);
       xnode_[j] = x[col] + h;
-      problem_.start_state(k, xnode_.data(), pstarts_.data() + off);
+      problem_.start_state(k, xnode_.data(), py);
       bool ok = true;
       if (problem_.shifts_end(k, j)) {
-        for (int q = 0; q < m_; ++q) pends_[off + q] = ends_[off + q] + (pstarts_[off + q] - starts_[off + q]);
+        for (int q = 0; q < m_; ++q) pe[q] = e0[q] + (py[q] - y0[q]);
       } else {
-        std::copy(pstarts_.begin() + off, pstarts_.begin() + off + m_, pends_.begin() + off);
+        for (int q = 0; q < m_; ++q) pe[q] = py[q];
         ++integrations_;
-        ok = integrator_->integrate(problem_.ode(k), problem_.node(k), problem_.node(k + 1), pends_.data() + off);
+        ok = integrator_->integrate(problem_.ode(k), problem_.node(k), problem_.node(k + 1), pe);
       }
       if (ok) {
-        // Rows of this column ascend; evaluate each block they belong to once.
+        // Rows of this column ascend, block by block: evaluate each block once.
         const double inv_h = 1.0 / h;
-        int block = -1;
-        for (int idx = pattern_.col_ptr[col]; idx < pattern_.col_ptr[col + 1]; ++idx) {
-          const int row = pattern_.row_idx[idx];
-          if (row_block_[row] != block) {
-            block = row_block_[row];
-            eval_block(block, perturbed, rblock_.data());
+        double sum = 0.0;
+        while (idx < end) {
+          const int b = row_block[pattern.row_idx[idx]];
+          eval_block(b, perturbed, rblock_.data());
+          const double* r = rblock_.data() - offset_[b];
+          for (const int last = offset_[b + 1]; idx < end && pattern.row_idx[idx] < last; ++idx) {
+            const int row = pattern.row_idx[idx];
+            values[idx] = (r[row] - f[row]) * inv_h;
+            sum += values[idx];
           }
-          const double v = (rblock_[row - offset_[block]] - f[row]) * inv_h;
-          if (!std::isfinite(v)) return false;
-          values[idx] = v;
         }
+        ok = std::isfinite(sum);  // false if any entry is not finite
       }
       xnode_[j] = x[col];
-      std::copy(starts_.begin() + off, starts_.begin() + off + m_, pstarts_.begin() + off);
-      std::copy(ends_.begin() + off, ends_.begin() + off + m_, pends_.begin() + off);
+      for (int q = 0; q < m_; ++q) {
+        py[q] = y0[q];
+        pe[q] = e0[q];
+      }
       if (!ok) return false;
     }
   }

@@ -58,7 +58,7 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
         d_(d),
         problem_(d),
         integrator_(bvp::make_integrator(integrator_options_)),
-        shooting_(problem_, *integrator_),
+        shooting_(problem_, *integrator_, d.structure),
         system_(problem_, shooting_) {}
 
   void bind(const ModelInput& input, const SolverOptions& options, const VcrefOptions& vo) {
@@ -127,8 +127,6 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
       sol.backbone[j] = BackboneSample{routing.disk_s[j], sol.disk_frames[j], cosserat::force(e), cosserat::moment(e)};
     }
   }
-
-  bvp::ShootingSystem& shooting() { return shooting_; }
 
  private:
   // Disk poses on the constant-curvature arcs of the tendon moments (paper Eq. 8 with u = sum T_k
@@ -214,6 +212,8 @@ VcrefModel::VcrefModel(const Robot& robot, const Effects& effects, const VcrefOp
   d->length = this->robot().total_length();
   d->l_min = d->length;
   for (int j = 1; j <= N; ++j) d->l_min = std::min(d->l_min, routing().disk_s[j] - routing().disk_s[j - 1]);
+  // The Jacobian pattern covers every routed tendon, whatever the tensions of a call.
+  d->structure = bvp::ShootingStructure::of(VcrefShooting(*d));
   data_ = d;
 }
 
@@ -255,10 +255,7 @@ bool VcrefModel::loads_from_rest(const ModelInput& input) const {
 
 int VcrefModel::unknowns() const { return data_->size; }
 
-int VcrefModel::jacobian_nonzeros() const {
-  const auto ws = make_workspace();
-  return static_cast<VcrefWorkspace&>(*ws).shooting().sparsity()->nnz();
-}
+int VcrefModel::jacobian_nonzeros() const { return data_->structure->pattern.nnz(); }
 
 bvp::JacobianCheck VcrefModel::check_jacobian(ModelWorkspace& workspace, const ModelInput& input,
                                               const SolverOptions& options, const Solution* at,

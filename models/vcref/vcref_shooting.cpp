@@ -66,13 +66,25 @@ void VcrefShooting::set_load_factor(double lambda) {
 }
 
 void VcrefShooting::start_state(int k, const double* x, double* y) const {
-  Eigen::Map<cosserat::State> state(y);
+  using namespace cosserat;
   if (k == 0) {
-    state = cosserat::make_state(Frame{}, Eigen::Map<const Vec3>(x), Eigen::Map<const Vec3>(x + 3));
-  } else {
-    const Frame f{rbar_[k] * lie::exp_so3(Eigen::Map<const Vec3>(x + 3)), Eigen::Map<const Vec3>(x)};
-    state = cosserat::make_state(f, Eigen::Map<const Vec3>(x + 6), Eigen::Map<const Vec3>(x + 9));
+    position(y).setZero();
+    rotation(y).setIdentity();
+    force(y) = Eigen::Map<const Vec3>(x);
+    moment(y) = Eigen::Map<const Vec3>(x + 3);
+    return;
   }
+  // The Jacobian perturbs one unknown at a time: most calls repeat the last rotation.
+  const Eigen::Map<const Vec3> w(x + 3);
+  if (k != chart_node_ || w != chart_w_) {
+    chart_node_ = k;
+    chart_w_ = w;
+    chart_R_ = rbar_[k] * lie::exp_so3(w);
+  }
+  position(y) = Eigen::Map<const Vec3>(x);
+  rotation(y) = chart_R_;
+  force(y) = Eigen::Map<const Vec3>(x + 6);
+  moment(y) = Eigen::Map<const Vec3>(x + 9);
 }
 
 void VcrefShooting::rebase(int k, double* x) {
@@ -80,6 +92,7 @@ void VcrefShooting::rebase(int k, double* x) {
   Eigen::Map<Vec3> w(x + 3);
   rbar_[k] = rbar_[k] * lie::exp_so3(w);
   w.setZero();
+  chart_node_ = -1;
 }
 
 // Block 0 (tip) reads node N-1 (its pose and, through the last interval's end, everything);
@@ -93,43 +106,49 @@ std::pair<int, int> VcrefShooting::dependent_rows(int block, int k, int j) const
   return {0, 0};
 }
 
-void VcrefShooting::disk_load(int j, Vec3& F, Vec3& M) const {
+// Subtracts the tendon wrench and the disk weight on disk j from F, M; frames_ j-1, j (and
+// j+1 if some tendon passes) must be set when a tendon acts on disk j.
+void VcrefShooting::subtract_disk_load(int j, Vec3& F, Vec3& M) const {
   if (tendon_at_[j]) {
     const tendon::DiskWrench w = tendon::disk_wrench(j, frames_.data(), active_, tension_.data(), d_.remove_normal);
-    F += w.force;
-    M += w.moment;
+    F -= w.force;
+    M -= w.moment;
   }
-  if (load_.has_disk_weight()) F += load_.disk_weight(j);
+  if (load_.has_disk_weight()) F -= load_.disk_weight(j);
 }
 
 void VcrefShooting::boundary(const bvp::ShootingNodes& nodes, double* r) const {
   const int N = d_.N;
   const double* e = nodes.end(N - 1);
-  frames_[N - 1] = cosserat::frame_of(nodes.start(N - 1));
-  frames_[N] = cosserat::frame_of(e);
-  Vec3 F = Vec3::Zero(), M = Vec3::Zero();
-  disk_load(N, F, M);
-  if (load_.has_tip_wrench()) {
-    F += load_.tip_force();
-    M += load_.tip_moment();
+  Vec3 F = cosserat::force(e), M = cosserat::moment(e);
+  if (tendon_at_[N]) {
+    frames_[N - 1] = cosserat::frame_of(nodes.start(N - 1));
+    frames_[N] = cosserat::frame_of(e);
   }
-  out(r) = cosserat::force(e) - F;
-  out(r + 3) = cosserat::moment(e) - M;
+  subtract_disk_load(N, F, M);
+  if (load_.has_tip_wrench()) {
+    F -= load_.tip_force();
+    M -= load_.tip_moment();
+  }
+  out(r) = F;
+  out(r + 3) = M;
 }
 
 void VcrefShooting::junction(int j, const bvp::ShootingNodes& nodes, double* r) const {
   const int N = d_.N;
   const double* e = nodes.end(j - 1);
   const double* y = nodes.start(j);
-  frames_[j - 1] = cosserat::frame_of(nodes.start(j - 1));
-  frames_[j] = cosserat::frame_of(y);
-  if (passes_[j]) frames_[j + 1] = cosserat::frame_of(j + 1 < N ? nodes.start(j + 1) : nodes.end(N - 1));
-  Vec3 F = Vec3::Zero(), M = Vec3::Zero();
-  disk_load(j, F, M);
+  Vec3 F = cosserat::force(e), M = cosserat::moment(e);
+  if (tendon_at_[j]) {
+    frames_[j - 1] = cosserat::frame_of(nodes.start(j - 1));
+    frames_[j] = cosserat::frame_of(y);
+    if (passes_[j]) frames_[j + 1] = cosserat::frame_of(j + 1 < N ? nodes.start(j + 1) : nodes.end(N - 1));
+  }
+  subtract_disk_load(j, F, M);
   out(r) = cosserat::position(y) - cosserat::position(e);
-  out(r + 3) = lie::vee(cosserat::rotation(e).transpose() * frames_[j].R);
-  out(r + 6) = cosserat::force(e) - F - cosserat::force(y);
-  out(r + 9) = cosserat::moment(e) - M - cosserat::moment(y);
+  out(r + 3) = lie::vee(cosserat::rotation(e).transpose() * cosserat::rotation(y));
+  out(r + 6) = F - cosserat::force(y);
+  out(r + 9) = M - cosserat::moment(y);
 }
 
 void VcrefShooting::unknown_scale(int k, double* s) const {

@@ -2,6 +2,7 @@
 // of one workspace (VcrefShooting: chart, residual blocks, scales; bound per input).
 #pragma once
 
+#include <memory>
 #include <vector>
 
 #include "physics/load_case.hpp"
@@ -23,6 +24,7 @@ struct VcrefModel::Data {
   bool arc_guess = true;            // VcrefOptions::initial_guess
   double length = 0.0;              // robot length L
   double l_min = 0.0;               // shortest interval
+  std::shared_ptr<const bvp::ShootingStructure> structure;  // layout and Jacobian pattern
 };
 
 // The multiple-shooting problem (bvp/shooting.hpp) of VCref. Node 0: unknowns (n_0, m_0) at the
@@ -41,7 +43,10 @@ class VcrefShooting final : public bvp::ShootingProblem {
   const TendonRouting& active() const { return active_; }
   bool tendon_at(int j) const { return tendon_at_[j] != 0; }
   Vec3 rod_weight() const { return load_.backbone_weight(); }
-  Mat3& reference(int j) { return rbar_[j]; }
+  Mat3& reference(int j) {
+    chart_node_ = -1;
+    return rbar_[j];
+  }
   // Component index 0..11 (p, w, n, m) of unknown j of node k.
   static int component(int k, int j) { return k == 0 ? j + 6 : j; }
 
@@ -62,9 +67,7 @@ class VcrefShooting final : public bvp::ShootingProblem {
   double increment(int k, int j, double value, double scale, double noise) const override;
 
  private:
-  // Tendon wrench plus disk weight on disk j; frames_ j-1, j (and j+1 if some tendon passes)
-  // must be set.
-  void disk_load(int j, Vec3& F, Vec3& M) const;
+  void subtract_disk_load(int j, Vec3& F, Vec3& M) const;
 
   const VcrefModel::Data& d_;
   physics::LoadCase load_;
@@ -75,6 +78,9 @@ class VcrefShooting final : public bvp::ShootingProblem {
   cosserat::FreeRod rod_;
   std::vector<Mat3> rbar_;          // chart references (0 unused)
   mutable std::vector<Frame> frames_;  // disk frames of one block evaluation
+  mutable int chart_node_ = -1;        // last chart evaluation: node, w, Rbar exp(w)
+  mutable Vec3 chart_w_ = Vec3::Zero();
+  mutable Mat3 chart_R_ = Mat3::Identity();
   double comp_scale_[4] = {1, 1, 1, 1};  // 1/L, 1, 1/F_s, 1/(F_s L)
   double fd_comp_[4] = {1, 1, 1, 1};     // finite-difference scale per component group
   double fd_rel_ = 1e-7;

@@ -23,6 +23,7 @@
 /// structural zeros from that band (dependent_rows).
 #pragma once
 
+#include <memory>
 #include <utility>
 #include <vector>
 
@@ -110,6 +111,17 @@ class ShootingProblem {
   /// @}
 };
 
+/// @brief The layout and Jacobian structure of a ShootingProblem: they depend only on its
+/// dimensions, coupling() and dependent_rows(), so a model can build them once and share them
+/// between the ShootingSystems of its workspaces.
+struct ShootingStructure {
+  std::vector<int> offset;     ///< First unknown (and residual row) of node (block) k; N+1 values.
+  std::vector<int> row_block;  ///< Block of every residual row.
+  SparsityPattern pattern;     ///< Jacobian pattern (CSC).
+  /// @brief Build the structure of `problem` (std::invalid_argument on invalid dimensions).
+  static std::shared_ptr<const ShootingStructure> of(const ShootingProblem& problem);
+};
+
 /// @brief The ResidualSystem of a ShootingProblem, with a structured finite-difference
 /// Jacobian: perturbing unknown j of node k re-integrates interval k only (or none, for
 /// ShootingProblem::shifts_end) and re-evaluates only the residual blocks that read it, so a
@@ -119,13 +131,15 @@ class ShootingSystem : public ResidualSystem {
  public:
   /// @param problem,integrator Must outlive this object.
   ShootingSystem(const ShootingProblem& problem, Integrator& integrator);
-  /// @brief As above, for a problem whose chart references rebase() may move.
-  ShootingSystem(ShootingProblem& problem, Integrator& integrator);
+  /// @brief As above, for a problem whose chart references rebase() may move, optionally with
+  /// its structure built before (ShootingStructure::of of an identical problem).
+  ShootingSystem(ShootingProblem& problem, Integrator& integrator,
+                 std::shared_ptr<const ShootingStructure> structure = nullptr);
 
   int size() const override { return size_; }
   bool residual(const Eigen::Ref<const Eigen::VectorXd>& x,
                 Eigen::Ref<Eigen::VectorXd> f) override;
-  const SparsityPattern* sparsity() const override { return &pattern_; }
+  const SparsityPattern* sparsity() const override { return &structure_->pattern; }
   bool has_jacobian() const override { return true; }
   bool sparse_jacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
                        const Eigen::Ref<const Eigen::VectorXd>& f, double* values) override;
@@ -147,7 +161,7 @@ class ShootingSystem : public ResidualSystem {
   /// @brief Use another integrator from now on (must outlive this object).
   void set_integrator(Integrator& integrator) { integrator_ = &integrator; cached_ = false; }
   /// @brief First unknown (and residual row) of node (block) k; offset(N) = size().
-  int offset(int k) const { return offset_[k]; }
+  int offset(int k) const { return structure_->offset[k]; }
   /// @brief The trajectory of the last residual()/evaluate() call.
   ShootingNodes nodes() const { return ShootingNodes(starts_.data(), ends_.data(), m_, n_); }
   /// @brief Number of single-interval integrations so far (cost measure).
@@ -156,16 +170,15 @@ class ShootingSystem : public ResidualSystem {
  private:
   bool integrate_all(const Eigen::Ref<const Eigen::VectorXd>& x);
   void eval_block(int block, const ShootingNodes& nodes, double* r) const;
-  void build_pattern();
+  void check_problem();
   void refresh_scale() const;
 
   const ShootingProblem& problem_;
   ShootingProblem* mutable_problem_ = nullptr;  // for rebase()
   Integrator* integrator_;
-  int m_, n_, c_, size_ = 0;
-  std::vector<int> offset_;                 // first unknown / row of node / block k (N+1)
-  std::vector<int> row_block_;              // block of every row
-  SparsityPattern pattern_;
+  int m_, n_, size_ = 0;
+  std::shared_ptr<const ShootingStructure> structure_;
+  const int* offset_ = nullptr;             // structure_->offset
   std::vector<double> x_;                   // unknowns of the cached trajectory
   bool cached_ = false;
   std::vector<double> starts_, ends_;       // trajectory at x_
