@@ -78,8 +78,8 @@ class ShootingProblem {
   /// (m values). Default: the state scale (continuity residuals are state differences).
   virtual void residual_scale(double* s) const { state_scale(s); }
 
-  /// @name Local unknowns and structure (optional; the defaults are the plain layout above)
-  /// @{
+  // Local unknowns and structure (optional; the defaults are the plain layout above).
+
   /// @brief Number of unknowns d_k of node k = 0..N-1; residual block k has as many rows.
   /// Default: m.
   virtual int unknown_dimension(int k) const { (void)k; return state_dimension(); }
@@ -108,7 +108,6 @@ class ShootingProblem {
   /// @brief Forward-difference increment of unknown j of node k at `value` (`scale`: its unknown
   /// scale, `noise`: the integrator's relative noise). Default: finite_difference_step().
   virtual double increment(int k, int j, double value, double scale, double noise) const;
-  /// @}
 };
 
 /// @brief The layout and Jacobian structure of a ShootingProblem: they depend only on its

@@ -80,6 +80,7 @@ class VcrefModel final : public StaticModel {
   std::unique_ptr<ModelWorkspace> make_workspace() const override;
   /// @brief Refuses displacement input (field `actuation.kind`), then the registry's checks.
   void check_input(const ModelInput& input) const override;
+  /// @brief The model-specific settings it was built with.
   const VcrefOptions& options() const { return options_; }
 
   /// @brief P = L^2 (|W| + |F_tip|) / EI of `input` (physics::LoadCase::load_parameter()).
