@@ -236,16 +236,19 @@ detail::ModelProblem& VcrefModel::bind(ModelWorkspace& workspace, const ModelInp
   return ws;
 }
 
-double VcrefModel::load_parameter(const ModelInput& input) const {
+namespace {
+physics::LoadCase load_case(const StaticModel& model, const ModelInput& input) {
+  input.validate(model.robot());
   physics::LoadCase l;
-  l.bind(robot(), routing(), input);
-  return l.load_parameter();
+  l.bind(model.robot(), model.routing(), input);
+  return l;
 }
+}  // namespace
+
+double VcrefModel::load_parameter(const ModelInput& input) const { return load_case(*this, input).load_parameter(); }
 
 double VcrefModel::compression_parameter(const ModelInput& input) const {
-  physics::LoadCase l;
-  l.bind(robot(), routing(), input);
-  return l.compression_parameter();
+  return load_case(*this, input).compression_parameter();
 }
 
 bool VcrefModel::loads_from_rest(const ModelInput& input) const {

@@ -83,7 +83,7 @@ class VcrefModel final : public StaticModel {
   /// @brief The model-specific settings it was built with.
   const VcrefOptions& options() const { return options_; }
 
-  /// @brief P = L^2 (|W| + |F_tip|) / EI of `input` (physics::LoadCase::load_parameter()).
+  /// @brief P = L^2 (|W| + |F_tip|) / EI of `input` (InputError if it does not fit the robot).
   double load_parameter(const ModelInput& input) const;
   /// @brief P_c = L^2 max(0, -e_z . (F_tip + W)) / EI of `input`.
   double compression_parameter(const ModelInput& input) const;
