@@ -33,13 +33,13 @@ struct Timing {
 };
 
 Timing time_solves(const Scene& s, int reps, const VcrefOptions& opt = VcrefOptions()) {
-  VcrefModel model(s, opt);
+  VcrefModel model(s.robot, s.effects, opt);
   std::vector<double> t;
   Timing r;
   for (int i = 0; i < reps; ++i) {
     auto ws = model.make_workspace();  // cold: fresh workspace, no warm start
     const auto t0 = std::chrono::steady_clock::now();
-    r.sol = model.solve(*ws);
+    r.sol = tdcr::solve(model, *ws, s.input(), s.solver);
     t.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
   }
   std::sort(t.begin(), t.end());
@@ -119,7 +119,7 @@ int main(int argc, char** argv) {
     Scene s = paper::scene(n, 2);
     s.solver.rk4_steps = steps_b;
     s.solver.rk4_max_step = std::numeric_limits<double>::infinity();  // exactly rk4_steps per interval
-    VcrefModel model(s);
+    VcrefModel model(s.robot, s.effects);
     const int r = quick ? 2 : (n <= 30 ? 21 : n <= 100 ? 11 : n <= 300 ? 5 : 3);
     const Timing t = time_solves(s, r);
     std::printf("%6d %9d %7d %10.2f %10.2f %6d %10.1f %12.6f%s\n", n, model.unknowns(), model.jacobian_nonzeros(),

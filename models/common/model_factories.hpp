@@ -1,11 +1,9 @@
 // Private to models/: the factory of each model (the registry's `make` column), defined in that
-// model's folder, and, transitional, the scene-bound factories of models not yet moved to the
-// StaticModel interface (wrapped by legacy_adapter.cpp).
+// model's folder.
 #pragma once
 
 #include <memory>
 
-#include "tdcr/models/legacy_model.hpp"
 #include "tdcr/models/static_model.hpp"
 
 namespace tdcr::detail {
@@ -14,7 +12,4 @@ std::unique_ptr<StaticModel> make_ccsub_model(const Robot& robot, const Effects&
 std::unique_ptr<StaticModel> make_prb_model(const Robot& robot, const Effects& effects);
 std::unique_ptr<StaticModel> make_vc_model(const Robot& robot, const Effects& effects);
 std::unique_ptr<StaticModel> make_vcref_model(const Robot& robot, const Effects& effects);
-
-// Transitional: scene-bound models.
-std::unique_ptr<LegacyStaticModel> make_legacy_vcref_model(const Scene& scene);
 }  // namespace tdcr::detail

@@ -62,13 +62,6 @@ class ModelProblem {
   /// (`evaluated`: it succeeded), so a problem may reuse the state of that evaluation.
   /// May downgrade a converged summary (e.g. a final pass that fails to integrate).
   virtual void extract(const Eigen::VectorXd& x, bool evaluated, Solution& solution) = 0;
-  /// Transitional (legacy_adapter.cpp): a model that still solves a whole scene itself does it
-  /// here and returns true; the driver then only checks and stamps the Solution.
-  virtual bool solve_whole(const Solution* warm_start, Solution& solution) {
-    (void)warm_start;
-    (void)solution;
-    return false;
-  }
   /// The integrator's name for the summary ("rk4", "cvode", "none").
   virtual std::string integrator_name() const { return "none"; }
 };

@@ -86,9 +86,7 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
   sum.integrator = P.integrator_name();
 
   bvp::ParameterizedSystem* sys = P.system();
-  if (P.solve_whole(warm_start, sol)) {
-    // Transitional: a scene-bound model solved it all.
-  } else if (!sys) {
+  if (!sys) {
     // Closed form: the problem computes the answer and its summary.
     sum.linear_solver = "none";
     P.extract(Eigen::VectorXd(), true, sol);

@@ -29,11 +29,6 @@ VcModel::~VcModel() = default;
 
 std::unique_ptr<ModelWorkspace> VcModel::make_workspace() const { return std::make_unique<VcWorkspace>(*this); }
 
-void VcModel::check_input(const ModelInput& input) const {
-  if (input.actuation.kind != Actuation::Kind::Tensions)
-    throw InputError("actuation.kind", "displacements", "the VC model is driven by tensions");
-}
-
 double VcModel::load_parameter(const ModelInput& input) const {
   physics::LoadCase loads;
   loads.bind(robot(), routing(), input);

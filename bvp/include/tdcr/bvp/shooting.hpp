@@ -1,21 +1,30 @@
 /// @file shooting.hpp
 /// @brief Generic multiple shooting: a boundary value problem on nodes s_0, ..., s_N becomes a
-/// sparse ResidualSystem whose unknowns are the states at the start of every interval.
+/// sparse ResidualSystem whose unknowns describe the states at the start of every interval.
 ///
 /// Layout. With state dimension m and N intervals, the unknowns are
-///   x = [y_0^+, y_1^+, ..., y_{N-1}^+]   (y_k^+ = state at the start of interval k, m each),
-/// and the N*m residuals are
-///   rows 0 .. m-1:        boundary(y_0^+, ..., y_{N-1}^-)      (boundary conditions),
-///   rows i*m .. i*m+m-1:  junction(i) at inner node i = 1..N-1  (continuity, jumps).
+///   x = [x_0, x_1, ..., x_{N-1}]   (x_k: d_k unknowns of node k, d_k = unknown_dimension(k)),
+/// mapped to the start states y_k^+ = start_state(k, x_k) (by default d_k = m and y_k^+ = x_k),
+/// and the residuals are, block by block (block k has d_k rows),
+///   block 0:            boundary(y_0^+, ..., y_{N-1}^-)      (boundary conditions),
+///   block i = 1..N-1:   junction(i) at inner node i          (continuity, jumps).
 /// y_k^- (state at the end of interval k) is y_k^+ integrated over [s_k, s_{k+1}].
+///
+/// Local unknowns. A node whose start state lies on a manifold (e.g. a rotation R in the state)
+/// takes fewer unknowns through a chart around a reference, e.g. R = Rbar exp(w) with w in R^3;
+/// rebase() folds the unknowns into the reference after an accepted Newton step so that they stay
+/// small. A boundary node may hold fewer unknowns (e.g. only the unknown half of its state).
 ///
 /// Locality. junction(i) may read intervals i-1-c .. i+c (start and end states), boundary may
 /// read intervals 0..c and N-1-c..N-1, where c = ShootingProblem::coupling(). With c = 0 a
 /// junction sees the nodes i-1, i and i+1, enough for point loads that depend on the
 /// neighbouring nodes (e.g. a tendon running from the previous to the next node). The Jacobian
-/// is then block-banded, its pattern is known, and KLU solves it in O(N).
+/// is then block-banded, its pattern is known, and KLU solves it in O(N). A problem may drop
+/// structural zeros from that band (dependent_rows).
 #pragma once
 
+#include <memory>
+#include <utility>
 #include <vector>
 
 #include "tdcr/bvp/integrator.hpp"
@@ -56,10 +65,11 @@ class ShootingProblem {
   virtual const OdeSystem& ode(int k) const = 0;
   /// @brief Half-width c of the coupling window (see the file comment). Default 0.
   virtual int coupling() const { return 0; }
-  /// @brief m boundary residuals. Must read only intervals 0..c and N-1-c..N-1 of `nodes`.
+  /// @brief The d_0 (default m) boundary residuals. Must read only intervals 0..c and
+  /// N-1-c..N-1 of `nodes`.
   virtual void boundary(const ShootingNodes& nodes, double* r) const = 0;
-  /// @brief m residuals at inner node i (1..N-1). Must read only intervals i-1-c .. i+c.
-  /// Default: continuity, r = y_i^+ - y_{i-1}^-.
+  /// @brief The d_i (default m) residuals at inner node i (1..N-1). Must read only intervals
+  /// i-1-c .. i+c. Default: continuity, r = y_i^+ - y_{i-1}^- (for d_i = m).
   virtual void junction(int i, const ShootingNodes& nodes, double* r) const;
   /// @brief 1 / typical magnitude of each state component (m values), used as unknown scale
   /// and for finite-difference increments. Default: ones.
@@ -67,22 +77,68 @@ class ShootingProblem {
   /// @brief 1 / typical magnitude of each residual component of a junction or boundary block
   /// (m values). Default: the state scale (continuity residuals are state differences).
   virtual void residual_scale(double* s) const { state_scale(s); }
+
+  // Local unknowns and structure (optional; the defaults are the plain layout above).
+
+  /// @brief Number of unknowns d_k of node k = 0..N-1; residual block k has as many rows.
+  /// Default: m.
+  virtual int unknown_dimension(int k) const { (void)k; return state_dimension(); }
+  /// @brief The start state y_k^+ (m values) of the unknowns x_k (d_k values) of node k: the
+  /// chart. Default: y = x (requires d_k = m).
+  virtual void start_state(int k, const double* x, double* y) const;
+  /// @brief Fold the unknowns x_k into the chart's reference so that they describe the same
+  /// start state (e.g. Rbar <- Rbar exp(w), w <- 0). Called by ShootingSystem::rebase().
+  /// Default: nothing.
+  virtual void rebase(int k, double* x) { (void)k; (void)x; }
+  /// @brief True if unknown j of node k moves the start state along a symmetry of interval k's
+  /// flow such that the end state moves by the same amount: end(y + d) = end(y) + d (e.g. a
+  /// translation of a rod with no position-dependent load). Such columns of the Jacobian need
+  /// no integration. Default: false.
+  virtual bool shifts_end(int k, int j) const { (void)k; (void)j; return false; }
+  /// @brief Rows [first, second) of residual block `block` that depend on unknown j of node k,
+  /// for a block whose window reads node k (see coupling()). Default: all rows of the block.
+  /// Rows left out are structural zeros of the Jacobian.
+  virtual std::pair<int, int> dependent_rows(int block, int k, int j) const;
+  /// @brief 1 / typical magnitude of the d_k unknowns of node k (m-sized buffer, first d_k
+  /// used). Default: state_scale().
+  virtual void unknown_scale(int k, double* s) const { (void)k; state_scale(s); }
+  /// @brief 1 / typical magnitude of the d_b residuals of block b (m-sized buffer, first d_b
+  /// used). Default: residual_scale().
+  virtual void block_scale(int block, double* s) const { (void)block; residual_scale(s); }
+  /// @brief Forward-difference increment of unknown j of node k at `value` (`scale`: its unknown
+  /// scale, `noise`: the integrator's relative noise). Default: finite_difference_step().
+  virtual double increment(int k, int j, double value, double scale, double noise) const;
+};
+
+/// @brief The layout and Jacobian structure of a ShootingProblem: they depend only on its
+/// dimensions, coupling() and dependent_rows(), so a model can build them once and share them
+/// between the ShootingSystems of its workspaces.
+struct ShootingStructure {
+  std::vector<int> offset;     ///< First unknown (and residual row) of node (block) k; N+1 values.
+  std::vector<int> row_block;  ///< Block of every residual row.
+  SparsityPattern pattern;     ///< Jacobian pattern (CSC).
+  /// @brief Build the structure of `problem` (std::invalid_argument on invalid dimensions).
+  static std::shared_ptr<const ShootingStructure> of(const ShootingProblem& problem);
 };
 
 /// @brief The ResidualSystem of a ShootingProblem, with a structured finite-difference
-/// Jacobian: perturbing unknown j of interval k re-integrates interval k only and re-evaluates
-/// only the residual blocks that read it, so a Jacobian costs N*m single-interval integrations
-/// (the same as one residual evaluation per unknown of one interval, times N), not N*m full
-/// residual evaluations. Allocation free after construction.
+/// Jacobian: perturbing unknown j of node k re-integrates interval k only (or none, for
+/// ShootingProblem::shifts_end) and re-evaluates only the residual blocks that read it, so a
+/// Jacobian costs at most sum_k d_k single-interval integrations (N*m by default), not N*m
+/// full residual evaluations. Allocation free after construction.
 class ShootingSystem : public ResidualSystem {
  public:
   /// @param problem,integrator Must outlive this object.
   ShootingSystem(const ShootingProblem& problem, Integrator& integrator);
+  /// @brief As above, for a problem whose chart references rebase() may move, optionally with
+  /// its structure built before (ShootingStructure::of of an identical problem).
+  ShootingSystem(ShootingProblem& problem, Integrator& integrator,
+                 std::shared_ptr<const ShootingStructure> structure = nullptr);
 
-  int size() const override { return n_ * m_; }
+  int size() const override { return size_; }
   bool residual(const Eigen::Ref<const Eigen::VectorXd>& x,
                 Eigen::Ref<Eigen::VectorXd> f) override;
-  const SparsityPattern* sparsity() const override { return &pattern_; }
+  const SparsityPattern* sparsity() const override { return &structure_->pattern; }
   bool has_jacobian() const override { return true; }
   bool sparse_jacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
                        const Eigen::Ref<const Eigen::VectorXd>& f, double* values) override;
@@ -95,6 +151,16 @@ class ShootingSystem : public ResidualSystem {
   /// @brief Integrate every interval from the starts in x (e.g. after a solve) so that nodes()
   /// describes the trajectory of x. Returns false if an integration failed.
   bool evaluate(const Eigen::Ref<const Eigen::VectorXd>& x);
+  /// @brief Fold x into the problem's chart references (ShootingProblem::rebase for every node),
+  /// e.g. after an accepted Newton step. Needs the non-const constructor (else std::logic_error).
+  void rebase(Eigen::Ref<Eigen::VectorXd> x);
+  /// @brief Forget the cached trajectory (call after changing the problem: its parameters, chart
+  /// references or ODEs).
+  void invalidate() { cached_ = false; }
+  /// @brief Use another integrator from now on (must outlive this object).
+  void set_integrator(Integrator& integrator) { integrator_ = &integrator; cached_ = false; }
+  /// @brief First unknown (and residual row) of node (block) k; offset(N) = size().
+  int offset(int k) const { return structure_->offset[k]; }
   /// @brief The trajectory of the last residual()/evaluate() call.
   ShootingNodes nodes() const { return ShootingNodes(starts_.data(), ends_.data(), m_, n_); }
   /// @brief Number of single-interval integrations so far (cost measure).
@@ -103,16 +169,23 @@ class ShootingSystem : public ResidualSystem {
  private:
   bool integrate_all(const Eigen::Ref<const Eigen::VectorXd>& x);
   void eval_block(int block, const ShootingNodes& nodes, double* r) const;
+  void check_problem();
+  void refresh_scale() const;
 
   const ShootingProblem& problem_;
-  Integrator& integrator_;
-  int m_, n_, c_;
-  SparsityPattern pattern_;
-  std::vector<double> starts_, ends_;     // trajectory at the last evaluated x
-  std::vector<double> pstarts_, pends_;   // perturbed copies for the Jacobian
-  std::vector<double> rblock_;            // one residual block
-  mutable std::vector<double> scale_;     // state scale (m), refreshed by unknown_scale()
-  mutable std::vector<double> rscale_;    // residual block scale (m)
+  ShootingProblem* mutable_problem_ = nullptr;  // for rebase()
+  Integrator* integrator_;
+  int m_, n_, size_ = 0;
+  std::shared_ptr<const ShootingStructure> structure_;
+  const int* offset_ = nullptr;             // structure_->offset
+  std::vector<double> x_;                   // unknowns of the cached trajectory
+  bool cached_ = false;
+  std::vector<double> starts_, ends_;       // trajectory at x_
+  std::vector<double> pstarts_, pends_;     // perturbed copies for the Jacobian
+  std::vector<double> xnode_;               // perturbed unknowns of one node
+  std::vector<double> rblock_;              // one residual block
+  mutable std::vector<double> scale_;       // unknown scales (size()), refreshed by unknown_scale()
+  mutable std::vector<double> sbuf_;        // one node's or block's scales (m)
   long integrations_ = 0;
 };
 

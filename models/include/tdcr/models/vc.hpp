@@ -111,8 +111,6 @@ class VcModel final : public StaticModel {
   ModelKind kind() const override { return ModelKind::VC; }
   /// @brief A fresh VcWorkspace.
   std::unique_ptr<ModelWorkspace> make_workspace() const override;
-  /// @brief InputError on a displacement actuation (VC is driven by tensions).
-  void check_input(const ModelInput& input) const override;
   /// @brief The options.
   const VcOptions& options() const { return options_; }
   /// @brief L^2 (|W| + |F_tip|) / EI (L: robot length, W: total weight of backbone and disks,

@@ -1,0 +1,166 @@
+// VCref's multiple-shooting problem: the chart of the disk unknowns, the residual blocks (tip
+// and disk equilibria, pose continuity), scales and finite-difference steps.
+#include "vcref/vcref_shooting.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "tdcr/core/lie.hpp"
+#include "tdcr/models/tendon_physics.hpp"
+
+namespace tdcr {
+
+namespace {
+constexpr double kFdStep = 1e-7;  // forward-difference step, relative to the unknown's scale
+Eigen::Map<Vec3> out(double* r) { return Eigen::Map<Vec3>(r); }
+}  // namespace
+
+VcrefShooting::VcrefShooting(const VcrefModel::Data& d)
+    : d_(d),
+      tendon_at_(d.N + 1, 0),
+      passes_(d.N + 1, 0),
+      rod_(d.section),
+      rbar_(d.N, Mat3::Identity()),
+      frames_(d.N + 1) {}
+
+void VcrefShooting::bind(const ModelInput& input, const SolverOptions& options) {
+  const TendonRouting& routing = *d_.routing;
+  load_.bind(*d_.robot, routing, input);
+  active_ = routing;
+  active_.tendons.clear();
+  for (const RoutedTendon& t : routing.tendons)
+    if (load_.full_tensions()[t.index] != 0.0) active_.tendons.push_back(t);
+  std::fill(tendon_at_.begin(), tendon_at_.end(), 0);
+  std::fill(passes_.begin(), passes_.end(), 0);
+  double r_max = 0.0;
+  for (const RoutedTendon& t : active_.tendons) {
+    r_max = std::max(r_max, t.r.norm());
+    for (int j = 1; j <= t.end_disk; ++j) {
+      tendon_at_[j] = 1;
+      if (j < t.end_disk) passes_[j] = 1;
+    }
+  }
+  const double L = d_.length, Fs = load_.force_scale();
+  const double comp[4] = {1.0 / L, 1.0, 1.0 / Fs, 1.0 / (Fs * L)};
+  std::copy(comp, comp + 4, comp_scale_);
+  // Finite-difference steps: the tendon chord directions vary on the scale of the shortest
+  // interval l_min (positions) and l_min / r_max (rotations), not on the robot's scale; steps
+  // relative to those keep the forward differences accurate with 1000 disks per segment.
+  const double l = d_.l_min;
+  const double fd[4] = {l, r_max > 0.0 ? std::min(1.0, l / r_max) : 1.0, Fs, Fs * L};
+  std::copy(fd, fd + 4, fd_comp_);
+  fd_rel_ = kFdStep;
+  if (options.integrator == IntegratorKind::Cvode)  // adaptive steps: noise ~ rtol
+    fd_rel_ = std::max(kFdStep, std::sqrt(options.cvode_rtol));
+  set_load_factor(1.0);
+}
+
+void VcrefShooting::set_load_factor(double lambda) {
+  load_.set_load_factor(lambda);
+  tension_.resize(load_.full_tensions().size());
+  for (std::size_t k = 0; k < tension_.size(); ++k) tension_[k] = load_.tension(static_cast<int>(k));
+  cosserat::Section s = d_.section;
+  s.gravity = load_.has_backbone_weight();
+  s.weight = load_.backbone_weight();
+  rod_ = cosserat::FreeRod(s);
+}
+
+void VcrefShooting::start_state(int k, const double* x, double* y) const {
+  using namespace cosserat;
+  if (k == 0) {
+    position(y).setZero();
+    rotation(y).setIdentity();
+    force(y) = Eigen::Map<const Vec3>(x);
+    moment(y) = Eigen::Map<const Vec3>(x + 3);
+    return;
+  }
+  // The Jacobian perturbs one unknown at a time: most calls repeat the last rotation.
+  const Eigen::Map<const Vec3> w(x + 3);
+  if (k != chart_node_ || w != chart_w_) {
+    chart_node_ = k;
+    chart_w_ = w;
+    chart_R_ = rbar_[k] * lie::exp_so3(w);
+  }
+  position(y) = Eigen::Map<const Vec3>(x);
+  rotation(y) = chart_R_;
+  force(y) = Eigen::Map<const Vec3>(x + 6);
+  moment(y) = Eigen::Map<const Vec3>(x + 9);
+}
+
+void VcrefShooting::rebase(int k, double* x) {
+  if (k == 0) return;
+  Eigen::Map<Vec3> w(x + 3);
+  rbar_[k] = rbar_[k] * lie::exp_so3(w);
+  w.setZero();
+  chart_node_ = -1;
+}
+
+// Block 0 (tip) reads node N-1 (its pose and, through the last interval's end, everything);
+// block b reads nodes b-1 (interval end, pose), b (pose, wrench) and the pose of b+1 in its
+// equilibrium rows when a tendon may pass disk b.
+std::pair<int, int> VcrefShooting::dependent_rows(int block, int k, int j) const {
+  const int N = d_.N;
+  if (block == 0) return k == N - 1 ? std::make_pair(0, 6) : std::make_pair(0, 0);
+  if (k == block || k == block - 1) return {0, 12};
+  if (k == block + 1 && j < 6 && d_.pass_through[block]) return {6, 12};
+  return {0, 0};
+}
+
+// Subtracts the tendon wrench and the disk weight on disk j from F, M; frames_ j-1, j (and
+// j+1 if some tendon passes) must be set when a tendon acts on disk j.
+void VcrefShooting::subtract_disk_load(int j, Vec3& F, Vec3& M) const {
+  if (tendon_at_[j]) {
+    const tendon::DiskWrench w = tendon::disk_wrench(j, frames_.data(), active_, tension_.data(), d_.remove_normal);
+    F -= w.force;
+    M -= w.moment;
+  }
+  if (load_.has_disk_weight()) F -= load_.disk_weight(j);
+}
+
+void VcrefShooting::boundary(const bvp::ShootingNodes& nodes, double* r) const {
+  const int N = d_.N;
+  const double* e = nodes.end(N - 1);
+  Vec3 F = cosserat::force(e), M = cosserat::moment(e);
+  if (tendon_at_[N]) {
+    frames_[N - 1] = cosserat::frame_of(nodes.start(N - 1));
+    frames_[N] = cosserat::frame_of(e);
+  }
+  subtract_disk_load(N, F, M);
+  if (load_.has_tip_wrench()) {
+    F -= load_.tip_force();
+    M -= load_.tip_moment();
+  }
+  out(r) = F;
+  out(r + 3) = M;
+}
+
+void VcrefShooting::junction(int j, const bvp::ShootingNodes& nodes, double* r) const {
+  const int N = d_.N;
+  const double* e = nodes.end(j - 1);
+  const double* y = nodes.start(j);
+  Vec3 F = cosserat::force(e), M = cosserat::moment(e);
+  if (tendon_at_[j]) {
+    frames_[j - 1] = cosserat::frame_of(nodes.start(j - 1));
+    frames_[j] = cosserat::frame_of(y);
+    if (passes_[j]) frames_[j + 1] = cosserat::frame_of(j + 1 < N ? nodes.start(j + 1) : nodes.end(N - 1));
+  }
+  subtract_disk_load(j, F, M);
+  out(r) = cosserat::position(y) - cosserat::position(e);
+  out(r + 3) = lie::vee(cosserat::rotation(e).transpose() * cosserat::rotation(y));
+  out(r + 6) = F - cosserat::force(y);
+  out(r + 9) = M - cosserat::moment(y);
+}
+
+void VcrefShooting::unknown_scale(int k, double* s) const {
+  for (int j = 0; j < unknown_dimension(k); ++j) s[j] = comp_scale_[component(k, j) / 3];
+}
+
+void VcrefShooting::block_scale(int block, double* s) const { unknown_scale(block, s); }
+
+// Positions and rotations: absolute steps on the scales above; wrenches: relative to the value.
+double VcrefShooting::increment(int k, int j, double value, double, double) const {
+  const int c = component(k, j);
+  return c < 6 ? fd_rel_ * fd_comp_[c / 3] : fd_rel_ * std::max(std::abs(value), fd_comp_[c / 3]);
+}
+
+}  // namespace tdcr

@@ -1,0 +1,89 @@
+// Private to models/vcref: what VcrefModel decides once (Data) and the multiple-shooting problem
+// of one workspace (VcrefShooting: chart, residual blocks, scales; bound per input).
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "physics/load_case.hpp"
+#include "tdcr/bvp/shooting.hpp"
+#include "tdcr/models/cosserat_rod.hpp"
+#include "tdcr/models/vcref.hpp"
+
+namespace tdcr {
+
+// Decided once from robot and effects.
+struct VcrefModel::Data {
+  int N = 0;                        // total disks (disk N = tip)
+  int size = 0;                     // unknowns = residuals
+  const Robot* robot = nullptr;     // the model's (outlives the data)
+  const TendonRouting* routing = nullptr;
+  std::vector<char> pass_through;   // some routed tendon passes (does not end at) disk j
+  cosserat::Section section;        // stiffness and rod variant; weight per call
+  bool remove_normal = true;        // Eq. 58
+  bool arc_guess = true;            // VcrefOptions::initial_guess
+  double length = 0.0;              // robot length L
+  double l_min = 0.0;               // shortest interval
+  std::shared_ptr<const bvp::ShootingStructure> structure;  // layout and Jacobian pattern
+};
+
+// The multiple-shooting problem (bvp/shooting.hpp) of VCref. Node 0: unknowns (n_0, m_0) at the
+// fixed base pose; node j = 1..N-1: (p_j, w_j, n_j, m_j), R_j = Rbar_j exp(w_j). Block 0: tip
+// equilibrium (6); block j: pose continuity and equilibrium of disk j (12).
+class VcrefShooting final : public bvp::ShootingProblem {
+ public:
+  explicit VcrefShooting(const VcrefModel::Data& d);
+
+  // Per call: loads, active tendons, scales, finite-difference steps; load factor 1.
+  void bind(const ModelInput& input, const SolverOptions& options);
+  // Scale every load (tensions, tip wrench, weights) by `lambda`.
+  void set_load_factor(double lambda);
+  const physics::LoadCase& loads() const { return load_; }
+  const std::vector<double>& tensions() const { return tension_; }
+  const TendonRouting& active() const { return active_; }
+  bool tendon_at(int j) const { return tendon_at_[j] != 0; }
+  Vec3 rod_weight() const { return load_.backbone_weight(); }
+  Mat3& reference(int j) {
+    chart_node_ = -1;
+    return rbar_[j];
+  }
+  // Component index 0..11 (p, w, n, m) of unknown j of node k.
+  static int component(int k, int j) { return k == 0 ? j + 6 : j; }
+
+  int state_dimension() const override { return cosserat::kStateSize; }
+  int intervals() const override { return d_.N; }
+  double node(int k) const override { return d_.routing->disk_s[k]; }
+  const bvp::OdeSystem& ode(int) const override { return rod_; }
+  int coupling() const override { return 1; }
+  int unknown_dimension(int k) const override { return k == 0 ? 6 : 12; }
+  void start_state(int k, const double* x, double* y) const override;
+  void rebase(int k, double* x) override;
+  bool shifts_end(int k, int j) const override { return k > 0 && j < 3; }
+  std::pair<int, int> dependent_rows(int block, int k, int j) const override;
+  void boundary(const bvp::ShootingNodes& nodes, double* r) const override;
+  void junction(int i, const bvp::ShootingNodes& nodes, double* r) const override;
+  void unknown_scale(int k, double* s) const override;
+  void block_scale(int block, double* s) const override;
+  double increment(int k, int j, double value, double scale, double noise) const override;
+
+ private:
+  void subtract_disk_load(int j, Vec3& F, Vec3& M) const;
+
+  const VcrefModel::Data& d_;
+  physics::LoadCase load_;
+  TendonRouting active_;            // tendons with nonzero tension
+  std::vector<char> tendon_at_;     // disk j receives a tendon wrench
+  std::vector<char> passes_;        // an active tendon passes disk j
+  std::vector<double> tension_;     // at the load factor, by global index
+  cosserat::FreeRod rod_;
+  std::vector<Mat3> rbar_;          // chart references (0 unused)
+  mutable std::vector<Frame> frames_;  // disk frames of one block evaluation
+  mutable int chart_node_ = -1;        // last chart evaluation: node, w, Rbar exp(w)
+  mutable Vec3 chart_w_ = Vec3::Zero();
+  mutable Mat3 chart_R_ = Mat3::Identity();
+  double comp_scale_[4] = {1, 1, 1, 1};  // 1/L, 1, 1/F_s, 1/(F_s L)
+  double fd_comp_[4] = {1, 1, 1, 1};     // finite-difference scale per component group
+  double fd_rel_ = 1e-7;
+};
+
+}  // namespace tdcr
