@@ -275,7 +275,7 @@ std::vector<HardCase> cases() {
                  // The robot hanging from its base has its tip far below: y < -0.4 m (CCsub,
                  // PRB, VCref: -0.59 m). Newton finds an equilibrium, not necessarily the one
                  // reached by loading the robot from rest. VC chooses multiple shooting here
-                 // (L^2 (|W| + |F|) / EI = 869 > 10, vc.hpp) and loads the robot from rest: it
+                 // (L^2 (|W| + |F|) / EI = 869 > 10, docs/design-notes/vc.md) and loads the robot from rest: it
                  // hangs, tip y -0.588 m (VCref -0.588 m); single shooting found a coiled
                  // equilibrium at y = -0.085 m.
                  const Vec3 p = c.sol.tip().p;
