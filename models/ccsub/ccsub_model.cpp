@@ -28,10 +28,14 @@ struct ArcCoefficients {
   }
 };
 
+// Automatic formulation: banded from this many loaded subsegments on (the measured crossover,
+// docs/design-notes/lumped.md).
+constexpr int kBandedFrom = 100;
+
 class CcsubBody final : public detail::LumpedBody {
  public:
   CcsubBody(const Robot& robot, const TendonRouting& routing, const Effects& effects, LumpedFormulation formulation)
-      : LumpedBody(robot, routing, effects, 3, formulation) {}
+      : LumpedBody(robot, routing, effects, 3, formulation, kBandedFrom) {}
 
   std::unique_ptr<detail::LumpedProblem> make_problem() const override;
 

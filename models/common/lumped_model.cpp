@@ -21,12 +21,13 @@ class LumpedWorkspace final : public ModelWorkspace {
 }  // namespace
 
 LumpedBody::LumpedBody(const Robot& robot, const TendonRouting& routing, const Effects& effects, int per_subsegment,
-                       LumpedFormulation formulation)
+                       LumpedFormulation formulation, int banded_from)
     : statics(robot, routing, effects),
       length(robot.total_length()),
       per_subsegment(per_subsegment),
       N(statics.subsegments()),
-      formulation(formulation) {
+      formulation(formulation),
+      banded_from(banded_from) {
   const BackboneStiffness k = robot.backbone.effective_stiffness();
   EI = k.EI;
   GJ = k.GJ;
@@ -40,7 +41,7 @@ bool LumpedBody::banded(int J) const {
     case LumpedFormulation::Banded: return true;
     case LumpedFormulation::Automatic: break;
   }
-  return J >= kBandedFromSubsegments;
+  return J >= banded_from;
 }
 
 void LumpedBody::compute_frames(const double* x, int J, Frame* frames, SubsegmentPose* poses, Vec3* centroids) const {

@@ -39,7 +39,7 @@ struct SubsegmentPose {
 class LumpedBody {
  public:
   LumpedBody(const Robot& robot, const TendonRouting& routing, const Effects& effects, int per_subsegment,
-             LumpedFormulation formulation);
+             LumpedFormulation formulation, int banded_from);
   virtual ~LumpedBody();
 
   /// Geometry of subsegment j (1-based) from its unknowns xj (per_subsegment values).
@@ -62,6 +62,7 @@ class LumpedBody {
   int per_subsegment = 0;     ///< Unknowns m per subsegment.
   int N = 0;                  ///< Subsegments.
   LumpedFormulation formulation = LumpedFormulation::Automatic;
+  int banded_from = 0;  ///< Automatic: banded from this many loaded subsegments on.
 };
 
 /// One workspace's solve of a lumped model: its residual system (the parameter is the load

@@ -23,6 +23,9 @@ constexpr double kPhiScale = 1e-4;
 // local minimum of |F| (configurations 14 and 15 of the case study at n = 1 end there with
 // KINSOL's automatic bound).
 constexpr double kMaxNewtonStep = 1.0;
+// Automatic formulation: banded from this many loaded subsegments on (the measured crossover,
+// docs/design-notes/lumped.md).
+constexpr int kBandedFrom = 40;
 
 // Model-specific points of a PRB subsegment in detail::SubsegmentPose::aux.
 constexpr int kJoint = 0;  // joint centres P_1..P_3: aux[0..2]
@@ -31,7 +34,7 @@ constexpr int kMid = 3;    // link midpoints: aux[3..6]
 class PrbBody final : public detail::LumpedBody {
  public:
   PrbBody(const Robot& robot, const TendonRouting& routing, const Effects& effects, LumpedFormulation formulation)
-      : LumpedBody(robot, routing, effects, kU, formulation) {
+      : LumpedBody(robot, routing, effects, kU, formulation, kBandedFrom) {
     gamma_sum = 0.0;
     for (int i = 0; i < 4; ++i) {
       gamma[i] = effects.prb.gamma[i];

@@ -15,7 +15,8 @@
 /// Two formulations of the same equations (LumpedFormulation), same solution: recursive (the
 /// subsegment unknowns only; dense Jacobian and LU, cost ~J^3, fastest for few subsegments)
 /// and banded (disk poses and internal wrenches are unknowns too; block-banded Jacobian, KLU,
-/// cost ~J). Automatic picks banded from kBandedFromSubsegments loaded subsegments on.
+/// cost ~J). Automatic picks banded from a model-specific number of loaded subsegments on (CCsub
+/// 100, PRB 40: the measured crossover, docs/design-notes/lumped.md).
 #pragma once
 
 #include <memory>
@@ -33,10 +34,6 @@ class LumpedBody;
 
 /// @brief How a lumped model sets up its Newton system (see the file comment).
 enum class LumpedFormulation { Automatic, Recursive, Banded };
-
-/// @brief Automatic uses the banded formulation from this many loaded subsegments on
-/// (crossover measured in docs/design-notes/lumped.md).
-constexpr int kBandedFromSubsegments = 24;
 
 /// @brief A lumped static model: immutable; solved through tdcr::solve with its workspace.
 class LumpedModel : public StaticModel {
