@@ -6,6 +6,12 @@
 // Configuration 2 loads segment 1 only: segment 2 carries no load and is exactly straight, so
 // tdcr leaves its subsegments out of the unknowns (the paper's code solves for them). Rows with
 // configuration 5 = (0, 0, T_M, 0) load every subsegment and show the cost of the full system.
+//
+// Then a scaling sweep (n = 5..200 disks per segment; --quick: n = 5, 10, 20) on configuration 5
+// with and without a tip force: median time of the automatic formulation, the log-log slope of
+// time vs n from n = 10 to 200, and the tip distance to the recursive (dense) formulation.
+// Usage: bench_lumped [--quick] [--reps N] [--sweep-only]
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <map>
@@ -15,14 +21,66 @@
 
 #include "bench_common.hpp"
 #include "tdcr/core/paper_robot.hpp"
+#include "tdcr/models/ccsub.hpp"
+#include "tdcr/models/prb.hpp"
 
 using namespace tdcr;
 
+namespace {
+
+std::unique_ptr<LumpedModel> lumped(const std::string& name, const Scene& s, LumpedFormulation f) {
+  if (name == "ccsub") return std::make_unique<CcsubModel>(s.robot, s.effects, f);
+  return std::make_unique<PrbModel>(s.robot, s.effects, f);
+}
+
+// The scaling sweep; false if a solve failed.
+bool sweep(bool quick, int reps) {
+  const std::vector<int> ns = quick ? std::vector<int>{5, 10, 20} : std::vector<int>{5, 10, 20, 50, 100, 200};
+  std::printf("\nscaling sweep, configuration 5 (every subsegment loaded)\n");
+  std::printf("%-6s %-9s %4s %8s %6s %12s %12s %12s\n", "model", "load", "n", "unknowns", "iters", "median_us",
+              "dense_us", "tip_diff_m");
+  bool ok = true;
+  for (const char* name : {"ccsub", "prb"}) {
+    for (bool tip : {false, true}) {
+      double t10 = 0.0, t200 = 0.0;
+      for (int n : ns) {
+        Scene s = paper::scene(n, 5, name);
+        if (tip) s.loads.tip_force = Vec3(0.05, 0.02, 0.0);
+        const auto model = lumped(name, s, LumpedFormulation::Automatic);
+        const int r = n >= 100 ? std::max(1, reps / 4) : reps;
+        const bench::Timing t = bench::time_solves(*model, s, r);
+        // The recursive formulation for comparison (dense LU: expensive above n = 50).
+        double dense_us = NAN, diff = NAN;
+        if (n <= (quick ? 20 : 100)) {
+          const auto dense = lumped(name, s, LumpedFormulation::Recursive);
+          const bench::Timing d = bench::time_solves(*dense, s, n >= 50 ? 1 : std::max(1, reps / 4));
+          dense_us = d.median_us;
+          diff = (d.last.tip().p - t.last.tip().p).norm();
+          ok = ok && d.last.converged();
+        }
+        ok = ok && t.last.converged();
+        if (n == 10) t10 = t.median_us;
+        if (n == 200) t200 = t.median_us;
+        std::printf("%-6s %-9s %4d %8d %6d %12.1f %12.1f %12.2e %s\n", name, tip ? "tip_force" : "tendons", n,
+                    t.last.summary.unknowns, t.last.summary.iterations, t.median_us, dense_us, diff,
+                    t.last.converged() ? "" : t.last.summary.message.c_str());
+      }
+      if (t10 > 0.0 && t200 > 0.0)
+        std::printf("%-6s %-9s log-log slope n = 10..200: %.2f\n", name, tip ? "tip_force" : "tendons",
+                    std::log(t200 / t10) / std::log(20.0));
+    }
+  }
+  return ok;
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
-  bool quick = false;
+  bool quick = false, sweep_only = false;
   int reps = 100;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--quick")) quick = true;
+    else if (!std::strcmp(argv[i], "--sweep-only")) sweep_only = true;
     else if (!std::strcmp(argv[i], "--reps") && i + 1 < argc) reps = std::atoi(argv[++i]);
   }
   if (quick) reps = 3;
@@ -32,6 +90,7 @@ int main(int argc, char** argv) {
       {{"ccsub", 10}, 12700.0}, {{"prb", 10}, 227000.0}, {{"prb", 40}, 28e6}};
   std::vector<int> ns = quick ? std::vector<int>{10} : std::vector<int>{1, 2, 5, 10, 20, 40};
 
+  if (sweep_only) return sweep(quick, reps) ? 0 : 1;
   std::printf("%-6s %4s %6s %8s %6s %12s %12s %14s %9s %s\n", "model", "n", "config", "unknowns", "iters",
               "median_us", "min_us", "paper_med_us", "speedup", "status");
   bool all_ok = true;
@@ -55,5 +114,6 @@ int main(int argc, char** argv) {
       }
     }
   }
+  all_ok = sweep(quick, reps) && all_ok;
   return all_ok ? 0 : 1;
 }

@@ -1,4 +1,5 @@
-// The common base of CCsub and PRB (lumped_model.hpp): workspace, binding, guesses, outputs.
+// The common base of CCsub and PRB (lumped_model.hpp): workspace, binding, guesses, outputs, the
+// recursive formulation (the banded one is in lumped_banded.cpp).
 #include "tdcr/models/lumped_model.hpp"
 
 #include "common/lumped_problem.hpp"
@@ -19,14 +20,50 @@ class LumpedWorkspace final : public ModelWorkspace {
 
 }  // namespace
 
-LumpedBody::LumpedBody(const Robot& robot, const TendonRouting& routing, const Effects& effects, int per_subsegment)
-    : statics(robot, routing, effects), per_subsegment(per_subsegment), N(statics.subsegments()) {
+LumpedBody::LumpedBody(const Robot& robot, const TendonRouting& routing, const Effects& effects, int per_subsegment,
+                       LumpedFormulation formulation, int banded_from)
+    : statics(robot, routing, effects),
+      length(robot.total_length()),
+      per_subsegment(per_subsegment),
+      N(statics.subsegments()),
+      formulation(formulation),
+      banded_from(banded_from) {
   const BackboneStiffness k = robot.backbone.effective_stiffness();
   EI = k.EI;
   GJ = k.GJ;
 }
 
 LumpedBody::~LumpedBody() = default;
+
+bool LumpedBody::banded(int J) const {
+  switch (formulation) {
+    case LumpedFormulation::Recursive: return false;
+    case LumpedFormulation::Banded: return true;
+    case LumpedFormulation::Automatic: break;
+  }
+  return J >= banded_from;
+}
+
+void LumpedBody::compute_frames(const double* x, int J, Frame* frames, SubsegmentPose* poses, Vec3* centroids) const {
+  frames[0] = Frame{};
+  SubsegmentPose tmp;
+  for (int j = 1; j <= N; ++j) {
+    const double l = statics.length(j);
+    const Frame& prev = frames[j - 1];
+    Frame& f = frames[j];
+    if (j > J) {
+      f.R = prev.R;
+      f.p = prev.p + l * prev.R.col(2);
+      if (centroids) centroids[j] = prev.p + 0.5 * l * prev.R.col(2);
+      continue;
+    }
+    SubsegmentPose& g = poses ? poses[j] : tmp;
+    local(j, x + per_subsegment * (j - 1), g);
+    f.R = prev.R * g.R;
+    f.p = prev.p + prev.R * g.p;
+    if (centroids) centroids[j] = prev.p + prev.R * g.c;
+  }
+}
 
 std::vector<Frame> LumpedBody::disk_frames(const Eigen::VectorXd& x) const {
   if (x.size() != per_subsegment * N)
@@ -39,6 +76,7 @@ std::vector<Frame> LumpedBody::disk_frames(const Eigen::VectorXd& x) const {
 
 LumpedProblem::LumpedProblem(const LumpedBody& body) : body_(body) {
   frames_.resize(body.N + 1);
+  poses_.resize(body.N + 1);
   centroids_.assign(body.N + 1, Vec3::Zero());
   F_.assign(body.N + 1, Vec3::Zero());
   M_.assign(body.N + 1, Vec3::Zero());
@@ -47,39 +85,82 @@ LumpedProblem::LumpedProblem(const LumpedBody& body) : body_(body) {
 void LumpedProblem::bind(const ModelInput& input) {
   body_.statics.bind(input, loads_);
   convention_ = input.actuation.convention;
+  banded_ = body_.banded(active());
+  if (banded_ && pattern_J_ != active()) build_pattern();
 }
 
-void LumpedProblem::adjust(bvp::NewtonOptions& options) const { options.linear_solver = LinearSolverKind::Dense; }
+void LumpedProblem::adjust(bvp::NewtonOptions& options) const {
+  options.linear_solver = banded_ ? LinearSolverKind::SparseKLU : LinearSolverKind::Dense;
+}
 
-bool LumpedProblem::warm_guess(const Solution& previous, Eigen::VectorXd& x) {
+void LumpedProblem::x_scale(double* s) const {
+  for (int i = 0; i < body_.per_subsegment; ++i) s[i] = 1.0;
+}
+
+void LumpedProblem::unknown_scale(Eigen::Ref<Eigen::VectorXd> s) const {
+  if (banded_) {
+    banded_scale(s.data());
+    return;
+  }
+  for (int j = 0; j < active(); ++j) x_scale(s.data() + body_.per_subsegment * j);
+}
+
+void LumpedProblem::cold_guess(Eigen::VectorXd& y) {
+  straight_x(x_, false);
+  lift(x_, y);
+}
+
+void LumpedProblem::rest_state(Eigen::VectorXd& y) {
+  straight_x(x_, true);
+  lift(x_, y);
+}
+
+bool LumpedProblem::warm_guess(const Solution& previous, Eigen::VectorXd& y) {
   if (previous.unknowns.size() != body_.per_subsegment * body_.N || !previous.unknowns.allFinite()) return false;
-  x = previous.unknowns.head(size());
+  x_ = previous.unknowns.head(body_.per_subsegment * active());
+  on_warm(x_);
+  lift(x_, y);
   return true;
 }
 
 void LumpedProblem::evaluate(const double* x) {
-  geometry(x);
+  body_.compute_frames(x, active(), frames_.data(), poses_.data(), backbone_weight_on() ? centroids_.data() : nullptr);
   body_.statics.distal_wrenches(loads_, frames_.data(), centroids_.data(), F_.data(), M_.data());
 }
 
-void LumpedProblem::extract(const Eigen::VectorXd& x, bool evaluated, Solution& solution) {
-  Eigen::VectorXd full = Eigen::VectorXd::Zero(body_.per_subsegment * body_.N);
-  full.head(x.size()) = x;
-  // The driver has just evaluated the residual at x: frames_ are the answer's.
-  if (evaluated) {
-    solution.disk_frames = frames_;
-  } else {
-    solution.disk_frames.resize(body_.N + 1);
-    body_.compute_frames(full.data(), active(), solution.disk_frames.data());
+bool LumpedProblem::residual(const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> f) {
+  const bool ok = banded_ ? banded_residual(y.data(), f.data()) : recursive_residual(y.data(), f.data());
+  return ok && f.allFinite();
+}
+
+bool LumpedProblem::recursive_residual(const double* x, double* f) {
+  evaluate(x);
+  const int m = body_.per_subsegment;
+  const bool bb = backbone_weight_on();
+  for (int j = 1; j <= active(); ++j) {
+    const Mat3 Rt = frames_[j - 1].R.transpose();
+    const Vec3 W = bb ? Vec3(Rt * backbone_weight(j)) : Vec3::Zero();
+    constitutive(j, x + m * (j - 1), poses_[j], Rt * F_[j], Rt * M_[j], W, f + m * (j - 1));
   }
+  return true;
+}
+
+void LumpedProblem::extract(const Eigen::VectorXd& y, bool evaluated, Solution& solution) {
+  (void)evaluated;
+  gather_x(y, x_);
+  Eigen::VectorXd full = Eigen::VectorXd::Zero(body_.per_subsegment * body_.N);
+  full.head(x_.size()) = x_;
+  solution.disk_frames.resize(body_.N + 1);
+  body_.compute_frames(full.data(), active(), solution.disk_frames.data());
   solution.tendon_displacements = tendon::chord_displacements(solution.disk_frames, body_.statics.routing(), convention_);
   solution.unknowns = std::move(full);
 }
 
 }  // namespace detail
 
-LumpedModel::LumpedModel(const Robot& robot, const Effects& effects, BodyFactory make_body)
-    : StaticModel(robot, effects), body_(make_body(this->robot(), routing(), this->effects())) {}
+LumpedModel::LumpedModel(const Robot& robot, const Effects& effects, LumpedFormulation formulation,
+                         BodyFactory make_body)
+    : StaticModel(robot, effects), body_(make_body(this->robot(), routing(), this->effects(), formulation)) {}
 
 LumpedModel::~LumpedModel() = default;
 

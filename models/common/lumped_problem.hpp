@@ -3,6 +3,15 @@
 // recursive statics (subsegment_statics.hpp), and differ only in their kinematics and
 // constitutive residuals: a LumpedBody (immutable, owned by the model) says those, a
 // LumpedProblem (one per workspace) binds an input and gives the solve driver the rest.
+//
+// Two formulations of the same equations (lumped_model.hpp, LumpedFormulation):
+//  - recursive: the m unknowns x_j of each loaded subsegment; frames follow from the base, the
+//    distal wrenches from the tip (dense Jacobian, dense LU: ~J^3);
+//  - banded (lumped_banded.cpp): besides x_j, the pose (p_j, rotation vector th_j) of disk j and
+//    the distal wrench (F_j, M_j) are unknowns; residuals of subsegment j are its constitutive
+//    law, pose continuity with disk j-1 and the balance of disk j (tendon forces of disks j-1,
+//    j, j+1): a block-banded Jacobian (declared pattern, grouped finite differences, KLU: ~J).
+// Both give the same solution; Solution::unknowns always holds the x_j of all N subsegments.
 #pragma once
 
 #include <memory>
@@ -18,55 +27,87 @@ namespace tdcr::detail {
 
 class LumpedProblem;
 
+/// Geometry of one subsegment in the frame of its base disk j-1.
+struct SubsegmentPose {
+  Mat3 R;       ///< Rotation of disk j relative to disk j-1.
+  Vec3 p;       ///< Centre O_j.
+  Vec3 c;       ///< Centre of mass of the backbone of the subsegment.
+  Vec3 aux[7];  ///< Model-specific points (PRB: joint centres 0..2, link midpoints 3..6).
+};
+
 /// The subsegments of one lumped model, their stiffness and kinematics.
 class LumpedBody {
  public:
-  LumpedBody(const Robot& robot, const TendonRouting& routing, const Effects& effects, int per_subsegment);
+  LumpedBody(const Robot& robot, const TendonRouting& routing, const Effects& effects, int per_subsegment,
+             LumpedFormulation formulation, int banded_from);
   virtual ~LumpedBody();
 
-  /// Disk frames 0..N (base disk first) from the unknowns of subsegments 1..J (x holds at least
-  /// per_subsegment J values); subsegments beyond J are straight.
-  virtual void compute_frames(const double* x, int J, Frame* frames) const = 0;
+  /// Geometry of subsegment j (1-based) from its unknowns xj (per_subsegment values).
+  virtual void local(int j, const double* xj, SubsegmentPose& g) const = 0;
   /// The problem of a new workspace.
   virtual std::unique_ptr<LumpedProblem> make_problem() const = 0;
+  /// Disk frames 0..N (base disk first) from the unknowns of subsegments 1..J (x holds at least
+  /// per_subsegment J values); subsegments beyond J are straight. Poses (if given, index 1..J)
+  /// and centroids (if given, base frame, index 1..N) receive the subsegment geometry.
+  void compute_frames(const double* x, int J, Frame* frames, SubsegmentPose* poses = nullptr,
+                      Vec3* centroids = nullptr) const;
   /// Disk frames for a full unknown vector (per_subsegment N values; InputError otherwise).
   std::vector<Frame> disk_frames(const Eigen::VectorXd& x) const;
+  /// True if J loaded subsegments are solved in the banded formulation.
+  bool banded(int J) const;
 
   SubsegmentStatics statics;
   double EI = 0.0, GJ = 0.0;  ///< Bending and torsional stiffness (N m^2).
-  int per_subsegment = 0;     ///< Unknowns per subsegment.
+  double length = 0.0;        ///< Robot length L (m).
+  int per_subsegment = 0;     ///< Unknowns m per subsegment.
   int N = 0;                  ///< Subsegments.
+  LumpedFormulation formulation = LumpedFormulation::Automatic;
+  int banded_from = 0;  ///< Automatic: banded from this many loaded subsegments on.
 };
 
 /// One workspace's solve of a lumped model: its residual system (the parameter is the load
 /// factor: every load of the bound input scales with it), Newton memory and buffers, sized once.
-/// Unknowns: per_subsegment values for each of the J loaded subsegments; Solution::unknowns
-/// holds all N (zero beyond J), so warm starts work across inputs with another J.
+/// Unknowns: those of the J loaded subsegments in the formulation chosen at bind (m J recursive,
+/// (m + 12) J banded); Solution::unknowns holds the x_j of all N (zero beyond J), so warm starts
+/// work across inputs with another J and either formulation.
 class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
  public:
   explicit LumpedProblem(const LumpedBody& body);
 
-  /// Resolve the loads of `input` (allocation-free after the first bind).
+  /// Resolve the loads of `input` and choose the formulation (allocation-free after the first
+  /// bind of a given J).
   void bind(const ModelInput& input);
 
   bvp::ParameterizedSystem* system() override { return this; }
   bvp::NewtonSolver& newton() override { return newton_; }
-  /// Dense LU: the finite-difference Jacobian of the recursion is dense.
+  /// Dense LU for the recursive formulation, KLU for the banded one.
   void adjust(bvp::NewtonOptions& options) const override;
-  /// The straight robot.
-  void cold_guess(Eigen::VectorXd& x) override { x.setZero(size()); }
-  void rest_state(Eigen::VectorXd& x) override { x.setZero(size()); }
-  bool warm_guess(const Solution& previous, Eigen::VectorXd& x) override;
-  void extract(const Eigen::VectorXd& x, bool evaluated, Solution& solution) override;
+  /// The straight robot (straight_x), lifted to the formulation's unknowns.
+  void cold_guess(Eigen::VectorXd& y) final;
+  void rest_state(Eigen::VectorXd& y) final;
+  bool warm_guess(const Solution& previous, Eigen::VectorXd& y) final;
+  void extract(const Eigen::VectorXd& y, bool evaluated, Solution& solution) final;
 
-  int size() const override { return body_.per_subsegment * loads_.active; }
-  void set_parameter(double lambda) override { loads_.set_load_factor(lambda); }
+  int size() const final { return stride() * loads_.active; }
+  void set_parameter(double lambda) final { loads_.set_load_factor(lambda); }
+  bool residual(const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> f) final;
+  const bvp::SparsityPattern* sparsity() const final { return banded_ ? &pattern_ : nullptr; }
+  void unknown_scale(Eigen::Ref<Eigen::VectorXd> s) const final;
 
  protected:
-  /// The model's geometry at x: frames_ (all N + 1), and centroids_ (backbone centres of mass)
-  /// if the backbone weight acts.
-  virtual void geometry(const double* x) = 0;
-  /// geometry(x), then the distal wrenches F_, M_ of subsegments 1..J.
+  /// Constitutive residuals (per_subsegment values) of subsegment j with geometry g: F, M
+  /// (about O_j) the distal wrench and W the backbone weight of the subsegment (zero without
+  /// gravity), all in the frame of disk j-1.
+  virtual void constitutive(int j, const double* xj, const SubsegmentPose& g, const Vec3& F, const Vec3& M,
+                            const Vec3& W, double* r) const = 0;
+  /// The x_j of the straight robot (zeros unless overridden); `rest`: for the rest state.
+  virtual void straight_x(Eigen::VectorXd& x, bool rest) { (void)rest; x.setZero(body_.per_subsegment * active()); }
+  /// Called with the x_j of a warm start (e.g. to take gauge references from it).
+  virtual void on_warm(const Eigen::VectorXd& x) { (void)x; }
+  /// Scale of x_j (per_subsegment values; default ones).
+  virtual void x_scale(double* s) const;
+
+  /// Frames, poses, centroids (if the backbone weight acts) and distal wrenches at x_j.
   void evaluate(const double* x);
   /// Moment about O_{j-1} (base frame) of everything distal of disk j-1 at the last evaluate().
   Vec3 base_moment(int j) const {
@@ -77,17 +118,32 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   }
 
   int active() const { return loads_.active; }
+  bool banded() const { return banded_; }
   bool backbone_weight_on() const { return loads_.loads.has_backbone_weight(); }
   Vec3 backbone_weight(int j) const { return body_.statics.backbone_weight(loads_, j); }
 
   SubsegmentLoads loads_;
   std::vector<Frame> frames_;
+  std::vector<SubsegmentPose> poses_;
   std::vector<Vec3> centroids_, F_, M_;
 
  private:
+  int stride() const { return banded_ ? body_.per_subsegment + 12 : body_.per_subsegment; }
+  bool recursive_residual(const double* x, double* f);
+  // lumped_banded.cpp
+  bool banded_residual(const double* y, double* f);
+  void lift(const Eigen::VectorXd& x, Eigen::VectorXd& y);
+  void gather_x(const Eigen::VectorXd& y, Eigen::VectorXd& x) const;
+  void build_pattern();
+  void banded_scale(double* s) const;
+
   const LumpedBody& body_;
   bvp::NewtonSolver newton_;
   Actuation::DisplacementConvention convention_ = Actuation::DisplacementConvention::AtBase;
+  bool banded_ = false;
+  bvp::SparsityPattern pattern_;
+  int pattern_J_ = -1;
+  Eigen::VectorXd x_;  // x_j of the loaded subsegments (guesses, lifting)
 };
 
 }  // namespace tdcr::detail

@@ -33,33 +33,36 @@ void SubsegmentStatics::bind(const ModelInput& input, SubsegmentLoads& out) cons
   }
 }
 
+void SubsegmentStatics::disk_load(const SubsegmentLoads& b, int j, const Frame* frames, Vec3& f, Vec3& m) const {
+  const physics::LoadCase& L = b.loads;
+  // Eq. 30-33 (+ Eq. 58): the tendon forces at disk j, moment about O_j.
+  const tendon::DiskWrench w = tendon::disk_wrench(j, frames, *routing_, b.tensions.data(), remove_normal_);
+  f = w.force;
+  m = w.moment;
+  if (L.has_disk_weight()) f += L.disk_weight(j);
+  if (j == n_ && L.has_tip_wrench()) {  // Eq. 44-45: the external tip wrench acts at O_n.
+    f += L.tip_force();
+    m += L.tip_moment();
+  }
+}
+
 void SubsegmentStatics::distal_wrenches(const SubsegmentLoads& b, const Frame* frames, const Vec3* backbone_centroid,
                                         Vec3* F, Vec3* M) const {
-  const physics::LoadCase& L = b.loads;
   const int J = b.active;
-  const bool disk_weight = L.has_disk_weight(), bb = L.has_backbone_weight();
+  const bool bb = b.loads.has_backbone_weight();
   for (int j = J; j >= 1; --j) {
-    // Eq. 30-33 (+ Eq. 58): the tendon forces at disk j, moment about O_j.
-    const tendon::DiskWrench w = tendon::disk_wrench(j, frames, *routing_, b.tensions.data(), remove_normal_);
-    Vec3 f = w.force;
-    Vec3 m = w.moment;
-    if (disk_weight) f += L.disk_weight(j);
-    if (j == n_) {
-      if (L.has_tip_wrench()) {  // Eq. 44-45: the external tip wrench acts at O_n.
-        f += L.tip_force();
-        m += L.tip_moment();
-      }
-    } else if (j < J) {
+    Vec3 f, m;
+    disk_load(b, j, frames, f, m);
+    if (j < J) {
       // Eq. 46-47: propagate the wrench of the distal subsegments from O_{j+1} to O_j.
       const Vec3& pj = frames[j].p;
-      Vec3 fd = F[j + 1];
+      f += F[j + 1];
       m += M[j + 1] + (frames[j + 1].p - pj).cross(F[j + 1]);
       if (bb) {
         const Vec3 W = backbone_weight(b, j + 1);
-        fd += W;
+        f += W;
         m += (backbone_centroid[j + 1] - pj).cross(W);
       }
-      f += fd;
     }
     F[j] = f;
     M[j] = m;

@@ -53,6 +53,9 @@ class SubsegmentStatics {
   /// @brief Weight of the backbone of subsegment j (N, base frame) at the current load factor.
   Vec3 backbone_weight(const SubsegmentLoads& b, int j) const { return length_[j] * b.loads.backbone_weight(); }
 
+  /// @brief The load on disk j alone at the current load factor: its tendon forces (Eq. 30-33,
+  /// 58), its weight and, at the tip disk, the tip wrench; moment m about O_j.
+  void disk_load(const SubsegmentLoads& b, int j, const Frame* frames, Vec3& f, Vec3& m) const;
   /// @brief The recursive balance (Eq. 44-47) for subsegments 1..J at the current load factor.
   ///
   /// @param frames Disk frames 0..N (base disk first).

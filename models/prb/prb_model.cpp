@@ -23,19 +23,18 @@ constexpr double kPhiScale = 1e-4;
 // local minimum of |F| (configurations 14 and 15 of the case study at n = 1 end there with
 // KINSOL's automatic bound).
 constexpr double kMaxNewtonStep = 1.0;
+// Automatic formulation: banded from this many loaded subsegments on (the measured crossover,
+// docs/design-notes/lumped.md).
+constexpr int kBandedFrom = 40;
 
-/// Geometry of one PRB subsegment in the frame of its base disk.
-struct PrbLocal {
-  Vec3 joint[3];  // joint centres P_1..P_3
-  Vec3 mid[4];    // link midpoints
-  Vec3 end;       // O_j
-  Mat3 R;         // rotation of disk j relative to disk j-1
-};
+// Model-specific points of a PRB subsegment in detail::SubsegmentPose::aux.
+constexpr int kJoint = 0;  // joint centres P_1..P_3: aux[0..2]
+constexpr int kMid = 3;    // link midpoints: aux[3..6]
 
 class PrbBody final : public detail::LumpedBody {
  public:
-  PrbBody(const Robot& robot, const TendonRouting& routing, const Effects& effects)
-      : LumpedBody(robot, routing, effects, kU) {
+  PrbBody(const Robot& robot, const TendonRouting& routing, const Effects& effects, LumpedFormulation formulation)
+      : LumpedBody(robot, routing, effects, kU, formulation, kBandedFrom) {
     gamma_sum = 0.0;
     for (int i = 0; i < 4; ++i) {
       gamma[i] = effects.prb.gamma[i];
@@ -44,26 +43,30 @@ class PrbBody final : public detail::LumpedBody {
     for (int q = 0; q < 3; ++q) k_theta[q] = effects.prb.k_theta[q];
   }
 
-  void compute_frames(const double* x, int J, Frame* frames) const override { chain(x, J, frames, nullptr, nullptr); }
   std::unique_ptr<detail::LumpedProblem> make_problem() const override;
 
   // Eq. 11-12 with the twist: the rigid-link body of subsegment j in its base disk frame.
-  void local(int j, const double* xj, PrbLocal& g) const {
+  void local(int j, const double* xj, detail::SubsegmentPose& g) const override {
     const double l = statics.length(j);
     const double cp = std::cos(xj[3]), sp = std::sin(xj[3]);
     // In-plane coordinates (x', z') of the chain, then x' mapped along (cos phi, sin phi).
     double x = 0.0, z = gamma[0] * l, a = 0.0;
     auto to3 = [&](double px, double pz) { return Vec3(px * cp, px * sp, pz); };
-    g.mid[0] = Vec3(0.0, 0.0, 0.5 * gamma[0] * l);
+    Vec3* joint = g.aux + kJoint;
+    Vec3* mid = g.aux + kMid;
+    mid[0] = Vec3(0.0, 0.0, 0.5 * gamma[0] * l);
     for (int q = 0; q < 3; ++q) {
-      g.joint[q] = to3(x, z);
+      joint[q] = to3(x, z);
       a += xj[q];
       const double L = gamma[q + 1] * l, sa = std::sin(a), ca = std::cos(a);
-      g.mid[q + 1] = to3(x + 0.5 * L * sa, z + 0.5 * L * ca);
+      mid[q + 1] = to3(x + 0.5 * L * sa, z + 0.5 * L * ca);
       x += L * sa;
       z += L * ca;
     }
-    g.end = to3(x, z);
+    g.p = to3(x, z);
+    Vec3 c = Vec3::Zero();
+    for (int i = 0; i < 4; ++i) c += gamma[i] * mid[i];
+    g.c = c / gamma_sum;
     // Rz(phi) Ry(a) Rz(eps - phi).
     const double sa = std::sin(a), ca = std::cos(a);
     const double e = xj[4] - xj[3], ce = std::cos(e), se = std::sin(e);
@@ -76,113 +79,66 @@ class PrbBody final : public detail::LumpedBody {
     g.R.col(2) = A.col(2);
   }
 
-  // Frames of all disks (straight beyond J); locals[j] (if given) receives the local geometry
-  // of subsegments 1..J; centroids (if given) the backbone centre of mass of every subsegment.
-  void chain(const double* x, int J, Frame* frames, PrbLocal* locals, Vec3* centroids) const {
-    frames[0] = Frame{};
-    PrbLocal g;
-    for (int j = 1; j <= N; ++j) {
-      const double l = statics.length(j);
-      const Frame& prev = frames[j - 1];
-      Frame& f = frames[j];
-      if (j > J) {
-        f.R = prev.R;
-        f.p = prev.p + l * prev.R.col(2);
-        if (centroids) centroids[j] = prev.p + 0.5 * l * prev.R.col(2);
-        continue;
-      }
-      PrbLocal& gl = locals ? locals[j] : g;
-      local(j, x + kU * (j - 1), gl);
-      f.R = prev.R * gl.R;
-      f.p = prev.p + prev.R * gl.end;
-      if (centroids) {
-        Vec3 c = Vec3::Zero();
-        for (int i = 0; i < 4; ++i) c += gamma[i] * gl.mid[i];
-        centroids[j] = prev.p + prev.R * (c / gamma_sum);
-      }
-    }
-  }
-
   double gamma[4] = {};
   double gamma_sum = 1.0;
   double k_theta[3] = {};
 };
 
-// The 5J residuals of Eq. 48-54 (see prb.hpp).
+// The 5 residuals of Eq. 48-54 per subsegment (see prb.hpp).
 class PrbProblem final : public detail::LumpedProblem {
  public:
-  explicit PrbProblem(const PrbBody& body) : LumpedProblem(body), body_(body) {
-    locals_.resize(body.N + 1);
-    phi_ref_.assign(body.N + 1, 0.0);
-  }
+  explicit PrbProblem(const PrbBody& body) : LumpedProblem(body), body_(body) { phi_ref_.assign(body.N + 1, 0.0); }
 
   void adjust(bvp::NewtonOptions& options) const override {
     LumpedProblem::adjust(options);
-    options.max_newton_step = kMaxNewtonStep;
-  }
-  void cold_guess(Eigen::VectorXd& x) override { straight_guess(x); }
-  // With phi_ref = phi the straight guess is the exact solution at load factor 0.
-  void rest_state(Eigen::VectorXd& x) override { straight_guess(x); }
-  bool warm_guess(const Solution& previous, Eigen::VectorXd& x) override {
-    if (!LumpedProblem::warm_guess(previous, x)) return false;
-    set_phi_ref(x);
-    return true;
-  }
-
-  void unknown_scale(Eigen::Ref<Eigen::VectorXd> s) const override {
-    s.setOnes();
-    for (int j = 0; j < active(); ++j) s[kU * j + 3] = kPhiScale;
-  }
-
-  bool residual(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> f) override {
-    evaluate(x.data());
-    const bool bb = backbone_weight_on();
-    const double gj_ei = body_.GJ / body_.EI;
-    for (int j = 1; j <= active(); ++j) {
-      const Frame& a = frames_[j - 1];
-      const PrbLocal& g = locals_[j];
-      const double* xj = x.data() + kU * (j - 1);
-      double* fj = f.data() + kU * (j - 1);
-      const double s = body_.statics.length(j) / body_.EI;
-      const double cp = std::cos(xj[3]), sp = std::sin(xj[3]);
-      // Distal wrench in the frame of disk j-1 (only relative geometry from here on).
-      const Vec3 F = a.R.transpose() * F_[j];
-      const Vec3 Mj = a.R.transpose() * M_[j];  // about O_j
-      Vec3 W = Vec3::Zero();
-      if (bb) W = (1.0 / body_.gamma_sum) * (a.R.transpose() * backbone_weight(j));
-      const Vec3 y(-sp, cp, 0.0);
-      // Eq. 48-51: joint q balances the moment of everything distal of it.
-      for (int q = 0; q < 3; ++q) {
-        Vec3 Mq = Mj + (g.end - g.joint[q]).cross(F);
-        if (bb)
-          for (int i = q + 1; i < 4; ++i) Mq += (g.mid[i] - g.joint[q]).cross(body_.gamma[i] * W);
-        fj[q] = body_.k_theta[q] * xj[q] - s * y.dot(Mq);
-      }
-      // Moment about O_{j-1}.
-      Vec3 Mb = Mj + g.end.cross(F);
-      if (bb)
-        for (int i = 0; i < 4; ++i) Mb += g.mid[i].cross(body_.gamma[i] * W);
-      // Eq. 52-53, two-sided: the in-plane moment has no component across the joint axis.
-      const double t2 = s * s * (Mb.x() * Mb.x() + Mb.y() * Mb.y());
-      const double gauge = kGaugeEta * kGaugeA0 * kGaugeA0 / (kGaugeA0 * kGaugeA0 + t2);
-      fj[3] = s * (cp * Mb.x() + sp * Mb.y()) + gauge * std::sin(xj[3] - phi_ref_[j]);
-      // Eq. 54: twist about the end tangent.
-      fj[4] = gj_ei * xj[4] - s * g.R.col(2).dot(Mb);
-    }
-    return f.allFinite();
+    // The banded unknowns include every disk pose: a bound on their joint step would stall it.
+    if (!banded()) options.max_newton_step = kMaxNewtonStep;
   }
 
  private:
-  void geometry(const double* x) override {
-    body_.chain(x, active(), frames_.data(), locals_.data(), centroids_.data());
+  void x_scale(double* s) const override {
+    for (int i = 0; i < kU; ++i) s[i] = 1.0;
+    s[3] = kPhiScale;
   }
+  void on_warm(const Eigen::VectorXd& x) override { set_phi_ref(x); }
+
+  void constitutive(int j, const double* xj, const detail::SubsegmentPose& g, const Vec3& F, const Vec3& Mj,
+                    const Vec3& Wj, double* r) const override {
+    const bool bb = backbone_weight_on();
+    const double gj_ei = body_.GJ / body_.EI;
+    const double s = body_.statics.length(j) / body_.EI;
+    const double cp = std::cos(xj[3]), sp = std::sin(xj[3]);
+    const Vec3* joint = g.aux + kJoint;
+    const Vec3* mid = g.aux + kMid;
+    const Vec3 W = Wj / body_.gamma_sum;
+    const Vec3 y(-sp, cp, 0.0);
+    // Eq. 48-51: joint q balances the moment of everything distal of it.
+    for (int q = 0; q < 3; ++q) {
+      Vec3 Mq = Mj + (g.p - joint[q]).cross(F);
+      if (bb)
+        for (int i = q + 1; i < 4; ++i) Mq += (mid[i] - joint[q]).cross(body_.gamma[i] * W);
+      r[q] = body_.k_theta[q] * xj[q] - s * y.dot(Mq);
+    }
+    // Moment about O_{j-1}.
+    Vec3 Mb = Mj + g.p.cross(F);
+    if (bb)
+      for (int i = 0; i < 4; ++i) Mb += mid[i].cross(body_.gamma[i] * W);
+    // Eq. 52-53, two-sided: the in-plane moment has no component across the joint axis.
+    const double t2 = s * s * (Mb.x() * Mb.x() + Mb.y() * Mb.y());
+    const double gauge = kGaugeEta * kGaugeA0 * kGaugeA0 / (kGaugeA0 * kGaugeA0 + t2);
+    r[3] = s * (cp * Mb.x() + sp * Mb.y()) + gauge * std::sin(xj[3] - phi_ref_[j]);
+    // Eq. 54: twist about the end tangent.
+    r[4] = gj_ei * xj[4] - s * g.R.col(2).dot(Mb);
+  }
+
   void set_phi_ref(const Eigen::VectorXd& x) {
     for (int j = 1; j <= active(); ++j) phi_ref_[j] = x[kU * (j - 1) + 3];
   }
   // Straight guess (all joint angles and twists zero); each bending plane is put where the moment
-  // at the straight state under the full load points (y_phi along M*), see prb.hpp.
-  void straight_guess(Eigen::VectorXd& x) {
-    x.setZero(size());
+  // at the straight state under the full load points (y_phi along M*), see prb.hpp. With
+  // phi_ref = phi it is also the exact solution at load factor 0.
+  void straight_x(Eigen::VectorXd& x, bool) override {
+    x.setZero(kU * active());
     const double lambda = loads_.loads.load_factor();
     set_parameter(1.0);
     evaluate(x.data());
@@ -196,29 +152,30 @@ class PrbProblem final : public detail::LumpedProblem {
   }
 
   const PrbBody& body_;
-  std::vector<PrbLocal> locals_;
   std::vector<double> phi_ref_;
 };
 
 std::unique_ptr<detail::LumpedProblem> PrbBody::make_problem() const { return std::make_unique<PrbProblem>(*this); }
 
-std::unique_ptr<detail::LumpedBody> make_body(const Robot& robot, const TendonRouting& routing, const Effects& effects) {
-  return std::make_unique<PrbBody>(robot, routing, effects);
+std::unique_ptr<detail::LumpedBody> make_body(const Robot& robot, const TendonRouting& routing, const Effects& effects,
+                                              LumpedFormulation formulation) {
+  return std::make_unique<PrbBody>(robot, routing, effects, formulation);
 }
 
 }  // namespace
 
-PrbModel::PrbModel(const Robot& robot, const Effects& effects) : LumpedModel(robot, effects, make_body) {}
+PrbModel::PrbModel(const Robot& robot, const Effects& effects, LumpedFormulation formulation)
+    : LumpedModel(robot, effects, formulation, make_body) {}
 
 std::vector<Vec3> PrbModel::joint_points(const Eigen::VectorXd& x) const {
   const std::vector<Frame> f = frames(x);
   const auto& b = static_cast<const PrbBody&>(body());
   std::vector<Vec3> pts;
   pts.reserve(4 * b.N);
-  PrbLocal g;
+  detail::SubsegmentPose g;
   for (int j = 1; j <= b.N; ++j) {
     b.local(j, x.data() + kU * (j - 1), g);
-    for (int q = 0; q < 3; ++q) pts.push_back(f[j - 1].transform(g.joint[q]));
+    for (int q = 0; q < 3; ++q) pts.push_back(f[j - 1].transform(g.aux[kJoint + q]));
     pts.push_back(f[j].p);
   }
   return pts;

@@ -32,8 +32,9 @@
 /// the exact centroid of its arc (the distributed weight integrated along the arc). Inextensible,
 /// no shear (effects.shear_extension is not used by this model).
 ///
-/// Solver (lumped_model.hpp): Newton on the 3J residuals of the loaded subsegments, from the
-/// straight robot; the load factor scales every load for continuation.
+/// Solver (lumped_model.hpp): Newton on the 3J residuals of the loaded subsegments (recursive)
+/// or on these and the pose and balance residuals of every disk (banded), from the straight
+/// robot; the load factor scales every load for continuation.
 #pragma once
 
 #include "tdcr/models/lumped_model.hpp"
@@ -45,7 +46,8 @@ namespace tdcr {
 class CcsubModel final : public LumpedModel {
  public:
   /// @brief Validates robot and effects (InputError).
-  CcsubModel(const Robot& robot, const Effects& effects);
+  CcsubModel(const Robot& robot, const Effects& effects,
+             LumpedFormulation formulation = LumpedFormulation::Automatic);
   ModelKind kind() const override { return ModelKind::CCsub; }
 };
 

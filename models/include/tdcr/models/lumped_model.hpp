@@ -10,8 +10,13 @@
 /// tip wrench, no gravity) are exactly straight: they are no unknowns of the solve
 /// (SolverSummary::unknowns counts the loaded ones), while Solution::unknowns holds the values
 /// of all N subsegments (zero for the straight ones), so that any Solution of the same model can
-/// warm-start another input. Cold guess: the straight robot. Newton with a dense
-/// finite-difference Jacobian (one column costs one O(N) residual).
+/// warm-start another input. Cold guess: the straight robot.
+///
+/// Two formulations of the same equations (LumpedFormulation), same solution: recursive (the
+/// subsegment unknowns only; dense Jacobian and LU, cost ~J^3, fastest for few subsegments)
+/// and banded (disk poses and internal wrenches are unknowns too; block-banded Jacobian, KLU,
+/// cost ~J). Automatic picks banded from a model-specific number of loaded subsegments on (CCsub
+/// 100, PRB 40: the measured crossover, docs/design-notes/lumped.md).
 #pragma once
 
 #include <memory>
@@ -27,6 +32,9 @@ namespace detail {
 class LumpedBody;
 }  // namespace detail
 
+/// @brief How a lumped model sets up its Newton system (see the file comment).
+enum class LumpedFormulation { Automatic, Recursive, Banded };
+
 /// @brief A lumped static model: immutable; solved through tdcr::solve with its workspace.
 class LumpedModel : public StaticModel {
  public:
@@ -40,9 +48,10 @@ class LumpedModel : public StaticModel {
 
  protected:
   /// @brief Builds a model's subsegments from the (validated) robot, its routing and effects.
-  using BodyFactory = std::unique_ptr<detail::LumpedBody> (*)(const Robot&, const TendonRouting&, const Effects&);
+  using BodyFactory = std::unique_ptr<detail::LumpedBody> (*)(const Robot&, const TendonRouting&, const Effects&,
+                                                              LumpedFormulation);
   /// @brief Validates robot and effects (InputError) and builds the body with `make_body`.
-  LumpedModel(const Robot& robot, const Effects& effects, BodyFactory make_body);
+  LumpedModel(const Robot& robot, const Effects& effects, LumpedFormulation formulation, BodyFactory make_body);
   /// @brief The model's subsegments (private type, models/common/lumped_problem.hpp).
   const detail::LumpedBody& body() const { return *body_; }
 

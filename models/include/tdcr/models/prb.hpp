@@ -40,9 +40,10 @@
 /// weights at disk centres and the backbone weight of each rigid link at its midpoint (the exact
 /// weight distribution of the rigid-link body). Inextensible, no shear.
 ///
-/// Solver (lumped_model.hpp): Newton on the 5J residuals of the loaded subsegments from the
-/// straight guess (bending planes along the moment at the straight state), steps bounded to
-/// about one radian of joint angle; the load factor scales every load for continuation.
+/// Solver (lumped_model.hpp): Newton on the 5J residuals of the loaded subsegments (recursive;
+/// steps bounded to about one radian of joint angle) or on these and the pose and balance
+/// residuals of every disk (banded), from the straight guess (bending planes along the moment
+/// at the straight state); the load factor scales every load for continuation.
 #pragma once
 
 #include <vector>
@@ -57,7 +58,8 @@ class PrbModel final : public LumpedModel {
  public:
   /// @brief Validates robot and effects (InputError; the PRB parameters must be positive and
   /// finite, Effects::validate).
-  PrbModel(const Robot& robot, const Effects& effects);
+  PrbModel(const Robot& robot, const Effects& effects,
+             LumpedFormulation formulation = LumpedFormulation::Automatic);
   ModelKind kind() const override { return ModelKind::PRB; }
 
   /// @brief Joint centres and link ends of the rigid-link body, base frame: for every
