@@ -4,7 +4,6 @@
 
 #include <Eigen/Dense>
 
-#include "common/model_factories.hpp"
 #include "common/model_problem.hpp"
 #include "tdcr/core/error.hpp"
 #include "tdcr/core/lie.hpp"
@@ -223,10 +222,5 @@ detail::ModelProblem& CcModel::bind(ModelWorkspace& workspace, const ModelInput&
   return problem;
 }
 
-namespace detail {
-std::unique_ptr<StaticModel> make_cc_model(const Robot& robot, const Effects& effects) {
-  return std::make_unique<CcModel>(robot, effects);
-}
-}  // namespace detail
 
 }  // namespace tdcr

@@ -3,7 +3,6 @@
 #include <cmath>
 
 #include "common/lumped_problem.hpp"
-#include "common/model_factories.hpp"
 
 namespace tdcr {
 
@@ -94,10 +93,5 @@ std::unique_ptr<detail::LumpedBody> make_body(const Robot& robot, const TendonRo
 CcsubModel::CcsubModel(const Robot& robot, const Effects& effects, LumpedFormulation formulation)
     : LumpedModel(robot, effects, formulation, make_body) {}
 
-namespace detail {
-std::unique_ptr<StaticModel> make_ccsub_model(const Robot& robot, const Effects& effects) {
-  return std::make_unique<CcsubModel>(robot, effects);
-}
-}  // namespace detail
 
 }  // namespace tdcr

@@ -5,12 +5,24 @@
 #include <cctype>
 #include <cstdio>
 
-#include "common/model_factories.hpp"
 #include "tdcr/core/error.hpp"
 #include "tdcr/core/scene_io.hpp"
+#include "tdcr/models/cc.hpp"
+#include "tdcr/models/ccsub.hpp"
 #include "tdcr/models/model_selection.hpp"
+#include "tdcr/models/prb.hpp"
+#include "tdcr/models/vc.hpp"
+#include "tdcr/models/vcref.hpp"
 
 namespace tdcr {
+
+namespace {
+// The registry's factory of a model class constructible from (robot, effects).
+template <class Model>
+std::unique_ptr<StaticModel> make(const Robot& robot, const Effects& effects) {
+  return std::make_unique<Model>(robot, effects);
+}
+}  // namespace
 
 const std::vector<ModelInfo>& model_registry() {
   // Expected accuracy: bench_case_study, scenario 1 (mean tip error against VCref, % of 2L) and
@@ -19,16 +31,16 @@ const std::vector<ModelInfo>& model_registry() {
   // tensions equals VC without external load; CCsub is within 1.2x of VC. With loads PRB is
   // slower than VCref (bench_case_study, scenario 2).
   static const std::vector<ModelInfo> table = {
-      {ModelKind::CC, "cc", "constant curvature per segment, kinematic (closed form)", detail::make_cc_model,
+      {ModelKind::CC, "cc", "constant curvature per segment, kinematic (closed form)", make<CcModel>,
        {true, true, false, false}, {{25.7, 4.27, 0.605, 0.151}, 2.0, INFINITY}, 0},
-      {ModelKind::CCsub, "ccsub", "constant curvature per subsegment with twist, static", detail::make_ccsub_model,
+      {ModelKind::CCsub, "ccsub", "constant curvature per subsegment with twist, static", make<CcsubModel>,
        {true, false, true, false, true}, {{30.8, 5.12, 0.726, 0.181}, 2.0, 3.2}, 2},
-      {ModelKind::PRB, "prb", "3R pseudo-rigid body per subsegment with twist, static", detail::make_prb_model,
+      {ModelKind::PRB, "prb", "3R pseudo-rigid body per subsegment with twist, static", make<PrbModel>,
        {true, false, true, false, true}, {{1.21, 0.231, 0.0165, 0.0345}, 0.0, 3.2}, 3, 5},
       {ModelKind::VC, "vc", "Cosserat rod with fully constrained tendons (Rucker & Webster 2011)",
-       detail::make_vc_model, {true, false, true, true}, {{25.7, 4.27, 0.605, 0.151}, 2.0, 3.2}, 1},
+       make<VcModel>, {true, false, true, true}, {{25.7, 4.27, 0.605, 0.151}, 2.0, 3.2}, 1},
       {ModelKind::VCref, "vcref", "Cosserat rod per subsegment with discrete disk forces (reference)",
-       detail::make_vcref_model, {true, false, true, true, true}, {{0.0, 0.0, 0.0, 0.0}, 0.0, 1.0}, 4},
+       make<VcrefModel>, {true, false, true, true, true}, {{0.0, 0.0, 0.0, 0.0}, 0.0, 1.0}, 4},
   };
   return table;
 }

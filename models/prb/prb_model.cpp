@@ -3,7 +3,6 @@
 #include <cmath>
 
 #include "common/lumped_problem.hpp"
-#include "common/model_factories.hpp"
 
 namespace tdcr {
 
@@ -181,10 +180,5 @@ std::vector<Vec3> PrbModel::joint_points(const Eigen::VectorXd& x) const {
   return pts;
 }
 
-namespace detail {
-std::unique_ptr<StaticModel> make_prb_model(const Robot& robot, const Effects& effects) {
-  return std::make_unique<PrbModel>(robot, effects);
-}
-}  // namespace detail
 
 }  // namespace tdcr

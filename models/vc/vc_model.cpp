@@ -1,7 +1,6 @@
 // The VC model: construction, the per-input choice of formulation, and its workspace (vc.hpp).
 #include "tdcr/models/vc.hpp"
 
-#include "common/model_factories.hpp"
 #include "tdcr/core/error.hpp"
 #include "vc/vc_shooting.hpp"
 
@@ -60,10 +59,5 @@ detail::ModelProblem& VcModel::bind(ModelWorkspace& workspace, const ModelInput&
   return *W.single;
 }
 
-namespace detail {
-std::unique_ptr<StaticModel> make_vc_model(const Robot& robot, const Effects& effects) {
-  return std::make_unique<VcModel>(robot, effects);
-}
-}  // namespace detail
 
 }  // namespace tdcr

@@ -6,7 +6,6 @@
 #include <cmath>
 #include <cstdio>
 
-#include "common/model_factories.hpp"
 #include "common/model_problem.hpp"
 #include "tdcr/bvp/integrator.hpp"
 #include "tdcr/core/error.hpp"
@@ -272,10 +271,5 @@ bvp::JacobianCheck VcrefModel::check_jacobian(ModelWorkspace& workspace, const M
   return bvp::check_jacobian(sys, x);
 }
 
-namespace detail {
-std::unique_ptr<StaticModel> make_vcref_model(const Robot& robot, const Effects& effects) {
-  return std::make_unique<VcrefModel>(robot, effects);
-}
-}  // namespace detail
 
 }  // namespace tdcr
