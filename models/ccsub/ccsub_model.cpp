@@ -83,15 +83,10 @@ class CcsubProblem final : public detail::LumpedProblem {
 
 std::unique_ptr<detail::LumpedProblem> CcsubBody::make_problem() const { return std::make_unique<CcsubProblem>(*this); }
 
-std::unique_ptr<detail::LumpedBody> make_body(const Robot& robot, const TendonRouting& routing, const Effects& effects,
-                                              LumpedFormulation formulation) {
-  return std::make_unique<CcsubBody>(robot, routing, effects, formulation);
-}
-
 }  // namespace
 
 CcsubModel::CcsubModel(const Robot& robot, const Effects& effects, LumpedFormulation formulation)
-    : LumpedModel(robot, effects, formulation, make_body) {}
+    : LumpedModel(robot, effects, formulation, detail::make_body<CcsubBody>) {}
 
 
 }  // namespace tdcr

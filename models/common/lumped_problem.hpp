@@ -65,6 +65,14 @@ class LumpedBody {
   int banded_from = 0;  ///< Automatic: banded from this many loaded subsegments on.
 };
 
+/// The LumpedModel::BodyFactory of a body class constructible from (robot, routing, effects,
+/// formulation).
+template <class Body>
+std::unique_ptr<LumpedBody> make_body(const Robot& robot, const TendonRouting& routing, const Effects& effects,
+                                      LumpedFormulation formulation) {
+  return std::make_unique<Body>(robot, routing, effects, formulation);
+}
+
 /// One workspace's solve of a lumped model: its residual system (the parameter is the load
 /// factor: every load of the bound input scales with it), Newton memory and buffers, sized once.
 /// Unknowns: those of the J loaded subsegments in the formulation chosen at bind (m J recursive,

@@ -156,15 +156,10 @@ class PrbProblem final : public detail::LumpedProblem {
 
 std::unique_ptr<detail::LumpedProblem> PrbBody::make_problem() const { return std::make_unique<PrbProblem>(*this); }
 
-std::unique_ptr<detail::LumpedBody> make_body(const Robot& robot, const TendonRouting& routing, const Effects& effects,
-                                              LumpedFormulation formulation) {
-  return std::make_unique<PrbBody>(robot, routing, effects, formulation);
-}
-
 }  // namespace
 
 PrbModel::PrbModel(const Robot& robot, const Effects& effects, LumpedFormulation formulation)
-    : LumpedModel(robot, effects, formulation, make_body) {}
+    : LumpedModel(robot, effects, formulation, detail::make_body<PrbBody>) {}
 
 std::vector<Vec3> PrbModel::joint_points(const Eigen::VectorXd& x) const {
   const std::vector<Frame> f = frames(x);
