@@ -32,6 +32,7 @@ std::string to_string(TerminationType t) {
     case TerminationType::LinearSolverFailed: return "linear_solver_failed";
     case TerminationType::IntegrationFailed: return "integration_failed";
     case TerminationType::NonFiniteResidual: return "non_finite_residual";
+    case TerminationType::Infeasible: return "infeasible";
     case TerminationType::NotSolved: return "not_solved";
   }
   return "unknown";
@@ -48,6 +49,24 @@ std::string SolverSummary::brief_report() const {
   std::string s = buf;
   if (!converged() && !message.empty()) s += " -- " + message;
   return s;
+}
+
+std::string to_string(StabilityStatus s) {
+  switch (s) {
+    case StabilityStatus::Stable: return "stable";
+    case StabilityStatus::Unstable: return "unstable";
+    case StabilityStatus::Undetermined: return "undetermined";
+  }
+  return "undetermined";
+}
+
+std::string to_string(PathEvent::Type t) {
+  switch (t) {
+    case PathEvent::Type::Fold: return "fold";
+    case PathEvent::Type::Bifurcation: return "bifurcation";
+    case PathEvent::Type::Snap: return "snap";
+  }
+  return "fold";
 }
 
 }  // namespace tdcr

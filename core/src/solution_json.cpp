@@ -88,6 +88,20 @@ std::string solution_to_json(const Solution& solution, const SolutionJsonOptions
   j["timing"] = {{"repeat", options.repeat},
                  {"median_us", number(options.median_us)},
                  {"min_us", number(options.min_us)}};
+  j["stability"] = {{"status", to_string(solution.stability.status)},
+                    {"margin", number(solution.stability.margin)},
+                    {"method", solution.stability.method}};
+  ojson events = ojson::array();
+  for (const PathEvent& e : solution.path_events)
+    events.push_back(ojson{{"type", to_string(e.type)},
+                           {"load_fraction", number(e.load_fraction)},
+                           {"tip_jump", number(e.tip_jump)},
+                           {"note", e.note}});
+  j["path_events"] = events;
+  ojson warnings = ojson::array();
+  for (const GeometryWarning& w : solution.geometry_warnings)
+    warnings.push_back(ojson{{"what", w.what}, {"tendon", w.tendon}, {"disk", w.disk}, {"value", number(w.value)}});
+  j["geometry_warnings"] = warnings;
   j["summary"] = summary_json(s);
   if (!solution.model_selection.empty()) j["model_selection"] = solution.model_selection;
   return detail::pretty(j);

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -22,6 +23,9 @@ enum class TerminationType {
   LinearSolverFailed,  ///< Singular or failed Jacobian factorisation.
   IntegrationFailed,   ///< The ODE integrator failed (too much work, step too small).
   NonFiniteResidual,   ///< NaN or Inf in the residual.
+  /// The actuation asks for more than the tendon geometry allows (a tendon would have to cross
+  /// the backbone): a physical limit, not a numerical failure; the message names the tendon.
+  Infeasible,
   NotSolved            ///< No solve was attempted (default state).
 };
 
@@ -51,6 +55,51 @@ struct SolverSummary {
   std::string brief_report() const;
 };
 
+/// @brief Whether an equilibrium is stable.
+enum class StabilityStatus {
+  Stable,       ///< Every small perturbation is resisted (positive reduced stiffness).
+  Unstable,     ///< Some perturbation lowers the potential: the robot would leave this shape.
+  Undetermined  ///< Not decided (not computed, or too close to call).
+};
+
+/// @brief Text name ("stable", "unstable", "undetermined").
+std::string to_string(StabilityStatus s);
+
+/// @brief The stability of a converged answer.
+struct Stability {
+  StabilityStatus status = StabilityStatus::Undetermined;  ///< The verdict.
+  /// Smallest eigenvalue of the scaled reduced stiffness (dimensionless; > 0 stable, < 0
+  /// unstable); NaN when not computed.
+  double margin = std::numeric_limits<double>::quiet_NaN();
+  std::string method;  ///< How it was decided (empty: not computed).
+};
+
+/// @brief An event on the loading path from the unloaded robot to the answer.
+struct PathEvent {
+  /// @brief What happened.
+  enum class Type {
+    Fold,         ///< A limit point: the load cannot grow further on this branch.
+    Bifurcation,  ///< Branches cross (a symmetry breaks).
+    Snap          ///< The robot jumped to another branch past a fold.
+  };
+  Type type = Type::Fold;     ///< The kind of event.
+  double load_fraction = 0.0; ///< Load factor where it happened (0 = unloaded, 1 = full input).
+  double tip_jump = 0.0;      ///< Snap: distance the tip jumped (m); else 0.
+  std::string note;           ///< One line of detail.
+};
+
+/// @brief Text name of a path event type ("fold", "bifurcation", "snap").
+std::string to_string(PathEvent::Type t);
+
+/// @brief A converged shape a real robot cannot take (e.g. a tendon chord through the backbone,
+/// neighbouring disks interpenetrating).
+struct GeometryWarning {
+  std::string what;  ///< One line: what cannot be built, with its numbers.
+  int tendon = -1;   ///< Tendon concerned (global index), or -1.
+  int disk = -1;     ///< Disk concerned (0 = base), or -1.
+  double value = 0.0;  ///< The offending quantity (see `what`).
+};
+
 /// @brief A sample of the backbone: arc length, frame, internal force and moment.
 struct BackboneSample {
   double s = 0.0;                ///< Arc length (m).
@@ -73,6 +122,9 @@ struct Solution {
   Eigen::VectorXd unknowns;               ///< The model's solved unknowns (for warm starts).
   /// Why this model was used when the scene asked for "auto" (model_selection.hpp); empty else.
   std::string model_selection;
+  Stability stability;                    ///< Stability of the answer (if computed).
+  std::vector<PathEvent> path_events;     ///< Folds, bifurcations, snaps met on the way.
+  std::vector<GeometryWarning> geometry_warnings;  ///< Shapes a real robot cannot take.
 
   /// @brief Shorthand for summary.converged().
   bool converged() const { return summary.converged(); }
