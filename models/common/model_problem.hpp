@@ -62,6 +62,12 @@ class ModelProblem {
   /// (`evaluated`: it succeeded), so a problem may reuse the state of that evaluation.
   /// May downgrade a converged summary (e.g. a final pass that fails to integrate).
   virtual void extract(const Eigen::VectorXd& x, bool evaluated, Solution& solution) = 0;
+  /// The stability of the converged answer at x (called after extract(), only for a converged
+  /// solve). Default: not computed (Undetermined).
+  virtual Stability stability(const Eigen::VectorXd& x) {
+    (void)x;
+    return Stability{};
+  }
   /// The integrator's name for the summary ("rk4", "cvode", "none").
   virtual std::string integrator_name() const { return "none"; }
 };

@@ -9,6 +9,7 @@
 #include "common/load_continuation.hpp"
 #include "common/model_problem.hpp"
 #include "common/newton_summary.hpp"
+#include "physics/geometry_check.hpp"
 #include "tdcr/core/error.hpp"
 #include "tdcr/models/static_model.hpp"
 
@@ -119,7 +120,9 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
     const bool evaluated = final_check(P, *sys, x, options.function_tolerance, sum);
     sol.unknowns = x;
     P.extract(x, evaluated, sol);
+    if (sum.converged()) sol.stability = P.stability(x);
   }
+  physics::check_geometry(model.routing(), sol);
   if (sol.tensions.empty() && input.actuation.kind == Actuation::Kind::Tensions) sol.tensions = input.actuation.values;
   sol.model = model.name();
   sol.model_fingerprint = model.fingerprint();
