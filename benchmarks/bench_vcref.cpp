@@ -122,12 +122,12 @@ int main(int argc, char** argv) {
     VcrefModel model(s.robot, s.effects);
     const int r = quick ? 2 : (n <= 30 ? 21 : n <= 100 ? 11 : n <= 300 ? 5 : 3);
     const Timing t = time_solves(s, r);
-    std::printf("%6d %9d %7d %10.2f %10.2f %6d %10.1f %12.6f%s\n", n, model.unknowns(), model.jacobian_nonzeros(),
+    std::printf("%6d %9d %7d %10.2f %10.2f %6d %10.1f %12.6f%s\n", n, model.unknowns(), model.jacobian_nonzeros(s.input()),
                 t.median_ms, t.min_ms, t.sol.summary.iterations, peak_rss_mb(), t.sol.tip().p.y(),
                 t.sol.converged() ? "" : "  FAILED");
     char line[512];
     std::snprintf(line, sizeof line, "b,%d,cc_arcs,rk4,%d,%.4f,%.4f,%d,%d,%d,%.1f,,", n, steps_b, t.median_ms, t.min_ms,
-                  t.sol.summary.iterations, model.unknowns(), model.jacobian_nonzeros(), peak_rss_mb());
+                  t.sol.summary.iterations, model.unknowns(), model.jacobian_nonzeros(s.input()), peak_rss_mb());
     rows.push_back(line);
     if (n >= 30) {
       logn.push_back(std::log(n));

@@ -1,6 +1,7 @@
 // Tests of the VCref model (multiple shooting, Cosserat rod per subsegment, discrete disk forces).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -25,6 +26,26 @@ Solution run(const Scene& scene, const Solution* warm = nullptr) {
 }
 
 double angle_deg(const Mat3& A, const Mat3& B) { return lie::rotation_angle(A, B) * 180.0 / M_PI; }
+
+// Three segments of 6, 7, 8 disks with three tendons each (tendons 3i..3i+2 end at segment i+1).
+Scene three_segments() {
+  Scene s;
+  s.model = "vcref";
+  s.robot.backbone.density = 6450.0;
+  const double r = 0.006;
+  for (int i = 0; i < 3; ++i) {
+    Segment seg;
+    seg.length = 0.04 - 0.005 * i;
+    seg.disks = 6 + i;
+    seg.disk_mass = 0.001 * (i + 1);
+    for (int k = 0; k < 3; ++k) {
+      const double a = 2 * M_PI * k / 3 + 0.4 * i;
+      seg.tendons.push_back(TendonSpec{r * std::cos(a), r * std::sin(a)});
+    }
+    s.robot.segments.push_back(seg);
+  }
+  return s;
+}
 
 // 1. Zero tension: the straight robot, exactly (the straight guess is the solution), for one
 // disk per segment and for 500 disks per segment.
@@ -334,21 +355,7 @@ TEST(Vcref, NonConvergenceIsReported) {
 // base disk balance the tip wrench and the weights. With Eq. 58 kept, the tendon chords are
 // two-force members, so their disk forces telescope to the base pull.
 TEST(Vcref, GlobalEquilibriumThreeSegments) {
-  Scene s;
-  s.model = "vcref";
-  s.robot.backbone.density = 6450.0;
-  const double r = 0.006;
-  for (int i = 0; i < 3; ++i) {
-    Segment seg;
-    seg.length = 0.04 - 0.005 * i;
-    seg.disks = 6 + i;
-    seg.disk_mass = 0.001 * (i + 1);
-    for (int k = 0; k < 3; ++k) {
-      const double a = 2 * M_PI * k / 3 + 0.4 * i;
-      seg.tendons.push_back(TendonSpec{r * std::cos(a), r * std::sin(a)});
-    }
-    s.robot.segments.push_back(seg);
-  }
+  Scene s = three_segments();
   s.actuation.values = {2.0, 0.0, 0.5, 0.0, 1.5, 0.0, 0.7, 0.0, 0.3};
   s.loads.tip_force = Vec3(0.1, -0.2, 0.05);
   s.loads.tip_moment = Vec3(0.001, 0.0, -0.002);
@@ -399,6 +406,75 @@ TEST(Vcref, WarmStart) {
   ASSERT_TRUE(w2.converged() && c2.converged());
   EXPECT_LT(w2.summary.iterations, c2.summary.iterations);
   EXPECT_LT((w2.tip().p - c2.tip().p).norm(), 1e-10);
+}
+
+// The Jacobian pattern follows the tensioned tendons: configuration 2 (T1 only, ending at the
+// first segment's tip) drops the pass-through rows of the other tendons (the count of the pattern
+// before the port onto bvp's shooting: 5796 at n = 10); with every tendon tensioned the model's
+// pattern of every routed tendon is used; without tension no disk reads its successor.
+TEST(Vcref, PatternFollowsTensionedTendons) {
+  const Scene s = paper::scene(10, 2);
+  VcrefModel model(s.robot, s.effects);
+  const int N = s.robot.total_disks();
+  EXPECT_EQ(model.unknowns(), 6 + 12 * (N - 1));
+  EXPECT_EQ(model.jacobian_nonzeros(), 6120);
+  EXPECT_EQ(model.jacobian_nonzeros(s.input()), 5796);
+  EXPECT_EQ(model.jacobian_nonzeros(paper::scene(10, 16).input()), model.jacobian_nonzeros());
+  Scene none = s;
+  std::fill(none.actuation.values.begin(), none.actuation.values.end(), 0.0);
+  // Block tridiagonal without pass-through entries: per disk 12 x 12 from itself and its
+  // predecessor, tip block 6 x 12 from node N-1, node 0's 6 columns in blocks 0 (N = 1) and 1.
+  EXPECT_EQ(model.jacobian_nonzeros(none.input()), 12 * 12 * (N - 1) + 12 * 12 * (N - 2) + 6 * 12 + 6 * 12);
+}
+
+// A trajectory switching tendons on and off gives the answers of fresh workspaces with the same
+// warm start (or none). The pass-through masks (none, segment 1, segments 1-2, all) change,
+// return, and outnumber the workspace's two cached patterns.
+TEST(Vcref, TrajectorySwitchingTendonsMatchesFreshWorkspaces) {
+  Scene base = three_segments();
+  base.loads.gravity = Vec3(0.0, 0.0, -9.81);
+  base.loads.tip_force = Vec3(0.05, -0.02, 0.0);
+  // Tension of one tendon in each segment.
+  const std::vector<Vec3> steps = {{1.5, 0, 0}, {1.5, 1.0, 0}, {0, 1.0, 0.5}, {0, 0, 0},     {1.0, 0, 0},
+                                   {0, 0, 0},   {0, 0.8, 0},   {0.5, 0, 0.5}, {0, 0.8, 0.2}, {1.2, 0, 0},
+                                   {0, 0, 0.6}, {1.5, 0, 0}};
+  VcrefModel model(base.robot, base.effects);
+  auto ws = model.make_workspace();
+  Solution prev;
+  for (std::size_t k = 0; k < steps.size(); ++k) {
+    Scene s = base;
+    s.actuation.values.assign(9, 0.0);
+    for (int i = 0; i < 3; ++i) s.actuation.values[3 * i + (k + i) % 3] = steps[k][i];
+    const Solution* warm = k % 4 == 3 || k == 0 ? nullptr : &prev;  // some cold solves
+    const Solution a = tdcr::solve(model, *ws, s.input(), s.solver, warm);
+    auto fresh = model.make_workspace();
+    const Solution b = tdcr::solve(model, *fresh, s.input(), s.solver, warm);
+    ASSERT_TRUE(a.converged() && b.converged()) << "step " << k << ": " << a.summary.message;
+    EXPECT_EQ(a.summary.iterations, b.summary.iterations) << "step " << k;
+    EXPECT_LT((a.tip().p - b.tip().p).norm(), 1e-12) << "step " << k;
+    EXPECT_LT(lie::rotation_angle(a.tip().R, b.tip().R), 1e-12) << "step " << k;
+    prev = a;
+  }
+  // The patterns of the four masks differ, and the one the trajectory's workspace uses leaves out
+  // no dependency: an entry outside it is 0 in the assembled Jacobian, so central differences
+  // must be negligible there (relative to their row).
+  Scene s = base;
+  std::vector<int> nnz;
+  for (int segs = 0; segs <= 3; ++segs) {
+    s.actuation.values.assign(9, 0.0);
+    if (segs > 0) s.actuation.values[3 * (segs - 1)] = 1.0;
+    nnz.push_back(model.jacobian_nonzeros(s.input()));
+    const bvp::JacobianCheck c = model.check_jacobian(*ws, s.input(), s.solver, &prev, 0.05);
+    ASSERT_TRUE(c.evaluated);
+    double missing = 0.0;
+    for (int i = 0; i < c.numeric.rows(); ++i) {
+      const double rmax = c.numeric.row(i).cwiseAbs().maxCoeff();
+      for (int j = 0; j < c.numeric.cols(); ++j)
+        if (c.analytic(i, j) == 0.0 && rmax > 0.0) missing = std::max(missing, std::abs(c.numeric(i, j)) / rmax);
+    }
+    EXPECT_LT(missing, 1e-6) << segs << " tensioned segments";
+  }
+  EXPECT_TRUE(nnz[0] < nnz[1] && nnz[1] < nnz[2] && nnz[2] < nnz[3] && nnz[3] == model.jacobian_nonzeros());
 }
 
 // Bad input is refused with the field named.

@@ -134,6 +134,13 @@ void ShootingSystem::check_problem() {
   refresh_scale();
 }
 
+void ShootingSystem::set_structure(std::shared_ptr<const ShootingStructure> structure) {
+  if (!structure || structure->offset != structure_->offset)
+    throw std::invalid_argument("ShootingSystem::set_structure: the structure has another layout");
+  structure_ = std::move(structure);
+  offset_ = structure_->offset.data();
+}
+
 // Through an m-sized buffer: a problem need not override the scales of nodes with d_k = m.
 void ShootingSystem::refresh_scale() const {
   for (int k = 0; k < n_; ++k) {

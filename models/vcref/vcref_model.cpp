@@ -67,6 +67,7 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
       shooting_.set_integrator(*integrator_);
     }
     problem_.bind(input, options);
+    select_structure();
     shooting_.invalidate();
     convention_ = input.actuation.convention;
     // Cold-start rule: external loads only (the tendon chords follow the disks).
@@ -84,7 +85,12 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
   }
 
   bvp::ParameterizedSystem* system() override { return &system_; }
-  bvp::NewtonSolver& newton() override { return newton_; }
+  bvp::NewtonSolver& newton() override {
+    // Kept alive so that a later structure cannot take the address of the pattern NewtonSolver
+    // last saw (a pattern change then always changes the pointer, too).
+    solved_ = shooting_.structure();
+    return newton_;
+  }
   detail::ColdStart cold_start() const override { return cold_; }
   void cold_guess(Eigen::VectorXd& x) override { shape_guess(x, d_.arc_guess); }
   void rest_state(Eigen::VectorXd& x) override { shape_guess(x, false); }
@@ -128,6 +134,23 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
   }
 
  private:
+  // The Jacobian structure of the bound input's pass-through mask: the model's (every routed
+  // tendon) when they agree, else the last or second-last one built here (a trajectory rebuilds
+  // it only when its mask changes).
+  void select_structure() {
+    const std::vector<char>& mask = problem_.pass_through();
+    std::shared_ptr<const bvp::ShootingStructure> s = d_.structure;
+    if (mask != d_.pass_through) {
+      if (cache_[1].mask == mask) std::swap(cache_[0], cache_[1]);
+      if (cache_[0].mask != mask) {
+        cache_[1] = std::move(cache_[0]);
+        cache_[0] = Structure{mask, bvp::ShootingStructure::of(problem_)};
+      }
+      s = cache_[0].structure;
+    }
+    if (s != shooting_.structure()) shooting_.set_structure(std::move(s));
+  }
+
   // Disk poses on the constant-curvature arcs of the tendon moments (paper Eq. 8 with u = sum T_k
   // (e_z x r_k) / EI per segment) or, with `arcs` false, the straight robot; wrenches from the
   // statics of that shape (backward pass of the disk equilibria at the current load factor).
@@ -186,6 +209,12 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
   detail::ColdStart cold_;
   Actuation::DisplacementConvention convention_ = Actuation::DisplacementConvention::AtBase;
   std::vector<Frame> frames_;  // guess scratch
+  struct Structure {
+    std::vector<char> mask;  // VcrefShooting::pass_through() it was built for
+    std::shared_ptr<const bvp::ShootingStructure> structure;
+  };
+  Structure cache_[2];  // most recently used first
+  std::shared_ptr<const bvp::ShootingStructure> solved_;  // structure of the last newton() call
 };
 
 }  // namespace
@@ -211,7 +240,7 @@ VcrefModel::VcrefModel(const Robot& robot, const Effects& effects, const VcrefOp
   d->length = this->robot().total_length();
   d->l_min = d->length;
   for (int j = 1; j <= N; ++j) d->l_min = std::min(d->l_min, routing().disk_s[j] - routing().disk_s[j - 1]);
-  // The Jacobian pattern covers every routed tendon, whatever the tensions of a call.
+  // The Jacobian pattern of every routed tendon; workspaces drop the untensioned ones.
   d->structure = bvp::ShootingStructure::of(VcrefShooting(*d));
   data_ = d;
 }
@@ -252,6 +281,15 @@ bool VcrefModel::loads_from_rest(const ModelInput& input) const {
 int VcrefModel::unknowns() const { return data_->size; }
 
 int VcrefModel::jacobian_nonzeros() const { return data_->structure->pattern.nnz(); }
+
+int VcrefModel::jacobian_nonzeros(const ModelInput& input) const {
+  input.validate(robot());
+  check_input(input);
+  VcrefShooting problem(*data_);
+  problem.bind(input, SolverOptions());
+  return problem.pass_through() == data_->pass_through ? jacobian_nonzeros()
+                                                       : bvp::ShootingStructure::of(problem)->pattern.nnz();
+}
 
 bvp::JacobianCheck VcrefModel::check_jacobian(ModelWorkspace& workspace, const ModelInput& input,
                                               const SolverOptions& options, const Solution* at,

@@ -18,7 +18,7 @@ Eigen::Map<Vec3> out(double* r) { return Eigen::Map<Vec3>(r); }
 VcrefShooting::VcrefShooting(const VcrefModel::Data& d)
     : d_(d),
       tendon_at_(d.N + 1, 0),
-      passes_(d.N + 1, 0),
+      passes_(d.pass_through),
       rod_(d.section),
       rbar_(d.N, Mat3::Identity()),
       frames_(d.N + 1) {}
@@ -97,12 +97,12 @@ void VcrefShooting::rebase(int k, double* x) {
 
 // Block 0 (tip) reads node N-1 (its pose and, through the last interval's end, everything);
 // block b reads nodes b-1 (interval end, pose), b (pose, wrench) and the pose of b+1 in its
-// equilibrium rows when a tendon may pass disk b.
+// equilibrium rows when a tensioned tendon passes disk b.
 std::pair<int, int> VcrefShooting::dependent_rows(int block, int k, int j) const {
   const int N = d_.N;
   if (block == 0) return k == N - 1 ? std::make_pair(0, 6) : std::make_pair(0, 0);
   if (k == block || k == block - 1) return {0, 12};
-  if (k == block + 1 && j < 6 && d_.pass_through[block]) return {6, 12};
+  if (k == block + 1 && j < 6 && passes_[block]) return {6, 12};
   return {0, 0};
 }
 

@@ -24,12 +24,15 @@ struct VcrefModel::Data {
   bool arc_guess = true;            // VcrefOptions::initial_guess
   double length = 0.0;              // robot length L
   double l_min = 0.0;               // shortest interval
-  std::shared_ptr<const bvp::ShootingStructure> structure;  // layout and Jacobian pattern
+  // Layout and Jacobian pattern of every routed tendon: a workspace's fallback (its own patterns
+  // follow the tensioned tendons, VcrefShooting::pass_through()).
+  std::shared_ptr<const bvp::ShootingStructure> structure;
 };
 
 // The multiple-shooting problem (bvp/shooting.hpp) of VCref. Node 0: unknowns (n_0, m_0) at the
 // fixed base pose; node j = 1..N-1: (p_j, w_j, n_j, m_j), R_j = Rbar_j exp(w_j). Block 0: tip
-// equilibrium (6); block j: pose continuity and equilibrium of disk j (12).
+// equilibrium (6); block j: pose continuity and equilibrium of disk j (12). dependent_rows()
+// follows pass_through(): every routed tendon until the first bind, then the tensioned ones.
 class VcrefShooting final : public bvp::ShootingProblem {
  public:
   explicit VcrefShooting(const VcrefModel::Data& d);
@@ -42,6 +45,8 @@ class VcrefShooting final : public bvp::ShootingProblem {
   const std::vector<double>& tensions() const { return tension_; }
   const TendonRouting& active() const { return active_; }
   bool tendon_at(int j) const { return tendon_at_[j] != 0; }
+  // Disk j has a tensioned tendon passing through it (its equilibrium reads disk j+1's pose).
+  const std::vector<char>& pass_through() const { return passes_; }
   Vec3 rod_weight() const { return load_.backbone_weight(); }
   Mat3& reference(int j) {
     chart_node_ = -1;
@@ -73,7 +78,7 @@ class VcrefShooting final : public bvp::ShootingProblem {
   physics::LoadCase load_;
   TendonRouting active_;            // tendons with nonzero tension
   std::vector<char> tendon_at_;     // disk j receives a tendon wrench
-  std::vector<char> passes_;        // an active tendon passes disk j
+  std::vector<char> passes_;        // an active tendon passes disk j (all routed before bind)
   std::vector<double> tension_;     // at the load factor, by global index
   cosserat::FreeRod rod_;
   std::vector<Mat3> rbar_;          // chart references (0 unused)

@@ -159,6 +159,12 @@ class ShootingSystem : public ResidualSystem {
   void invalidate() { cached_ = false; }
   /// @brief Use another integrator from now on (must outlive this object).
   void set_integrator(Integrator& integrator) { integrator_ = &integrator; cached_ = false; }
+  /// @brief Use another structure of the same layout from now on (e.g. a sparser pattern when
+  /// the problem's dependent_rows() changed between solves; std::invalid_argument if its offsets
+  /// differ). sparsity() then points to its pattern; not during a solve.
+  void set_structure(std::shared_ptr<const ShootingStructure> structure);
+  /// @brief The structure in use.
+  const std::shared_ptr<const ShootingStructure>& structure() const { return structure_; }
   /// @brief First unknown (and residual row) of node (block) k; offset(N) = size().
   int offset(int k) const { return structure_->offset[k]; }
   /// @brief The trajectory of the last residual()/evaluate() call.

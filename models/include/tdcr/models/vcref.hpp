@@ -19,7 +19,10 @@
 /// tendon wrench reads the poses of disks j-1, j, j+1. The Jacobian is block tridiagonal
 /// (forward differences; a position perturbation needs no integration, the free rod being
 /// translation invariant: about 9 integrations per interval per Jacobian); KLU above
-/// NewtonOptions::dense_size_limit unknowns, so the cost grows linearly with N.
+/// NewtonOptions::dense_size_limit unknowns, so the cost grows linearly with N. Its pattern
+/// follows the input: disk j's equilibrium reads disk j+1's pose only where a tensioned tendon
+/// passes disk j; a workspace keeps the patterns of its last two such sets and rebuilds one only
+/// when the set changes (the model's pattern, every routed tendon, needs no build).
 ///
 /// **Scaling.** Positions by 1/L, rotations by 1, forces by 1/F_s, moments by 1/(F_s L)
 /// (L robot length, F_s = physics::LoadCase::force_scale()), residuals and unknowns alike.
@@ -89,8 +92,13 @@ class VcrefModel final : public StaticModel {
   bool loads_from_rest(const ModelInput& input) const;
   /// @brief Number of unknowns (and residuals): 6 + 12 (N - 1), N = total disks.
   int unknowns() const;
-  /// @brief Structural nonzeros of the block-tridiagonal Jacobian (grows linearly with N).
+  /// @brief Structural nonzeros of the block-tridiagonal Jacobian with every routed tendon
+  /// tensioned (grows linearly with N).
   int jacobian_nonzeros() const;
+  /// @brief Structural nonzeros of the Jacobian a solve of `input` uses: a disk's equilibrium
+  /// reads the next disk's pose only if a tensioned tendon passes through it (InputError if
+  /// `input` does not fit the robot).
+  int jacobian_nonzeros(const ModelInput& input) const;
 
   /// @brief Diagnostics: the assembled sparse Jacobian against central differences
   /// (bvp::check_jacobian) for `input`, at the guess from `at` (a previous Solution, as for a
