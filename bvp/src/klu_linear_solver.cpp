@@ -7,8 +7,6 @@
 #include <sunmatrix/sunmatrix_sparse.h>
 
 #include <algorithm>
-#include <cstdlib>
-#include <cstdio>
 #include <new>
 #include <type_traits>
 #include <vector>
@@ -28,7 +26,6 @@ class KluSolver {
     // KLU a fill estimate to size the LU memory by; COLAMD (SUNLinSol_KLU's choice) does not, and
     // KLU then reserves 10 nnz(A), several times what the shooting Jacobians need.
     common_.ordering = 0;
-    if (const char* e = std::getenv("TDCR_KLU_ORDERING")) common_.ordering = std::atoi(e);  // TEMP
   }
   ~KluSolver() {
     if (numeric_) klu_l_free_numeric(&numeric_, &common_);
@@ -75,10 +72,6 @@ class KluSolver {
       return last_flag_ = common_.status == KLU_SINGULAR ? SUNLS_LUFACT_FAIL
                                                          : SUNLS_PACKAGE_FAIL_UNREC;
     ++stats_.factorizations;
-    if (std::getenv("TDCR_KLU_DEBUG") && klu_l_flops(symbolic_, numeric_, &common_))  // TEMP
-      std::fprintf(stderr, "klu factor n=%ld nnzA=%ld lnz=%ld unz=%ld flops=%g mempeak=%zu ordering=%ld\n",
-                   (long)n, (long)colptr[n], (long)numeric_->lnz, (long)numeric_->unz, common_.flops,
-                   common_.mempeak, (long)common_.ordering);
     reference_rgrowth_ = klu_l_rgrowth(colptr, rowval, values, symbolic_, numeric_, &common_)
                              ? common_.rgrowth
                              : 0.0;
