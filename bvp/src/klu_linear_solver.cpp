@@ -166,8 +166,12 @@ SUNLinearSolver make_klu_linear_solver(SUNContext ctx) {
   return S;
 }
 
-const SparseLuStatistics& klu_statistics(SUNLinearSolver solver) {
-  return content(solver).statistics();
+void add_klu_statistics(SUNLinearSolver solver, SparseLuStatistics& total) {
+  const SparseLuStatistics& s = content(solver).statistics();
+  total.symbolic_analyses += s.symbolic_analyses;
+  total.factorizations += s.factorizations;
+  total.refactorizations += s.refactorizations;
+  total.rejected_refactorizations += s.rejected_refactorizations;
 }
 
 }  // namespace tdcr::bvp::detail

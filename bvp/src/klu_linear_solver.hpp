@@ -31,7 +31,7 @@ constexpr double kRefactorGrowthRatio = 1e-2;
 /// Free it with SUNLinSolFree.
 SUNLinearSolver make_klu_linear_solver(SUNContext ctx);
 
-/// @brief The work counters of a solver made by make_klu_linear_solver.
-const SparseLuStatistics& klu_statistics(SUNLinearSolver solver);
+/// @brief Adds the work counters of a solver made by make_klu_linear_solver to total.
+void add_klu_statistics(SUNLinearSolver solver, SparseLuStatistics& total);
 
 }  // namespace tdcr::bvp::detail

@@ -26,30 +26,21 @@ namespace {
 
 /// KINSOL's flag names, without KINGetReturnFlagName (which returns malloc'd memory).
 const char* kinsol_flag_name(int flag) {
+#define TDCR_KIN_FLAG(f) \
+  case f: return #f;
   switch (flag) {
-    case KIN_SUCCESS: return "KIN_SUCCESS";
-    case KIN_INITIAL_GUESS_OK: return "KIN_INITIAL_GUESS_OK";
-    case KIN_STEP_LT_STPTOL: return "KIN_STEP_LT_STPTOL";
-    case KIN_WARNING: return "KIN_WARNING";
-    case KIN_MEM_NULL: return "KIN_MEM_NULL";
-    case KIN_ILL_INPUT: return "KIN_ILL_INPUT";
-    case KIN_NO_MALLOC: return "KIN_NO_MALLOC";
-    case KIN_MEM_FAIL: return "KIN_MEM_FAIL";
-    case KIN_LINESEARCH_NONCONV: return "KIN_LINESEARCH_NONCONV";
-    case KIN_MAXITER_REACHED: return "KIN_MAXITER_REACHED";
-    case KIN_MXNEWT_5X_EXCEEDED: return "KIN_MXNEWT_5X_EXCEEDED";
-    case KIN_LINESEARCH_BCFAIL: return "KIN_LINESEARCH_BCFAIL";
-    case KIN_LINSOLV_NO_RECOVERY: return "KIN_LINSOLV_NO_RECOVERY";
-    case KIN_LINIT_FAIL: return "KIN_LINIT_FAIL";
-    case KIN_LSETUP_FAIL: return "KIN_LSETUP_FAIL";
-    case KIN_LSOLVE_FAIL: return "KIN_LSOLVE_FAIL";
-    case KIN_SYSFUNC_FAIL: return "KIN_SYSFUNC_FAIL";
-    case KIN_FIRST_SYSFUNC_ERR: return "KIN_FIRST_SYSFUNC_ERR";
-    case KIN_REPTD_SYSFUNC_ERR: return "KIN_REPTD_SYSFUNC_ERR";
-    case KIN_VECTOROP_ERR: return "KIN_VECTOROP_ERR";
-    case KIN_CONTEXT_ERR: return "KIN_CONTEXT_ERR";
+    TDCR_KIN_FLAG(KIN_SUCCESS) TDCR_KIN_FLAG(KIN_INITIAL_GUESS_OK) TDCR_KIN_FLAG(KIN_STEP_LT_STPTOL)
+    TDCR_KIN_FLAG(KIN_WARNING) TDCR_KIN_FLAG(KIN_MEM_NULL) TDCR_KIN_FLAG(KIN_ILL_INPUT)
+    TDCR_KIN_FLAG(KIN_NO_MALLOC) TDCR_KIN_FLAG(KIN_MEM_FAIL) TDCR_KIN_FLAG(KIN_LINESEARCH_NONCONV)
+    TDCR_KIN_FLAG(KIN_MAXITER_REACHED) TDCR_KIN_FLAG(KIN_MXNEWT_5X_EXCEEDED)
+    TDCR_KIN_FLAG(KIN_LINESEARCH_BCFAIL) TDCR_KIN_FLAG(KIN_LINSOLV_NO_RECOVERY)
+    TDCR_KIN_FLAG(KIN_LINIT_FAIL) TDCR_KIN_FLAG(KIN_LSETUP_FAIL) TDCR_KIN_FLAG(KIN_LSOLVE_FAIL)
+    TDCR_KIN_FLAG(KIN_SYSFUNC_FAIL) TDCR_KIN_FLAG(KIN_FIRST_SYSFUNC_ERR)
+    TDCR_KIN_FLAG(KIN_REPTD_SYSFUNC_ERR) TDCR_KIN_FLAG(KIN_VECTOROP_ERR)
+    TDCR_KIN_FLAG(KIN_CONTEXT_ERR)
     default: return "KIN_UNKNOWN_FLAG";
   }
+#undef TDCR_KIN_FLAG
 }
 
 /// Why the most recent evaluation inside a callback failed.
@@ -130,13 +121,7 @@ struct NewtonSolver::Impl {
 
   SparseLuStatistics lu_statistics() const {
     SparseLuStatistics total = retired_lu;
-    if (LS && sparse) {
-      const SparseLuStatistics& s = detail::klu_statistics(LS);
-      total.symbolic_analyses += s.symbolic_analyses;
-      total.factorizations += s.factorizations;
-      total.refactorizations += s.refactorizations;
-      total.rejected_refactorizations += s.rejected_refactorizations;
-    }
+    if (LS && sparse) detail::add_klu_statistics(LS, total);
     return total;
   }
 
@@ -280,8 +265,7 @@ struct NewtonSolver::Impl {
   // Column grouping costs more than a small solve: only systems without an analytic Jacobian
   // need it, once per pattern.
   void prepare_fd_groups() {
-    if (fd_groups) return;
-    fd.prepare(pattern);
+    if (!fd_groups) fd.prepare(pattern);
     fd_groups = true;
   }
 };
@@ -355,12 +339,10 @@ NewtonResult NewtonSolver::solve(ResidualSystem& system, Eigen::VectorXd& x,
   }
   const bool dense_fallback = use_klu && !p;
   const bool same_size = s.n == n && s.sparse == use_klu;
-  SparsityPattern dense_pattern;  // built only if the stored pattern is not already it
-  const SparsityPattern* eff = p;
-  if (dense_fallback) {
-    if (!(same_size && s.dense_fallback)) dense_pattern = SparsityPattern::dense(n);
-    eff = same_size && s.dense_fallback ? &s.pattern : &dense_pattern;
-  }
+  const bool reuse_dense = dense_fallback && same_size && s.dense_fallback;
+  const SparsityPattern dense_pattern =
+      dense_fallback && !reuse_dense ? SparsityPattern::dense(n) : SparsityPattern();
+  const SparsityPattern* eff = reuse_dense ? &s.pattern : dense_fallback ? &dense_pattern : p;
 
   // Rebuild only on a change of size or solver kind; a new structure re-sizes the sparse
   // matrix (the KLU solver notices the new pattern and re-analyses it).
