@@ -7,6 +7,8 @@
 #include <limits>
 #include <new>
 #include <stdexcept>
+#include <utility>
+#include <vector>
 
 #include "bvp_test_systems.hpp"
 #include "allocation_counter.hpp"
@@ -113,6 +115,41 @@ class BadJacobian : public Dense3 {
                 Eigen::Ref<Eigen::MatrixXd>) override {
     return false;
   }
+};
+
+// F(x) = A x - b with an analytic sparse Jacobian; the pattern holds A's nonzeros, or every
+// entry (explicit zeros included) if full.
+class SparseLinear : public tdcr::bvp::ResidualSystem {
+ public:
+  SparseLinear(Eigen::MatrixXd a, Eigen::VectorXd rhs, bool full) : A(std::move(a)), b(std::move(rhs)) {
+    set_pattern(full);
+  }
+  void set_pattern(bool full) {
+    std::vector<std::pair<int, int>> e;
+    for (int i = 0; i < A.rows(); ++i)
+      for (int j = 0; j < A.cols(); ++j)
+        if (full || A(i, j) != 0.0) e.emplace_back(i, j);
+    p_ = SparsityPattern::from_triplets(A.rows(), A.cols(), e);
+  }
+  int size() const override { return static_cast<int>(A.rows()); }
+  bool residual(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> f) override {
+    f = A * x - b;
+    return true;
+  }
+  const SparsityPattern* sparsity() const override { return &p_; }
+  bool has_jacobian() const override { return true; }
+  bool sparse_jacobian(const Eigen::Ref<const Eigen::VectorXd>&, const Eigen::Ref<const Eigen::VectorXd>&,
+                       double* v) override {
+    for (int j = 0; j < p_.cols; ++j)
+      for (int k = p_.col_ptr[j]; k < p_.col_ptr[j + 1]; ++k) v[k] = A(p_.row_idx[k], j);
+    return true;
+  }
+
+  Eigen::MatrixXd A;
+  Eigen::VectorXd b;
+
+ private:
+  SparsityPattern p_;
 };
 
 class Throwing : public tdcr::bvp::ResidualSystem {
@@ -390,4 +427,108 @@ TEST(BvpNewton, AllocationsDoNotGrowWithIterations) {
   ASSERT_GT(many.iterations, few.iterations);
   EXPECT_EQ(allocations_many, allocations_few);
   EXPECT_LE(allocations_many, 8);  // the report's strings only
+}
+
+TEST(BvpNewton, RepeatedKluSolvesKeepTheSymbolicAnalysisAndMatchFreshSolvers) {
+  // A trajectory: one solver, one pattern, warm starts. Only the first Jacobian is analysed
+  // and factorised with pivoting; every later one is refactorised in that pivot order.
+  const int n = 300;
+  Bratu sys(n, 1.0, true);
+  NewtonSolver solver;
+  NewtonOptions o;
+  o.linear_solver = LinearSolverKind::SparseKLU;
+  Eigen::VectorXd u = Eigen::VectorXd::Zero(n);
+  int jacobians = 0;
+  for (int step = 0; step < 6; ++step) {
+    sys.lambda = 1.0 + 0.05 * step;
+    const Eigen::VectorXd guess = u;
+    const auto r = solver.solve(sys, u, o);
+    ASSERT_TRUE(r.converged()) << r.message;
+    jacobians += r.jacobian_evaluations;
+
+    NewtonSolver fresh;
+    Eigen::VectorXd v = guess;
+    const auto rf = fresh.solve(sys, v, o);
+    ASSERT_TRUE(rf.converged()) << rf.message;
+    EXPECT_EQ(rf.iterations, r.iterations);
+    EXPECT_LE((u - v).cwiseAbs().maxCoeff(), 1e-12) << "step " << step;
+    EXPECT_EQ(fresh.sparse_lu_statistics().symbolic_analyses, 1);
+  }
+  const auto st = solver.sparse_lu_statistics();
+  EXPECT_EQ(st.symbolic_analyses, 1);
+  EXPECT_EQ(st.factorizations, 1);
+  EXPECT_EQ(st.refactorizations, jacobians - 1);
+  EXPECT_EQ(st.rejected_refactorizations, 0);
+  EXPECT_EQ(solver.rebuilds(), 1);
+
+  // KLU forced on a system without a pattern (dense pattern): analysed once as well.
+  NewtonSolver dense_klu;
+  Rosenbrock rb;
+  for (int k = 0; k < 3; ++k) {
+    Eigen::VectorXd x = Eigen::VectorXd::Zero(2);
+    ASSERT_TRUE(dense_klu.solve(rb, x, o).converged());
+  }
+  EXPECT_EQ(dense_klu.sparse_lu_statistics().symbolic_analyses, 1);
+  EXPECT_EQ(dense_klu.rebuilds(), 1);
+  EXPECT_EQ(NewtonSolver().sparse_lu_statistics().symbolic_analyses, 0);
+}
+
+TEST(BvpNewton, KluRefactorWithABadPivotOrderFallsBackToPivoting) {
+  // [eps 1; 1 eps] makes KLU pivot off the diagonal (whichever column comes first). Reusing that
+  // order on [1 d; d 1] divides by d: d = 1e-10 grows the pivots by 1e10 (rejected), d = 0 is a
+  // zero pivot (refactorisation fails). Both must be refactorised with pivoting and solve.
+  const Eigen::Vector2d b(1.0, 2.0);
+  Eigen::Matrix2d a1;
+  a1 << 1e-8, 1.0, 1.0, 1e-8;
+  SparseLinear sys(a1, b, true);
+  NewtonSolver solver;
+  NewtonOptions o;
+  o.linear_solver = LinearSolverKind::SparseKLU;
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(2);
+  ASSERT_TRUE(solver.solve(sys, x, o).converged());
+  EXPECT_LE((a1 * x - b).cwiseAbs().maxCoeff(), 1e-12);
+
+  for (double d : {1e-10, 0.0}) {
+    // Re-establish the off-diagonal order (itself a rejected refactorisation after d = 1e-10:
+    // the diagonal order divides by 1e-8 there).
+    sys.A << 1e-8, 1.0, 1.0, 1e-8;
+    x.setZero();
+    ASSERT_TRUE(solver.solve(sys, x, o).converged());
+    const auto before = solver.sparse_lu_statistics();
+    sys.A << 1.0, d, d, 1.0;
+    x.setZero();
+    const auto r = solver.solve(sys, x, o);
+    ASSERT_TRUE(r.converged()) << "d = " << d << ": " << r.message;
+    EXPECT_LE((x - sys.A.partialPivLu().solve(b)).cwiseAbs().maxCoeff(), 1e-14) << "d = " << d;
+    const auto after = solver.sparse_lu_statistics();
+    EXPECT_EQ(after.rejected_refactorizations, before.rejected_refactorizations + 1) << "d = " << d;
+    EXPECT_EQ(after.factorizations, before.factorizations + 1) << "d = " << d;
+  }
+  EXPECT_EQ(solver.sparse_lu_statistics().symbolic_analyses, 1);
+}
+
+TEST(BvpNewton, KluPatternChangeTriggersANewAnalysis) {
+  Eigen::Matrix3d a;
+  a << 4.0, 1.0, 0.0,  //
+      1.0, 5.0, 2.0,   //
+      0.0, 2.0, 6.0;
+  const Eigen::Vector3d b(1.0, -2.0, 3.0);
+  const Eigen::Vector3d exact = a.lu().solve(b);
+  SparseLinear sys(a, b, false);
+  NewtonSolver solver;
+  NewtonOptions o;
+  o.linear_solver = LinearSolverKind::SparseKLU;
+  int analyses = 0;
+  for (bool full : {false, false, true, true, false}) {
+    const SparsityPattern before = *sys.sparsity();
+    sys.set_pattern(full);
+    if (*sys.sparsity() != before || analyses == 0) ++analyses;
+    Eigen::VectorXd x = Eigen::VectorXd::Zero(3);
+    const auto r = solver.solve(sys, x, o);
+    ASSERT_TRUE(r.converged()) << r.message;
+    EXPECT_LE((x - exact).cwiseAbs().maxCoeff(), 1e-14);
+    EXPECT_EQ(solver.sparse_lu_statistics().symbolic_analyses, analyses) << "full = " << full;
+  }
+  EXPECT_EQ(analyses, 3);
+  EXPECT_EQ(solver.rebuilds(), 1);  // a new pattern re-sizes the matrix, nothing else
 }

@@ -7,7 +7,6 @@
 #include <nvector/nvector_serial.h>
 #include <sundials/sundials_context.h>
 #include <sunlinsol/sunlinsol_dense.h>
-#include <sunlinsol/sunlinsol_klu.h>
 #include <sunmatrix/sunmatrix_dense.h>
 #include <sunmatrix/sunmatrix_sparse.h>
 
@@ -18,39 +17,30 @@
 #include <stdexcept>
 #include <utility>
 
+#include "klu_linear_solver.hpp"
 #include "tdcr/core/error.hpp"
 
 namespace tdcr::bvp {
 
 namespace {
 
-
 /// KINSOL's flag names, without KINGetReturnFlagName (which returns malloc'd memory).
 const char* kinsol_flag_name(int flag) {
+#define TDCR_KIN_FLAG(f) \
+  case f: return #f;
   switch (flag) {
-    case KIN_SUCCESS: return "KIN_SUCCESS";
-    case KIN_INITIAL_GUESS_OK: return "KIN_INITIAL_GUESS_OK";
-    case KIN_STEP_LT_STPTOL: return "KIN_STEP_LT_STPTOL";
-    case KIN_WARNING: return "KIN_WARNING";
-    case KIN_MEM_NULL: return "KIN_MEM_NULL";
-    case KIN_ILL_INPUT: return "KIN_ILL_INPUT";
-    case KIN_NO_MALLOC: return "KIN_NO_MALLOC";
-    case KIN_MEM_FAIL: return "KIN_MEM_FAIL";
-    case KIN_LINESEARCH_NONCONV: return "KIN_LINESEARCH_NONCONV";
-    case KIN_MAXITER_REACHED: return "KIN_MAXITER_REACHED";
-    case KIN_MXNEWT_5X_EXCEEDED: return "KIN_MXNEWT_5X_EXCEEDED";
-    case KIN_LINESEARCH_BCFAIL: return "KIN_LINESEARCH_BCFAIL";
-    case KIN_LINSOLV_NO_RECOVERY: return "KIN_LINSOLV_NO_RECOVERY";
-    case KIN_LINIT_FAIL: return "KIN_LINIT_FAIL";
-    case KIN_LSETUP_FAIL: return "KIN_LSETUP_FAIL";
-    case KIN_LSOLVE_FAIL: return "KIN_LSOLVE_FAIL";
-    case KIN_SYSFUNC_FAIL: return "KIN_SYSFUNC_FAIL";
-    case KIN_FIRST_SYSFUNC_ERR: return "KIN_FIRST_SYSFUNC_ERR";
-    case KIN_REPTD_SYSFUNC_ERR: return "KIN_REPTD_SYSFUNC_ERR";
-    case KIN_VECTOROP_ERR: return "KIN_VECTOROP_ERR";
-    case KIN_CONTEXT_ERR: return "KIN_CONTEXT_ERR";
+    TDCR_KIN_FLAG(KIN_SUCCESS) TDCR_KIN_FLAG(KIN_INITIAL_GUESS_OK) TDCR_KIN_FLAG(KIN_STEP_LT_STPTOL)
+    TDCR_KIN_FLAG(KIN_WARNING) TDCR_KIN_FLAG(KIN_MEM_NULL) TDCR_KIN_FLAG(KIN_ILL_INPUT)
+    TDCR_KIN_FLAG(KIN_NO_MALLOC) TDCR_KIN_FLAG(KIN_MEM_FAIL) TDCR_KIN_FLAG(KIN_LINESEARCH_NONCONV)
+    TDCR_KIN_FLAG(KIN_MAXITER_REACHED) TDCR_KIN_FLAG(KIN_MXNEWT_5X_EXCEEDED)
+    TDCR_KIN_FLAG(KIN_LINESEARCH_BCFAIL) TDCR_KIN_FLAG(KIN_LINSOLV_NO_RECOVERY)
+    TDCR_KIN_FLAG(KIN_LINIT_FAIL) TDCR_KIN_FLAG(KIN_LSETUP_FAIL) TDCR_KIN_FLAG(KIN_LSOLVE_FAIL)
+    TDCR_KIN_FLAG(KIN_SYSFUNC_FAIL) TDCR_KIN_FLAG(KIN_FIRST_SYSFUNC_ERR)
+    TDCR_KIN_FLAG(KIN_REPTD_SYSFUNC_ERR) TDCR_KIN_FLAG(KIN_VECTOROP_ERR)
+    TDCR_KIN_FLAG(KIN_CONTEXT_ERR)
     default: return "KIN_UNKNOWN_FLAG";
   }
+#undef TDCR_KIN_FLAG
 }
 
 /// Why the most recent evaluation inside a callback failed.
@@ -89,11 +79,14 @@ struct NewtonSolver::Impl {
   bool sparse = false;
   SparsityPattern pattern;     // copy of the system's pattern (empty if dense system)
   bool has_pattern = false;
+  bool dense_fallback = false;  // pattern is SparsityPattern::dense(n): KLU without a pattern
   int rebuilds = 0;
+  SparseLuStatistics retired_lu;  // KLU work of linear solvers already freed
 
   // Per-solve state, reached from the C callbacks through user_data.
   ResidualSystem* system = nullptr;
   FiniteDifferenceWorkspace fd;
+  bool fd_groups = false;       // fd holds the column groups of pattern (computed on first use)
   std::vector<double> values;  // sparse Jacobian values when the linear solver is dense
   Eigen::VectorXd f_final;
   int nfe = 0, nje = 0;
@@ -113,6 +106,7 @@ struct NewtonSolver::Impl {
 
   void destroy() {
     if (kin) KINFree(&kin);
+    if (LS && sparse) retired_lu = lu_statistics();
     if (LS) SUNLinSolFree(LS);
     if (J) SUNMatDestroy(J);
     if (fscale) N_VDestroy(fscale);
@@ -125,6 +119,21 @@ struct NewtonSolver::Impl {
     n = -1;
   }
 
+  SparseLuStatistics lu_statistics() const {
+    SparseLuStatistics total = retired_lu;
+    if (LS && sparse) detail::add_klu_statistics(LS, total);
+    return total;
+  }
+
+  /// Adopt a new Jacobian structure (nullptr: none) without rebuilding the SUNDIALS objects.
+  void set_pattern(const SparsityPattern* p, bool dense) {
+    has_pattern = p != nullptr;
+    pattern = p ? *p : SparsityPattern();
+    dense_fallback = dense;
+    fd = FiniteDifferenceWorkspace();
+    fd_groups = false;
+  }
+
   void build(int size, bool use_klu, const SparsityPattern* p) {
     destroy();
     ++rebuilds;
@@ -134,7 +143,7 @@ struct NewtonSolver::Impl {
     if (!u || !uscale || !fscale) throw std::runtime_error("NewtonSolver: N_VNew_Serial failed");
     if (use_klu) {
       J = SUNSparseMatrix(size, size, p->nnz(), CSC_MAT, ctx);
-      if (J) LS = SUNLinSol_KLU(u, J, ctx);
+      if (J) LS = detail::make_klu_linear_solver(ctx);
     } else {
       J = SUNDenseMatrix(size, size, ctx);
       if (J) LS = SUNLinSol_Dense(u, J, ctx);
@@ -223,6 +232,7 @@ struct NewtonSolver::Impl {
       const int nnz = pattern.nnz();
       for (int k = 0; k < nnz; ++k) rowval[k] = pattern.row_idx[k];
       double* vals = SM_DATA_S(Jm);
+      if (!analytic) prepare_fd_groups();
       ok = analytic ? sys.sparse_jacobian(x, f, vals)
                     : finite_difference_sparse_jacobian(sys, x, f, pattern, vals, &fd);
       if (ok)
@@ -233,6 +243,7 @@ struct NewtonSolver::Impl {
       Eigen::Map<Eigen::MatrixXd> Jd(SM_DATA_D(Jm), n, n);
       if (has_pattern) {
         // Structured system on a dense solver: still use grouped differences, then scatter.
+        if (!analytic) prepare_fd_groups();
         ok = analytic ? sys.sparse_jacobian(x, f, values.data())
                       : finite_difference_sparse_jacobian(sys, x, f, pattern, values.data(), &fd);
         if (ok) {
@@ -249,6 +260,13 @@ struct NewtonSolver::Impl {
     // A finite-difference failure is a failed residual evaluation; treat an analytic one alike.
     if (!ok) return EvalFailure::NotEvaluated;
     return EvalFailure::None;
+  }
+
+  // Column grouping costs more than a small solve: only systems without an analytic Jacobian
+  // need it, once per pattern.
+  void prepare_fd_groups() {
+    if (!fd_groups) fd.prepare(pattern);
+    fd_groups = true;
   }
 };
 
@@ -287,6 +305,8 @@ NewtonSolver& NewtonSolver::operator=(NewtonSolver&&) noexcept = default;
 
 int NewtonSolver::rebuilds() const { return impl_->rebuilds; }
 
+SparseLuStatistics NewtonSolver::sparse_lu_statistics() const { return impl_->lu_statistics(); }
+
 NewtonResult NewtonSolver::solve(ResidualSystem& system, Eigen::VectorXd& x,
                                  const NewtonOptions& options) {
   options.validate();
@@ -317,27 +337,27 @@ NewtonResult NewtonSolver::solve(ResidualSystem& system, Eigen::VectorXd& x,
     case LinearSolverKind::SparseKLU: use_klu = true; break;
     case LinearSolverKind::Automatic: use_klu = p && n > options.dense_size_limit; break;
   }
-  const SparsityPattern dense_pattern = (use_klu && !p) ? SparsityPattern::dense(n)
-                                                         : SparsityPattern();
-  const SparsityPattern* eff = p ? p : (use_klu ? &dense_pattern : nullptr);
+  const bool dense_fallback = use_klu && !p;
+  const bool same_size = s.n == n && s.sparse == use_klu;
+  const bool reuse_dense = dense_fallback && same_size && s.dense_fallback;
+  const SparsityPattern dense_pattern =
+      dense_fallback && !reuse_dense ? SparsityPattern::dense(n) : SparsityPattern();
+  const SparsityPattern* eff = reuse_dense ? &s.pattern : dense_fallback ? &dense_pattern : p;
 
-  // Rebuild only on a change of size, solver kind or (for KLU) structure.
+  // Rebuild only on a change of size or solver kind; a new structure re-sizes the sparse
+  // matrix (the KLU solver notices the new pattern and re-analyses it).
   const bool pattern_changed =
-      (eff != nullptr) != s.has_pattern || (eff && *eff != s.pattern);
-  if (s.n != n || s.sparse != use_klu || (use_klu && pattern_changed)) {
-    s.has_pattern = eff != nullptr;
-    s.pattern = eff ? *eff : SparsityPattern();
+      (eff != nullptr) != s.has_pattern || (eff && eff != &s.pattern && *eff != s.pattern);
+  if (!same_size) {
+    s.set_pattern(eff, dense_fallback);
     s.build(n, use_klu, eff);
-    s.fd = FiniteDifferenceWorkspace();
-    if (eff) s.fd.prepare(s.pattern);
   } else if (pattern_changed) {
-    s.has_pattern = eff != nullptr;
-    s.pattern = eff ? *eff : SparsityPattern();
-    s.fd = FiniteDifferenceWorkspace();
-    if (eff) s.fd.prepare(s.pattern);
+    s.set_pattern(eff, dense_fallback);
+    if (use_klu && SUNSparseMatrix_Reallocate(s.J, eff->nnz()) != 0)
+      throw std::runtime_error("NewtonSolver: cannot re-size the sparse Jacobian");
   }
   s.fd.prepare(n);
-  if (s.has_pattern && !use_klu) s.values.assign(static_cast<size_t>(s.pattern.nnz()), 0.0);
+  if (s.has_pattern && !use_klu) s.values.resize(static_cast<size_t>(s.pattern.nnz()));
   if (s.f_final.size() != n) s.f_final.resize(n);
 
   // Scaling.

@@ -65,12 +65,24 @@ struct NewtonResult {
   bool converged() const { return termination == TerminationType::Converged; }
 };
 
+/// @brief Work done by the sparse LU (KLU) of a NewtonSolver over its lifetime.
+struct SparseLuStatistics {
+  int symbolic_analyses = 0;  ///< Orderings and symbolic analyses: one per sparsity pattern.
+  int factorizations = 0;     ///< Numeric factorisations with partial pivoting.
+  int refactorizations = 0;   ///< Accepted refactorisations reusing the previous pivot order.
+  /// Refactorisations that failed or grew the pivots too much, redone with pivoting (each
+  /// is also counted in factorizations).
+  int rejected_refactorizations = 0;
+};
+
 /// @brief Newton solver workspace: owns the SUNDIALS context, vectors, Jacobian matrix, linear
 /// solver and KINSOL memory, and keeps them across solves.
 ///
-/// They are rebuilt only when the system size, its sparsity pattern or the linear solver kind
-/// changes; otherwise a solve reuses everything (vectors, matrix, KLU and KINSOL memory), so
-/// warm-started repeated solves (continuation, trajectories, benchmarks) pay no setup cost.
+/// They are rebuilt only when the system size or the linear solver kind changes; a new sparsity
+/// pattern only re-sizes the sparse matrix. Otherwise a solve reuses everything (vectors,
+/// matrix, KINSOL memory, and KLU's symbolic analysis, pivot order and LU memory: later
+/// Jacobians are refactorised in the previous pivot order while that stays numerically safe),
+/// so warm-started repeated solves (continuation, trajectories, benchmarks) pay no setup cost.
 /// Not thread-safe: use one NewtonSolver per thread. Movable, not copyable.
 class NewtonSolver {
  public:
@@ -100,6 +112,10 @@ class NewtonSolver {
   /// @brief Number of times the SUNDIALS objects were (re)built; lets tests and benchmarks
   /// verify that repeated solves reuse the workspace.
   int rebuilds() const;
+
+  /// @brief KLU work over this solver's lifetime (all zero if KLU was never used); lets tests
+  /// and benchmarks verify that repeated solves keep the symbolic analysis.
+  SparseLuStatistics sparse_lu_statistics() const;
 
  private:
   struct Impl;
