@@ -210,6 +210,9 @@ void CcProblem::extract(const Eigen::VectorXd&, bool, Solution& solution) {
   sum.physical_residual = misfit;
   sum.residual_norm = 0.0;
   sum.unknowns = static_cast<int>(unknowns.size());
+  // CC prescribes its arcs (geometry, or tendon statics without any external load): it has no
+  // reduced stiffness to examine, so it does not decide; VC gives the verdict for the same input.
+  solution.stability.method = "kinematic model: not examined";
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include "tdcr/bvp/newton_solver.hpp"
 #include "tdcr/bvp/shooting.hpp"
 #include "vc/vc_shooting.hpp"
+#include "vc/vc_stability.hpp"
 
 namespace tdcr::vc {
 
@@ -168,6 +169,8 @@ class MultipleShooting final : public detail::ModelProblem {
     }
     tendon_displacements(W_, W_.segment_lengths, sol.tendon_displacements);
   }
+  // Node 0 holds the base wrench (states 12..17).
+  Stability stability(const Eigen::VectorXd& x) override { return conjugate_point_test(W_, Vec6(x.segment<6>(12))); }
   std::string integrator_name() const override { return W_.shot_integrator->name(); }
 
  private:

@@ -1,6 +1,7 @@
 // VC by single shooting: unknowns n(0), m(0), residual the tip wrench (vc.hpp).
 #include "tdcr/bvp/newton_solver.hpp"
 #include "vc/vc_shooting.hpp"
+#include "vc/vc_stability.hpp"
 
 namespace tdcr::vc {
 
@@ -89,6 +90,7 @@ class SingleShooting final : public detail::ModelProblem {
     sol.backbone = samples_;
     tendon_displacements(W_, W_.segment_lengths, sol.tendon_displacements);
   }
+  Stability stability(const Eigen::VectorXd& x) override { return conjugate_point_test(W_, Vec6(x)); }
   std::string integrator_name() const override { return W_.shot_integrator->name(); }
 
  private:

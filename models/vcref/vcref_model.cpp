@@ -95,6 +95,9 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
   void cold_guess(Eigen::VectorXd& x) override { shape_guess(x, d_.arc_guess); }
   void rest_state(Eigen::VectorXd& x) override { shape_guess(x, false); }
   std::string integrator_name() const override { return integrator_->name(); }
+  // Not implemented yet: its disk forces couple neighbouring disks, so no conjugate-point sweep
+  // from the base applies; the Hessian of its discrete energy would (docs/models.md, Stability).
+  Stability stability(const Eigen::VectorXd&) override { return Stability{StabilityStatus::Undetermined, NAN, "not implemented"}; }
 
   // The previous unknowns, its disk rotations as the chart references (w = 0).
   bool warm_guess(const Solution& prev, Eigen::VectorXd& x) override {

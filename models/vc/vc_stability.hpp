@@ -1,0 +1,13 @@
+// Private to models/vc: the stability of a converged VC equilibrium (vc_stability.cpp).
+#pragma once
+
+#include "tdcr/core/solution.hpp"
+#include "vc/vc_shooting.hpp"
+
+namespace tdcr::vc {
+
+/// The conjugate-point test of Till & Rucker (IEEE T-RO 2017) on the equilibrium with base
+/// wrench `base` = (n(0), m(0)) at load factor 1 (see vc_stability.cpp for the definition).
+Stability conjugate_point_test(VcWorkspace::Impl& W, const Vec6& base);
+
+}  // namespace tdcr::vc
