@@ -23,13 +23,29 @@ Scene column(double factor, double transverse = 0.0, bool continuation = true) {
   const double Fcr = M_PI * M_PI * EI / (4.0 * L * L);
   s.loads.tip_force = Fcr * Vec3(transverse, 0.0, -factor);
   s.solver.continuation = continuation;
+  s.solver.stability = true;
   return s;
 }
 
+// Solve with the stability check on (SolverOptions::stability is off by default).
 Solution solve_with(ModelKind kind, const Scene& s) {
   auto m = make_model(kind, s.robot, s.effects);
   auto ws = m->make_workspace();
-  return solve(*m, *ws, s.input(), s.solver);
+  SolverOptions options = s.solver;
+  options.stability = true;
+  return solve(*m, *ws, s.input(), options);
+}
+
+TEST(Stability, OffByDefaultIsUndetermined) {
+  const Solution sol = [] {
+    const Scene s = paper::scene(10, 2);
+    auto m = make_model(ModelKind::VC, s.robot, s.effects);
+    auto ws = m->make_workspace();
+    return solve(*m, *ws, s.input(), SolverOptions());
+  }();
+  ASSERT_TRUE(sol.converged());
+  EXPECT_EQ(sol.stability.status, StabilityStatus::Undetermined);
+  EXPECT_TRUE(sol.stability.method.empty());
 }
 
 double lateral(const Solution& sol) { return std::hypot(sol.tip().p.x(), sol.tip().p.y()); }

@@ -223,6 +223,12 @@ const Schema<SolverOptions>& solver_schema() {
                     {"", nullptr, "load continuation when a direct solve fails", kNewton}),
       integer_field("max_continuation_steps", &S::max_continuation_steps,
                     {"", nullptr, ">= 1; at most this many Newton solves (converged or failed steps)", kNewton}),
+      boolean_field("stability", &S::stability,
+                    {"", nullptr,
+                     "decide the stability of every converged answer (`stability` in the JSON output): VC by "
+                     "the conjugate-point test, CCsub and PRB by the reduced stiffness; VCref and CC: "
+                     "undetermined",
+                     "VC, CCsub, PRB"}),
   });
   return s;
 }

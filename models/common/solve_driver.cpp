@@ -120,7 +120,7 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
     const bool evaluated = final_check(P, *sys, x, options.function_tolerance, sum);
     sol.unknowns = x;
     P.extract(x, evaluated, sol);
-    if (sum.converged()) sol.stability = P.stability(x);
+    if (sum.converged() && options.stability) sol.stability = P.stability(x);
   }
   physics::check_geometry(model.routing(), sol);
   if (sol.tensions.empty() && input.actuation.kind == Actuation::Kind::Tensions) sol.tensions = input.actuation.values;

@@ -52,6 +52,11 @@ struct SolverOptions {
   bool continuation = true;
   /// Bound on continuation work: at most this many Newton solves (converged or failed steps).
   int max_continuation_steps = 64;
+  /// Decide the stability of every converged answer (Solution::stability): VC by the
+  /// conjugate-point test (6 extra shots), CCsub and PRB by the eigenvalues of the reduced
+  /// stiffness (one extra Jacobian); VCref and CC report "undetermined". Off by default until the
+  /// check reuses the solve's own Jacobian (today it costs up to one Newton iteration per solve).
+  bool stability = false;
 
   /// @brief Throws InputError (field `solver.<name>`) on a tolerance that is not a positive
   /// finite number, or an iteration, RK4 step or continuation step count below 1.
