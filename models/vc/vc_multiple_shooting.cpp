@@ -138,6 +138,7 @@ class MultipleShooting final : public detail::ModelProblem {
     sol.disk_frames.push_back(Frame{});
     sol.backbone.push_back(BackboneSample{0.0, Frame{}, Vec3(x.segment<3>(12)), Vec3(x.segment<3>(15))});
     cum_.assign(K, 0.0);
+    W_.degeneracy.reset();
     bvp::Integrator& fin = W_.final_pass_integrator();
     TendonRod& rod = *W_.final_rod;
     double* y = W_.y.data();
@@ -168,6 +169,7 @@ class MultipleShooting final : public detail::ModelProblem {
     }
     tendon_displacements(W_, W_.segment_lengths, sol.tendon_displacements);
   }
+  bool infeasibility(const Eigen::VectorXd&, std::string& why) override { return tendon_limit(W_, why); }
   std::string integrator_name() const override { return W_.shot_integrator->name(); }
 
  private:

@@ -2,6 +2,9 @@
 // and the tendon displacements (vc_shooting.hpp).
 #include "vc/vc_shooting.hpp"
 
+#include <cstdio>
+
+#include "physics/geometry_check.hpp"
 #include "physics/tendon_path.hpp"
 
 namespace tdcr {
@@ -63,6 +66,7 @@ void bind_input(VcWorkspace::Impl& W, const VcModel& model, const ModelInput& in
   W.final_integrator = lengths_in_shots ? nullptr : bvp::make_integrator(options);
   W.shot_rod = std::make_unique<TendonRod>(W.section, W.segments[0], W.tendon_count, lengths_in_shots);
   W.final_rod = std::make_unique<TendonRod>(W.section, W.segments[0], W.tendon_count, true);
+  W.final_rod->watch(&W.degeneracy);
   W.y = Eigen::VectorXd::Zero(cosserat::kStateSize + W.tendon_count);
   W.segment_lengths.assign(W.segments.size() * W.tendon_count, 0.0);
   W.single.reset();
@@ -181,6 +185,15 @@ bool shoot(VcWorkspace::Impl& W, bvp::Integrator& integ, TendonRod& rod, const V
     res.tail<3>() -= W.loads.tip_moment();
   }
   return res.allFinite();
+}
+
+bool tendon_limit(const VcWorkspace::Impl& W, std::string& why) {
+  const Degeneracy& d = W.degeneracy;
+  if (d.tendon < 0 || !(d.value >= physics::kTendonLimitNear)) return false;
+  char where[48];
+  std::snprintf(where, sizeof where, "at s = %.4g m", d.s);
+  why = physics::tendon_limit_message(d.tendon, d.value, where);
+  return true;
 }
 
 void tendon_displacements(const VcWorkspace::Impl& W, const std::vector<double>& lengths,

@@ -70,6 +70,7 @@ class SingleShooting final : public detail::ModelProblem {
   bool final_residual(const Eigen::VectorXd& x, Eigen::Ref<Eigen::VectorXd> f) override {
     frames_.clear();
     samples_.clear();
+    W_.degeneracy.reset();
     const Record rec{&frames_, &samples_, &W_.segment_lengths};
     Vec6 r;
     const bool ok = shoot(W_, W_.final_pass_integrator(), *W_.final_rod, Vec6(x), r, &rec);
@@ -89,6 +90,7 @@ class SingleShooting final : public detail::ModelProblem {
     sol.backbone = samples_;
     tendon_displacements(W_, W_.segment_lengths, sol.tendon_displacements);
   }
+  bool infeasibility(const Eigen::VectorXd&, std::string& why) override { return tendon_limit(W_, why); }
   std::string integrator_name() const override { return W_.shot_integrator->name(); }
 
  private:
