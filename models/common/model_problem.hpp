@@ -68,6 +68,15 @@ class ModelProblem {
     (void)x;
     return Stability{};
   }
+  /// Called when loading from rest stopped short of full load, after extract() at x, the
+  /// equilibrium at the load factor reached (the system's parameter): true and a one-line reason
+  /// if the stop is a physical limit (a tendon at its geometric limit) rather than a numerical
+  /// failure. Default: no model-specific test (the driver still checks the extracted disk frames).
+  virtual bool infeasibility(const Eigen::VectorXd& x, std::string& why) {
+    (void)x;
+    (void)why;
+    return false;
+  }
   /// The integrator's name for the summary ("rk4", "cvode", "none").
   virtual std::string integrator_name() const { return "none"; }
 };

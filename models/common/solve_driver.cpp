@@ -48,9 +48,10 @@ void direct_solve(detail::ModelProblem& P, bvp::ParameterizedSystem& sys, const 
 }
 
 // The converged flag must describe the returned unknowns: evaluate the residual at full load.
-bool final_check(detail::ModelProblem& P, bvp::ParameterizedSystem& sys, const Eigen::VectorXd& x, double tolerance,
-                 SolverSummary& sum) {
-  sys.set_parameter(1.0);
+// After a stopped loading path x is the equilibrium at load factor `reached`: evaluated there.
+bool final_check(detail::ModelProblem& P, bvp::ParameterizedSystem& sys, const Eigen::VectorXd& x, double reached,
+                 double tolerance, SolverSummary& sum) {
+  sys.set_parameter(reached);
   Eigen::VectorXd f(sys.size()), scale(sys.size());
   const bool evaluated = P.final_residual(x, f);
   if (!sum.converged()) return evaluated;
@@ -64,6 +65,18 @@ bool final_check(detail::ModelProblem& P, bvp::ParameterizedSystem& sys, const E
     sum.residual_norm = scaled;
   }
   return evaluated;
+}
+
+// A loading path stopped at load factor `reached` < 1: if a tendon is at its geometric limit
+// there (the model's own test, else the disk frames), the actuation is infeasible.
+void name_infeasibility(detail::ModelProblem& P, const TendonRouting& routing, const Eigen::VectorXd& x,
+                        double reached, Solution& sol) {
+  std::string why;
+  if (!P.infeasibility(x, why) && !physics::tendon_limit(routing, sol, why)) return;
+  char buf[64];
+  std::snprintf(buf, sizeof buf, ", reached at %.1f %% of the load; ", 100.0 * reached);
+  sol.summary.termination = TerminationType::Infeasible;
+  sol.summary.message = why + buf + sol.summary.message;
 }
 
 }  // namespace
@@ -87,6 +100,7 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
   sum.integrator = P.integrator_name();
 
   bvp::ParameterizedSystem* sys = P.system();
+  double reached = 1.0;  // load factor of the answer (< 1: loading from rest stopped there)
   if (!sys) {
     // Closed form: the problem computes the answer and its summary.
     sum.linear_solver = "none";
@@ -107,23 +121,27 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
     } else if (cold.from_rest && options.continuation) {
       sys->set_parameter(0.0);
       P.rest_state(x);
-      detail::continue_loads(P.newton(), *sys, x, nopt, options, sum, cold.first_step, cold.reason);
+      reached = detail::continue_loads(P.newton(), *sys, x, nopt, options, sum, cold.first_step, cold.reason)
+                    .parameter;
     } else {
       if (!warm) P.cold_guess(x);
       direct_solve(P, *sys, nopt, warm, x, sum);
       if (!sum.converged() && options.continuation) {
         sys->set_parameter(0.0);
         P.rest_state(x);
-        detail::continue_loads(P.newton(), *sys, x, nopt, options, sum, P.cold_start().first_step);
+        reached = detail::continue_loads(P.newton(), *sys, x, nopt, options, sum, P.cold_start().first_step)
+                      .parameter;
       }
     }
-    const bool evaluated = final_check(P, *sys, x, options.function_tolerance, sum);
+    if (sum.converged()) reached = 1.0;
+    const bool evaluated = final_check(P, *sys, x, reached, options.function_tolerance, sum);
     sol.unknowns = x;
     P.extract(x, evaluated, sol);
     if (sum.converged() && options.stability) sol.stability = P.stability(x);
   }
-  physics::check_geometry(model.routing(), sol);
   if (sol.tensions.empty() && input.actuation.kind == Actuation::Kind::Tensions) sol.tensions = input.actuation.values;
+  if (!sum.converged() && reached < 1.0) name_infeasibility(P, model.routing(), sol.unknowns, reached, sol);
+  physics::check_geometry(model.robot(), model.routing(), sol);
   sol.model = model.name();
   sol.model_fingerprint = model.fingerprint();
   sum.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

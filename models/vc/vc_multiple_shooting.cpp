@@ -139,6 +139,7 @@ class MultipleShooting final : public detail::ModelProblem {
     sol.disk_frames.push_back(Frame{});
     sol.backbone.push_back(BackboneSample{0.0, Frame{}, Vec3(x.segment<3>(12)), Vec3(x.segment<3>(15))});
     cum_.assign(K, 0.0);
+    W_.degeneracy.reset();
     bvp::Integrator& fin = W_.final_pass_integrator();
     TendonRod& rod = *W_.final_rod;
     double* y = W_.y.data();
@@ -171,6 +172,7 @@ class MultipleShooting final : public detail::ModelProblem {
   }
   // Node 0 holds the base wrench (states 12..17).
   Stability stability(const Eigen::VectorXd& x) override { return conjugate_point_test(W_, Vec6(x.segment<6>(12))); }
+  bool infeasibility(const Eigen::VectorXd&, std::string& why) override { return tendon_limit(W_, why); }
   std::string integrator_name() const override { return W_.shot_integrator->name(); }
 
  private:

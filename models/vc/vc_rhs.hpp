@@ -25,6 +25,21 @@ struct SegmentLoads {
   std::vector<LengthTerm> lengths;                ///< Every tendon running through the segment.
 };
 
+/// The most degenerate tensioned tendon path seen by a watching rod (TendonRod::watch).
+///
+/// The measure is curvature x offset, c_k = -(u x r_k) . v / |v|^2 = 1 - (q_k . v) / |v|^2 with
+/// q_k = v + u x r_k the tangent of the fully constrained tendon path: the fraction of the
+/// backbone's advance that the tendon loses by running on the inside of the bend (kappa |r_k| for
+/// a tendon straight towards the centre of curvature). At c_k = 1 the tendon sits on the centre of
+/// curvature and its path degenerates (q_k . v = 0); beyond, it would have to run backwards, i.e.
+/// cross the backbone. No actuation of a real robot passes c_k = 1.
+struct Degeneracy {
+  double value = -1e300;  ///< Largest c_k seen.
+  double s = 0.0;         ///< Arc length where it was seen (m).
+  int tendon = -1;        ///< Its global tendon index (-1: none seen).
+  void reset() { *this = Degeneracy{}; }
+};
+
 /// The rod of one segment: 18 states, plus one length per tendon (|q_k|, Eq. 56) if requested.
 /// Reads the section (its weight at the current load factor) and the segment's loads through
 /// pointers, so that rescaling the loads needs no rebuild.
@@ -37,15 +52,18 @@ class TendonRod final : public bvp::OdeSystem {
   void rhs(double s, const double* y, double* dyds) const override;
   /// Integrate segment `segment` from now on.
   void set(const SegmentLoads& segment) { seg_ = &segment; }
+  /// Record the largest curvature x offset of the tensioned tendons in `d` (null: stop).
+  void watch(Degeneracy* d) { watch_ = d; }
 
  private:
   template <bool Shear, bool Gravity>
-  void eval(const double* y, double* dyds) const;
+  void eval(double s, const double* y, double* dyds) const;
 
   const cosserat::Section* section_;
   const SegmentLoads* seg_;
   int tendon_count_;
   bool lengths_;
+  Degeneracy* watch_ = nullptr;
 };
 
 }  // namespace tdcr::vc

@@ -2,6 +2,13 @@
 // and the tendon displacements (vc_shooting.hpp).
 #include "vc/vc_shooting.hpp"
 
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include <Eigen/LU>
+
+#include "physics/geometry_check.hpp"
 #include "physics/tendon_path.hpp"
 
 namespace tdcr {
@@ -14,6 +21,66 @@ VcWorkspace::Impl::~Impl() = default;
 namespace vc {
 
 namespace {
+
+/// The wrench just distal of a disk's kinks as a function of itself: z = (n+, m+) maps to the
+/// wrench before the kinks minus the kink wrench of the continuing tendons at the strains z gives.
+struct KinkMap {
+  const cosserat::Section& S;
+  const Mat3& R;
+  const Vec3& u;  ///< Strains just proximal of the disk.
+  const Vec3& v;
+  const std::vector<cosserat::TendonLoad>& tendons;
+  Vec6 base;      ///< The wrench before the kinks.
+  Vec6 operator()(const Vec6& z) const {
+    const Vec3 up = S.curvature(R, z.tail<3>());
+    const Vec3 vp = S.strain(R, z.head<3>());
+    Vec6 g = base;
+    for (const cosserat::TendonLoad& t : tendons) {
+      const Vec3 qm = physics::tendon_tangent(v, u, t.r);
+      const Vec3 qp = physics::tendon_tangent(vp, up, t.r);
+      const Vec3 K = t.T * (R * (qp / qp.norm() - qm / qm.norm()));
+      g.head<3>() -= K;
+      g.tail<3>() -= (R * t.r).cross(K);
+    }
+    return g;
+  }
+};
+
+/// Solve z = G(z), z in: the start. Fixed-point iteration while it contracts (its factor is about
+/// T r^2 / (EI |q_k|), small for moderate bends); once it stops contracting (a strong tendon
+/// continuing past a large point load on a strongly bent robot: the factor passes 1 and the
+/// iteration falls into a 2-cycle), Newton on z - G(z) from the start with a forward-difference
+/// Jacobian. False if neither settles.
+bool kink_fixed_point(const KinkMap& G, double force_scale, double moment_scale, Vec6& z) {
+  Vec6 scale;
+  scale << Vec3::Constant(force_scale), Vec3::Constant(moment_scale);
+  const Vec6 start = z;
+  double previous = INFINITY;
+  for (int it = 0; it < 100; ++it) {
+    const Vec6 next = G(z);
+    const double step = (next - z).cwiseQuotient(scale).cwiseAbs().maxCoeff();
+    z = next;
+    if (step <= 1e-15) return z.allFinite();
+    if (!(step < 0.9 * previous)) break;
+    previous = step;
+  }
+  z = start;
+  for (int it = 0; it < 30; ++it) {
+    const Vec6 h = z - G(z);
+    Eigen::Matrix<double, 6, 6> J;
+    for (int c = 0; c < 6; ++c) {
+      Vec6 zc = z;
+      const double d = 1e-7 * std::max(std::abs(z[c]), scale[c]);
+      zc[c] += d;
+      J.col(c) = (zc - G(zc) - h) / d;
+    }
+    const Vec6 dz = J.partialPivLu().solve(-h);
+    if (!dz.allFinite()) return false;
+    z += dz;
+    if (dz.cwiseQuotient(scale).cwiseAbs().maxCoeff() <= 1e-14) return z.allFinite();
+  }
+  return false;
+}
 
 bool same_integration(const SolverOptions& a, const SolverOptions& b) {
   return a.integrator == b.integrator && a.rk4_steps == b.rk4_steps && a.rk4_max_step == b.rk4_max_step &&
@@ -63,6 +130,7 @@ void bind_input(VcWorkspace::Impl& W, const VcModel& model, const ModelInput& in
   W.final_integrator = lengths_in_shots ? nullptr : bvp::make_integrator(options);
   W.shot_rod = std::make_unique<TendonRod>(W.section, W.segments[0], W.tendon_count, lengths_in_shots);
   W.final_rod = std::make_unique<TendonRod>(W.section, W.segments[0], W.tendon_count, true);
+  W.final_rod->watch(&W.degeneracy);
   W.y = Eigen::VectorXd::Zero(cosserat::kStateSize + W.tendon_count);
   W.segment_lengths.assign(W.segments.size() * W.tendon_count, 0.0);
   W.single.reset();
@@ -109,37 +177,19 @@ bool disk_point_loads(const VcWorkspace::Impl& W, int i, int j, double* y) {
   if (weighted) cosserat::force(y) -= W.loads.disk_weight(j);
   // Kinks: the point loads make u, v jump, so every tensioned tendon continuing past disk j
   // changes direction there and pulls on the backbone with T_k R (t_k+ - t_k-) at p + R r_k.
-  // t_k+ depends on the wrench after the kink: fixed-point iteration (its contraction factor is
-  // about T r^2 / EI, small for any sane tension).
+  // t_k+ depends on the wrench after the kink: a fixed point z = G(z) (kink_fixed_point).
   const std::vector<cosserat::TendonLoad>* cont = nullptr;
   if (j < last)
     cont = &seg.tendons;
   else if (i + 1 < nseg)
     cont = &W.segments[i + 1].tendons;
   if (!W.model->options().kink_forces || !cont || cont->empty()) return true;
-  const Vec3 n_base = cosserat::force(y), m_base = cosserat::moment(y);
-  Vec3 np = n_base, mp = m_base;
-  bool settled = false;
-  for (int it = 0; it < 100 && !settled; ++it) {
-    const Vec3 up = S.curvature(R, mp);
-    const Vec3 vp = S.strain(R, np);
-    Vec3 dn = Vec3::Zero(), dm = Vec3::Zero();
-    for (const cosserat::TendonLoad& t : *cont) {
-      const Vec3 qm = physics::tendon_tangent(v, u, t.r);
-      const Vec3 qp = physics::tendon_tangent(vp, up, t.r);
-      const Vec3 K = t.T * (R * (qp / qp.norm() - qm / qm.norm()));
-      dn += K;
-      dm += (R * t.r).cross(K);
-    }
-    const Vec3 n_new = n_base - dn, m_new = m_base - dm;
-    settled = (n_new - np).norm() <= 1e-15 * W.loads.force_scale() &&
-              (m_new - mp).norm() <= 1e-15 * W.loads.moment_scale();
-    np = n_new;
-    mp = m_new;
-  }
-  if (!settled) return false;
-  cosserat::force(y) = np;
-  cosserat::moment(y) = mp;
+  Vec6 z;
+  z << cosserat::force(y), cosserat::moment(y);
+  const KinkMap G{S, R, u, v, *cont, z};
+  if (!kink_fixed_point(G, W.loads.force_scale(), W.loads.moment_scale(), z)) return false;
+  cosserat::force(y) = z.head<3>();
+  cosserat::moment(y) = z.tail<3>();
   return true;
 }
 
@@ -181,6 +231,15 @@ bool shoot(VcWorkspace::Impl& W, bvp::Integrator& integ, TendonRod& rod, const V
     res.tail<3>() -= W.loads.tip_moment();
   }
   return res.allFinite();
+}
+
+bool tendon_limit(const VcWorkspace::Impl& W, std::string& why) {
+  const Degeneracy& d = W.degeneracy;
+  if (d.tendon < 0 || !(d.value >= physics::kTendonLimitNear)) return false;
+  char where[48];
+  std::snprintf(where, sizeof where, "at s = %.4g m", d.s);
+  why = physics::tendon_limit_message(d.tendon, d.value, where);
+  return true;
 }
 
 void tendon_displacements(const VcWorkspace::Impl& W, const std::vector<double>& lengths,

@@ -38,7 +38,8 @@ struct VcWorkspace::Impl {
   std::unique_ptr<bvp::Integrator> final_integrator;  ///< Null with CVODE (lengths in every shot).
   long retired_rhs = 0;                               ///< Evaluations of replaced integrators.
   std::unique_ptr<vc::TendonRod> shot_rod;            ///< Lengths only with CVODE.
-  std::unique_ptr<vc::TendonRod> final_rod;           ///< With lengths.
+  std::unique_ptr<vc::TendonRod> final_rod;           ///< With lengths; watches `degeneracy`.
+  vc::Degeneracy degeneracy;                          ///< Of the last final pass.
   Eigen::VectorXd y;                                  ///< 18 + tendon_count.
   std::vector<double> segment_lengths;                ///< [segment * tendon_count + k] at segment ends.
 
@@ -71,6 +72,9 @@ bool disk_point_loads(const VcWorkspace::Impl& W, int i, int j, double* y);
 /// failed, else `res` = (n(L+) - F_tip, m(L+) - M_tip).
 bool shoot(VcWorkspace::Impl& W, bvp::Integrator& integrator, TendonRod& rod, const Vec6& x, Vec6& res,
            const Record* rec);
+/// Whether the last final pass (at the load factor where a loading path stopped) had a tensioned
+/// tendon at its geometric limit (curvature x offset >= physics::kTendonLimitNear): the reason.
+bool tendon_limit(const VcWorkspace::Impl& W, std::string& why);
 /// Tendon displacements (Eq. 56) from the tendon lengths at every segment end.
 void tendon_displacements(const VcWorkspace::Impl& W, const std::vector<double>& segment_lengths,
                           std::vector<double>& displacements);

@@ -71,6 +71,7 @@ class SingleShooting final : public detail::ModelProblem {
   bool final_residual(const Eigen::VectorXd& x, Eigen::Ref<Eigen::VectorXd> f) override {
     frames_.clear();
     samples_.clear();
+    W_.degeneracy.reset();
     const Record rec{&frames_, &samples_, &W_.segment_lengths};
     Vec6 r;
     const bool ok = shoot(W_, W_.final_pass_integrator(), *W_.final_rod, Vec6(x), r, &rec);
@@ -91,6 +92,7 @@ class SingleShooting final : public detail::ModelProblem {
     tendon_displacements(W_, W_.segment_lengths, sol.tendon_displacements);
   }
   Stability stability(const Eigen::VectorXd& x) override { return conjugate_point_test(W_, Vec6(x)); }
+  bool infeasibility(const Eigen::VectorXd&, std::string& why) override { return tendon_limit(W_, why); }
   std::string integrator_name() const override { return W_.shot_integrator->name(); }
 
  private:
