@@ -4,9 +4,11 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include <Eigen/Core>
 
+#include "tdcr/bvp/arclength.hpp"
 #include "tdcr/bvp/continuation.hpp"
 #include "tdcr/bvp/newton_solver.hpp"
 #include "tdcr/core/solution.hpp"
@@ -34,5 +36,25 @@ bvp::ContinuationResult continue_loads(bvp::NewtonSolver& newton, bvp::Parameter
                                        Eigen::VectorXd& x, const bvp::NewtonOptions& newton_options,
                                        const SolverOptions& options, SolverSummary& sum, double first_step = 0.0,
                                        const std::string& purpose = "");
+
+class ModelProblem;
+
+/// @brief The answer to a loaded scene (docs/models.md): follow the loading path from the
+/// unloaded straight robot (load factor 0) to the full input (1) by pseudo-arclength
+/// continuation (bvp::arclength_continuation, FoldAction::Snap). Where the path meets a fold
+/// before full load the robot snaps: the solver lands on the branch beyond and goes on.
+///
+/// @param x Out: the solution at the load factor reached (1 on success); starts from
+///        P.rest_state().
+/// @param sum Work counters and continuation_steps are added; termination and message set as
+///        by continue_loads() (the message names the snaps, with load fraction and tip jump).
+/// @param events Out: the folds, bifurcations and snaps of the path (tip jump from the tip
+///        positions of ModelProblem::tip_position()).
+/// @param first_step First step (0: the arclength default), in scaled arclength.
+/// @param purpose Why the path is followed, for the message.
+bvp::ArclengthResult follow_loading_path(ModelProblem& P, bvp::ParameterizedSystem& system, Eigen::VectorXd& x,
+                                         const bvp::NewtonOptions& newton_options, const SolverOptions& options,
+                                         SolverSummary& sum, std::vector<PathEvent>& events, double first_step,
+                                         const std::string& purpose);
 
 }  // namespace tdcr::detail
