@@ -5,7 +5,6 @@
 
 #include "common/load_continuation.hpp"
 #include "common/model_problem.hpp"
-#include "tdcr/core/error.hpp"
 
 namespace tdcr::detail {
 
@@ -61,8 +60,8 @@ bvp::ArclengthResult follow_loading_path(ModelProblem& P, bvp::ParameterizedSyst
     if (e.type == bvp::ArclengthEventType::Snap) {
       const bool measured = fold_tip && fold_tip->size() == 3 && e.output.size() == 3;
       pe.tip_jump = measured ? (e.output - *fold_tip).norm() : 0.0;
-      std::snprintf(buf, sizeof buf, "snapped to another branch at %.2f %% of the load (tip jump %s)",
-                    100.0 * e.lambda, measured ? (format_value(1e3 * pe.tip_jump) + " mm").c_str() : "unknown");
+      std::snprintf(buf, sizeof buf, "snapped to another branch at %.2f %% of the load (tip jump %.3g mm)",
+                    100.0 * e.lambda, measured ? 1e3 * pe.tip_jump : -1.0);
       snaps += std::string(snaps.empty() ? "" : "; ") + buf;
     } else {
       std::snprintf(buf, sizeof buf, "%s at %.4g %% of the load%s", bvp::to_string(e.type).c_str(),
