@@ -195,6 +195,7 @@ void Run::record(ArclengthEventType type, const Point& p, bool refined, double j
   e.jump = jump;
   e.refined = refined;
   e.x = p.y.head(n_);
+  if (opt_.event_output) e.output = opt_.event_output(e.x, e.lambda);
   res_.events.push_back(std::move(e));
 }
 

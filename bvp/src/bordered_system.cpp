@@ -26,10 +26,10 @@ BorderedSystem::BorderedSystem(ParameterizedSystem& inner, double lambda_scale)
   col_.resize(n);
   rhs_ = Eigen::VectorXd::Zero(n + 1);
   rhs_[n] = 1.0;
-  M_.resize(n + 1, n + 1);
-  lu_ = Eigen::PartialPivLU<Eigen::MatrixXd>(n + 1);
-  visited_.assign(static_cast<size_t>(n) + 1, 0);
   if (!sparse_) {
+    M_.resize(n + 1, n + 1);
+    lu_ = Eigen::PartialPivLU<Eigen::MatrixXd>(n + 1);
+    visited_.assign(static_cast<size_t>(n) + 1, 0);
     fd_.prepare(n);
     return;
   }
@@ -55,6 +55,8 @@ BorderedSystem::BorderedSystem(ParameterizedSystem& inner, double lambda_scale)
   for (int i = 0; i <= n; ++i) pattern_.row_idx.push_back(i);
   pattern_.col_ptr[n + 1] = static_cast<int>(pattern_.row_idx.size());
   values_.assign(static_cast<size_t>(pattern_.nnz()), 0.0);
+  S_.resize(n + 1, n + 1);
+  S_.reserve(pattern_.nnz());
 }
 
 void BorderedSystem::set_border(const Eigen::VectorXd& t, const Eigen::VectorXd& y_pred) {
@@ -131,24 +133,20 @@ bool BorderedSystem::tangent(const Eigen::VectorXd& y, const Eigen::VectorXd& bo
   if (!inner_.residual(y.head(n_), f_.head(n_)) || !f_.head(n_).allFinite()) return false;
   f_[n_] = 0.0;
   // The Jacobian's border row is tw_ = t W; use the requested border for this factorisation.
-  const Eigen::VectorXd::Index n1 = n_ + 1;
   tw_saved_ = tw_;
   tw_ = border.cwiseProduct(w_);
-  bool ok;
-  if (sparse_) {
-    ok = sparse_jacobian(y, f_, values_.data());
-    if (ok) {
-      M_.setZero();
-      for (int j = 0; j < n1; ++j)
-        for (int k = pattern_.col_ptr[j]; k < pattern_.col_ptr[j + 1]; ++k)
-          M_(pattern_.row_idx[k], j) = values_[k];
-    }
-  } else {
-    ok = jacobian(y, f_, M_);
-  }
+  const bool ok = sparse_ ? sparse_jacobian(y, f_, values_.data()) : jacobian(y, f_, M_);
   tw_ = tw_saved_;
-  if (!ok) return false;
-  // Scaled columns (dF/dz = dF/dy W^-1; the border row becomes `border`), scaled rows.
+  if (!ok || !(sparse_ ? sparse_tangent(t, det_sign, det_log) : dense_tangent(t, det_sign, det_log))) return false;
+  const double norm = t.norm();
+  if (!(norm > 0.0) || !std::isfinite(norm)) return false;
+  t /= norm;
+  return true;
+}
+
+// Scaled columns (dF/dz = dF/dy W^-1; the border row becomes `border`), scaled rows.
+bool BorderedSystem::dense_tangent(Eigen::VectorXd& t, int& det_sign, double& det_log) {
+  const Eigen::Index n1 = n_ + 1;
   M_.array().colwise() *= fs_.array();
   M_.array().rowwise() *= w_inv_.transpose().array();
   lu_.compute(M_);
@@ -173,10 +171,27 @@ bool BorderedSystem::tangent(const Eigen::VectorXd& y, const Eigen::VectorXd& bo
     det_log += std::log(std::abs(d[i]));
   }
   t = lu_.solve(rhs_);
-  const double norm = t.norm();
-  if (!(norm > 0.0) || !std::isfinite(norm)) return false;
-  t /= norm;
   return true;
+}
+
+// The same scaling on the bordered pattern, then a sparse LU (column ordering reused).
+bool BorderedSystem::sparse_tangent(Eigen::VectorXd& t, int& det_sign, double& det_log) {
+  const int n1 = n_ + 1;
+  for (int j = 0; j < n1; ++j)
+    for (int k = pattern_.col_ptr[j]; k < pattern_.col_ptr[j + 1]; ++k)
+      values_[k] *= fs_[pattern_.row_idx[k]] * w_inv_[j];
+  S_ = Eigen::Map<const Eigen::SparseMatrix<double, Eigen::ColMajor, int>>(
+      n1, n1, pattern_.nnz(), pattern_.col_ptr.data(), pattern_.row_idx.data(), values_.data());
+  if (!analyzed_) {
+    slu_.analyzePattern(S_);
+    analyzed_ = true;
+  }
+  slu_.factorize(S_);
+  if (slu_.info() != Eigen::Success) return false;
+  det_sign = static_cast<int>(slu_.signDeterminant());
+  det_log = slu_.logAbsDeterminant();
+  t = slu_.solve(rhs_);
+  return slu_.info() == Eigen::Success;
 }
 
 }  // namespace tdcr::bvp::detail

@@ -7,6 +7,8 @@
 
 #include <Eigen/Core>
 #include <Eigen/LU>
+#include <Eigen/SparseCore>
+#include <Eigen/SparseLU>
 
 #include "tdcr/bvp/continuation.hpp"
 #include "tdcr/bvp/residual_system.hpp"
@@ -42,7 +44,8 @@ class BorderedSystem final : public ResidualSystem {
   const Eigen::VectorXd& weights() const { return w_; }
 
   /// Factorise the augmented Jacobian [dF/dz; border^T] (rows scaled by the residual scale)
-  /// at y, a solution of F. Outputs the unit tangent t (M t = e_{n+1}, normalised, so that
+  /// at y, a solution of F: a dense LU, or a sparse LU (Eigen::SparseLU on the bordered
+  /// pattern) when the inner system declares a pattern, so large sparse systems stay O(nnz). Outputs the unit tangent t (M t = e_{n+1}, normalised, so that
   /// border^T t > 0), the sign and log|.| of det M. False if F or its Jacobian cannot be
   /// evaluated or t is not finite (M singular).
   bool tangent(const Eigen::VectorXd& y, const Eigen::VectorXd& border, Eigen::VectorXd& t,
@@ -67,8 +70,15 @@ class BorderedSystem final : public ResidualSystem {
   FiniteDifferenceWorkspace fd_;
   Eigen::VectorXd w_, w_inv_, tw_, tw_saved_, y_pred_, fs_;
   Eigen::VectorXd f_, f_pert_, col_, rhs_;
-  Eigen::MatrixXd M_;
-  Eigen::PartialPivLU<Eigen::MatrixXd> lu_;
+  Eigen::MatrixXd M_;                       // dense case only
+  Eigen::PartialPivLU<Eigen::MatrixXd> lu_;  // dense case only
+  // Sparse case: the scaled augmented matrix on pattern_, factorised by SparseLU (its column
+  // ordering is computed once; the determinant sign comes from the factors and permutations).
+  Eigen::SparseMatrix<double, Eigen::ColMajor, int> S_;
+  Eigen::SparseLU<Eigen::SparseMatrix<double, Eigen::ColMajor, int>, Eigen::COLAMDOrdering<int>> slu_;
+  bool analyzed_ = false;
+  bool dense_tangent(Eigen::VectorXd& t, int& det_sign, double& det_log);
+  bool sparse_tangent(Eigen::VectorXd& t, int& det_sign, double& det_log);
 };
 
 }  // namespace tdcr::bvp::detail

@@ -77,6 +77,18 @@ class ModelProblem {
     (void)why;
     return false;
   }
+  /// Path following: the tip position (m, base frame) at unknowns x at the system's current
+  /// parameter, for the tip jump of a snap. Default: one final_residual() and extract() into a
+  /// scratch Solution (its last disk frame), i.e. a full output pass; called only at events.
+  virtual bool tip_position(const Eigen::VectorXd& x, Vec3& tip) {
+    Eigen::VectorXd f(x.size());
+    Solution scratch;
+    const bool evaluated = final_residual(x, f);
+    extract(x, evaluated, scratch);
+    if (!evaluated || scratch.disk_frames.empty()) return false;
+    tip = scratch.disk_frames.back().p;
+    return tip.allFinite();
+  }
   /// The integrator's name for the summary ("rk4", "cvode", "none").
   virtual std::string integrator_name() const { return "none"; }
 };

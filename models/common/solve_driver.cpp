@@ -10,6 +10,7 @@
 #include "common/model_problem.hpp"
 #include "common/newton_summary.hpp"
 #include "physics/geometry_check.hpp"
+#include "physics/load_case.hpp"
 #include "tdcr/core/error.hpp"
 #include "tdcr/models/static_model.hpp"
 
@@ -79,6 +80,47 @@ void name_infeasibility(detail::ModelProblem& P, const TendonRouting& routing, c
   sol.summary.message = why + buf + sol.summary.message;
 }
 
+// --- The answer to a loaded scene (docs/models.md): the loading path from rest. ---
+
+// Load parameters up to which a cold direct solve is taken as the answer: below them the
+// external loads only perturb the tendon-bent shape the cold guesses start from, and the direct
+// solve lands on the branch connected to rest (VCref's measured thresholds, docs/models.md).
+constexpr double kDirectLoadParameter = 2.0;
+constexpr double kDirectCompressionParameter = 2.0;
+
+// Why a cold solve must follow the loading path instead of a direct solve ("" if it need not).
+std::string path_reason(const StaticModel& model, const ModelInput& input, const detail::ColdStart& cold) {
+  if (cold.from_rest) return cold.reason;
+  physics::LoadCase load;
+  load.bind(model.robot(), model.routing(), input);
+  if (load.load_parameter() <= kDirectLoadParameter && load.compression_parameter() <= kDirectCompressionParameter)
+    return "";
+  char why[200];
+  std::snprintf(why, sizeof why,
+                "loaded from rest: L^2 (|W| + |F_tip|) / EI = %.3g, compression parameter %.3g (direct solve up to %g, %g)",
+                load.load_parameter(), load.compression_parameter(), kDirectLoadParameter,
+                kDirectCompressionParameter);
+  return why;
+}
+
+// Cold or warm solve of a system: the direct solve where it lands on the loading branch, else
+// (or when it fails) the loading path from rest. Returns the load factor reached (1: the input).
+double solve_on_loading_path(const StaticModel& model, const ModelInput& input, detail::ModelProblem& P,
+                           bvp::ParameterizedSystem& sys, const bvp::NewtonOptions& nopt, const SolverOptions& options,
+                           bool warm, Eigen::VectorXd& x, Solution& sol) {
+  SolverSummary& sum = sol.summary;
+  const detail::ColdStart cold = P.cold_start();
+  const std::string reason = warm ? "" : path_reason(model, input, cold);
+  if (!reason.empty() && options.continuation)
+    return detail::follow_loading_path(P, sys, x, nopt, options, sum, sol.path_events, cold.first_step, reason)
+        .parameter;
+  if (!warm) P.cold_guess(x);
+  direct_solve(P, sys, nopt, warm, x, sum);
+  if (sum.converged() || !options.continuation) return 1.0;
+  const std::string why = (warm ? "warm-started direct solve failed: " : "direct solve failed: ") + sum.message;
+  return detail::follow_loading_path(P, sys, x, nopt, options, sum, sol.path_events, cold.first_step, why).parameter;
+}
+
 }  // namespace
 
 Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelInput& input,
@@ -112,26 +154,13 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
     Eigen::VectorXd x;
     sys->set_parameter(1.0);
     const bool warm = warm_start && P.warm_guess(*warm_start, x);
-    const detail::ColdStart cold = warm ? detail::ColdStart{} : P.cold_start();
     if (sys->size() == 0) {
       x.resize(0);
       sum.termination = TerminationType::Converged;
       sum.message = "no unknowns: the answer follows from the input alone";
       sum.linear_solver = "none";
-    } else if (cold.from_rest && options.continuation) {
-      sys->set_parameter(0.0);
-      P.rest_state(x);
-      reached = detail::continue_loads(P.newton(), *sys, x, nopt, options, sum, cold.first_step, cold.reason)
-                    .parameter;
     } else {
-      if (!warm) P.cold_guess(x);
-      direct_solve(P, *sys, nopt, warm, x, sum);
-      if (!sum.converged() && options.continuation) {
-        sys->set_parameter(0.0);
-        P.rest_state(x);
-        reached = detail::continue_loads(P.newton(), *sys, x, nopt, options, sum, P.cold_start().first_step)
-                      .parameter;
-      }
+      reached = solve_on_loading_path(model, input, P, *sys, nopt, options, warm, x, sol);
     }
     if (sum.converged()) reached = 1.0;
     const bool evaluated = final_check(P, *sys, x, reached, options.function_tolerance, sum);

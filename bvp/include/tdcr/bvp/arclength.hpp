@@ -92,6 +92,10 @@ struct ArclengthOptions {
   int snap_max_iterations = 30;
   /// The scalar stored per path point, from (x, lambda); empty = the 2-norm of x.
   std::function<double(const Eigen::VectorXd&, double)> output;
+  /// Outputs stored per event (ArclengthEvent::output), from (x, lambda) at the event point,
+  /// evaluated during the run while the unknowns keep the parameterisation of the path (before
+  /// the final accept_step()); e.g. a position whose jump across a snap is wanted. Empty: none.
+  std::function<Eigen::VectorXd(const Eigen::VectorXd&, double)> event_output;
 
   /// @brief Defaults with max_steps = options.max_continuation_steps.
   static ArclengthOptions from(const SolverOptions& options);
@@ -126,6 +130,9 @@ struct ArclengthEvent {
   /// within max_refine_iterations). Snap: true.
   bool refined = false;
   Eigen::VectorXd x;     ///< State at the event (Snap: after the jump).
+  /// ArclengthOptions::event_output at the event point (empty without one). A Snap follows
+  /// the Fold it jumps from, so the jump of the output is the difference of the two.
+  Eigen::VectorXd output;
 };
 
 /// @brief A point of the path (accepted points, refined event points, snap landings, the

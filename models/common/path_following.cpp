@@ -1,0 +1,91 @@
+// The loading path from rest (load_continuation.hpp: follow_loading_path): arclength
+// continuation with snaps, its events mapped to PathEvents with the tip jump in metres.
+#include <algorithm>
+#include <cstdio>
+
+#include "common/load_continuation.hpp"
+#include "common/model_problem.hpp"
+
+namespace tdcr::detail {
+
+namespace {
+
+PathEvent::Type event_type(bvp::ArclengthEventType t) {
+  switch (t) {
+    case bvp::ArclengthEventType::Fold: return PathEvent::Type::Fold;
+    case bvp::ArclengthEventType::Bifurcation: return PathEvent::Type::Bifurcation;
+    case bvp::ArclengthEventType::Snap: return PathEvent::Type::Snap;
+  }
+  return PathEvent::Type::Fold;
+}
+
+}  // namespace
+
+bvp::ArclengthResult follow_loading_path(ModelProblem& P, bvp::ParameterizedSystem& system, Eigen::VectorXd& x,
+                                         const bvp::NewtonOptions& newton_options, const SolverOptions& options,
+                                         SolverSummary& sum, std::vector<PathEvent>& events, double first_step,
+                                         const std::string& purpose) {
+  bvp::ArclengthOptions a = bvp::ArclengthOptions::from(options);
+  a.start = 0.0;
+  a.target = 1.0;
+  a.at_fold = bvp::FoldAction::Snap;
+  // The path is long in scaled arclength where the robot bends far: at least 400 corrector solves.
+  a.max_steps = std::max(a.max_steps, 400);
+  if (first_step > 0.0) a.initial_step = std::clamp(first_step, a.min_step, a.initial_step);
+  a.event_output = [&P, &system](const Eigen::VectorXd& xe, double lambda) {
+    system.set_parameter(lambda);
+    Vec3 tip;
+    return P.tip_position(xe, tip) ? Eigen::VectorXd(tip) : Eigen::VectorXd();
+  };
+  system.set_parameter(0.0);
+  P.rest_state(x);
+  const bvp::ArclengthResult r = bvp::arclength_continuation(P.newton(), system, x, newton_options, a);
+  sum.iterations += r.iterations;
+  sum.residual_evaluations += r.residual_evaluations;
+  sum.jacobian_evaluations += r.jacobian_evaluations;
+  sum.continuation_steps += r.steps;
+  sum.solver_flag = r.last.flag;
+  sum.residual_norm = r.last.residual_norm;
+  sum.physical_residual = r.last.physical_residual;
+  if (!r.last.linear_solver.empty()) sum.linear_solver = r.last.linear_solver;
+
+  // Events; a snap's tip jump is measured from the fold it leaves.
+  std::string snaps;
+  const Eigen::VectorXd* fold_tip = nullptr;
+  for (const bvp::ArclengthEvent& e : r.events) {
+    PathEvent pe;
+    pe.type = event_type(e.type);
+    pe.load_fraction = e.lambda;
+    char buf[160];
+    if (e.type == bvp::ArclengthEventType::Snap) {
+      const bool measured = fold_tip && fold_tip->size() == 3 && e.output.size() == 3;
+      pe.tip_jump = measured ? (e.output - *fold_tip).norm() : 0.0;
+      std::snprintf(buf, sizeof buf, "snapped to another branch at %.2f %% of the load (tip jump %.3g mm)",
+                    100.0 * e.lambda, measured ? 1e3 * pe.tip_jump : -1.0);
+      snaps += std::string(snaps.empty() ? "" : "; ") + buf;
+    } else {
+      std::snprintf(buf, sizeof buf, "%s at %.4g %% of the load%s", bvp::to_string(e.type).c_str(),
+                    100.0 * e.lambda, e.refined ? "" : " (location not refined)");
+    }
+    if (e.type == bvp::ArclengthEventType::Fold) fold_tip = &e.output;
+    pe.note = buf;
+    events.push_back(pe);
+  }
+
+  const std::string why = purpose + "; " + r.message;
+  if (r.converged()) {
+    sum.termination = TerminationType::Converged;
+    sum.message = r.last.message + " (by following the loading path from rest: " + why + ")";
+    if (!snaps.empty()) sum.message = "the robot snaps: " + snaps + "; " + sum.message;
+  } else {
+    sum.termination = r.last.converged() || r.steps == 0 ? TerminationType::NoConvergence : r.last.termination;
+    char buf[160];
+    std::snprintf(buf, sizeof buf,
+                  "the loading path stopped at %.1f %% of the load (returned shape: the equilibrium there): ",
+                  100.0 * r.parameter);
+    sum.message = buf + why;
+  }
+  return r;
+}
+
+}  // namespace tdcr::detail

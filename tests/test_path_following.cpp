@@ -1,0 +1,116 @@
+// The answer to a loaded scene (docs/models.md): cold solves follow the loading path from rest,
+// snap past folds and report the events.
+#include <cstdio>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "tdcr/core/scene_io.hpp"
+#include "tdcr/models/static_model.hpp"
+
+using namespace tdcr;
+
+namespace {
+
+Scene scene_file(const std::string& name) { return load_scene(std::string(TDCR_TEST_DATA_DIR) + "/" + name); }
+
+ModelInput scaled(const Scene& scene, double f) {
+  ModelInput in = scene.input();
+  for (double& v : in.actuation.values) v *= f;
+  in.loads.tip_force *= f;
+  in.loads.tip_moment *= f;
+  in.loads.gravity *= f;
+  return in;
+}
+
+// Natural-parameter path by warm-started direct solves from `from` to `to` in `steps` steps;
+// returns the last converged Solution (empty disk_frames if the first step failed).
+Solution natural_path(const StaticModel& m, ModelWorkspace& ws, const Scene& scene, const Solution& start, double from,
+                      double to, int steps, bool& all_converged) {
+  SolverOptions opt = scene.solver;
+  opt.continuation = false;  // a plain warm solve per step: no path following
+  Solution prev = start;
+  all_converged = true;
+  for (int k = 1; k <= steps; ++k) {
+    const Solution s = solve(m, ws, scaled(scene, from + (to - from) * k / steps), opt, &prev);
+    if (!s.converged()) {
+      all_converged = false;
+      break;
+    }
+    prev = s;
+  }
+  return prev;
+}
+
+}  // namespace
+
+// Issue 12, example a: VC, CCsub and PRB used to land near (-29, 46, 58) mm, VCref at (56, -40,
+// -23) mm. The loading path (fine natural steps agree: docs/models.md) reaches VCref's.
+TEST(PathFollowing, IssueExampleAllStaticModelsOnOneBranch) {
+  const Scene scene = scene_file("issue12_a.json");
+  const double length = 0.1;
+  Vec3 ref = Vec3::Zero();
+  for (ModelKind kind : {ModelKind::VCref, ModelKind::VC, ModelKind::CCsub, ModelKind::PRB}) {
+    auto m = make_model(kind, scene.robot, scene.effects);
+    auto ws = m->make_workspace();
+    const Solution s = solve(*m, *ws, scene.input(), scene.solver);
+    ASSERT_TRUE(s.converged()) << m->name() << ": " << s.summary.message;
+    if (kind == ModelKind::VCref) ref = s.tip().p;
+    EXPECT_LT((s.tip().p - ref).norm(), 0.05 * length) << m->name() << " tip " << s.tip().p.transpose();
+    EXPECT_GT(s.tip().p.x(), 0.04) << m->name();  // the branch of the loading path, not (-29, 46, 58) mm
+  }
+}
+
+// Issue 12, example b with CCsub: the loading path meets a fold near 60 % of the load and the
+// robot snaps. A fine natural path confirms the events: warm-started solves reach just below
+// the fold and fail (or jump) just past it; walking back from the answer at full load reaches
+// just past the fold on the landing branch, and the two tips differ by the reported jump.
+TEST(PathFollowing, SnapThroughMatchesAFineNaturalPath) {
+  const Scene scene = scene_file("issue12_b.json");
+  auto m = make_model(ModelKind::CCsub, scene.robot, scene.effects);
+  auto ws = m->make_workspace();
+  const Solution s = solve(*m, *ws, scene.input(), scene.solver);
+  ASSERT_TRUE(s.converged()) << s.summary.message;
+  ASSERT_EQ(s.path_events.size(), 2u);
+  EXPECT_EQ(s.path_events[0].type, PathEvent::Type::Fold);
+  EXPECT_EQ(s.path_events[1].type, PathEvent::Type::Snap);
+  EXPECT_NE(s.summary.message.find("snaps"), std::string::npos) << s.summary.message;
+  const double fold = s.path_events[0].load_fraction;
+  const double jump = s.path_events[1].tip_jump;
+  EXPECT_GT(fold, 0.5);
+  EXPECT_LT(fold, 0.7);
+  EXPECT_GT(jump, 0.02);
+
+  // Before the fold: fine natural path from rest (first step cold and tiny, so direct).
+  SolverOptions opt = scene.solver;
+  const Solution first = solve(*m, *ws, scaled(scene, 0.01), opt);
+  ASSERT_TRUE(first.converged());
+  bool ok = false;
+  const double below = fold - 2e-4;
+  const Solution before = natural_path(*m, *ws, scene, first, 0.01, below, 300, ok);
+  ASSERT_TRUE(ok) << "the fine natural path stops before the reported fold";
+  // Past the fold the lower branch is gone: a small warm step from just below it fails or jumps.
+  SolverOptions plain = scene.solver;
+  plain.continuation = false;
+  const Solution past = solve(*m, *ws, scaled(scene, fold + 2e-4), plain, &before);
+  EXPECT_TRUE(!past.converged() || (past.tip().p - before.tip().p).norm() > 0.5 * jump);
+
+  // After the snap: walk back from the full-load answer to just past the fold.
+  const Solution after = natural_path(*m, *ws, scene, s, 1.0, fold + 2e-4, 300, ok);
+  ASSERT_TRUE(ok) << "the landing branch does not reach back to the fold";
+  // The tip moves like sqrt(distance to the fold) there: 15 % covers the 2e-4 offsets.
+  EXPECT_NEAR((after.tip().p - before.tip().p).norm(), jump, 0.15 * jump);
+}
+
+// Below the direct-solve load parameters (tendons only) the fast path stays: no path events,
+// no continuation.
+TEST(PathFollowing, TendonOnlySceneSolvesDirectly) {
+  Scene scene = scene_file("issue12_a.json");
+  scene.loads.tip_force.setZero();
+  auto m = make_model(ModelKind::CCsub, scene.robot, scene.effects);
+  auto ws = m->make_workspace();
+  const Solution s = solve(*m, *ws, scene.input(), scene.solver);
+  ASSERT_TRUE(s.converged()) << s.summary.message;
+  EXPECT_EQ(s.summary.continuation_steps, 0);
+  EXPECT_TRUE(s.path_events.empty());
+}
