@@ -70,6 +70,18 @@ double disk_overlap(const Frame& A, const Frame& B, double R) {
   return hi - lo;
 }
 
+// True if disks a and b (spacing h) turn so little against each other that no finding is
+// possible between them: a relative rotation angle theta with r_max theta <= h / 2 keeps every
+// tendon's curvature x offset below about 1/2, leaves the disk rims (radius r_max) apart and
+// cannot twist a chord onto the backbone. Tested on 1 - cos(theta) = (3 - tr(Ra^T Rb)) / 2
+// against a^2/2 (1 - a^2/12) <= 1 - cos(a), a = h / (2 r_max), so it needs no trigonometry.
+bool quiet(const Frame& a, const Frame& b, double h, double r_max) {
+  const double x = h / (2.0 * r_max);
+  if (x >= 1.5) return false;  // the series bound holds for small angles only
+  const double one_minus_cos = 0.5 * (3.0 - a.R.cwiseProduct(b.R).sum());
+  return one_minus_cos <= 0.5 * x * x * (1.0 - x * x / 12.0);
+}
+
 std::string tendon_name(int k) {
   char buf[48];
   std::snprintf(buf, sizeof buf, "tendon T%d (index %d)", k + 1, k);
@@ -98,17 +110,34 @@ void check_geometry(const Robot& robot, const TendonRouting& rt, Solution& sol) 
   const double rb = robot.backbone.outer_radius;
   double disk_radius = 0.0;
   for (const RoutedTendon& t : rt.tendons) disk_radius = std::max(disk_radius, t.r.norm());
+  // Most shapes turn gently between every pair of disks: then there is nothing to find.
+  bool all_quiet = true;
+  for (int j = 1; j < rt.disk_count() && all_quiet; ++j)
+    all_quiet = quiet(f[j - 1], f[j], rt.disk_s[j] - rt.disk_s[j - 1], disk_radius);
+  if (all_quiet) return;
   char buf[160];
   for (const RoutedTendon& t : rt.tendons) {
-    // The worst interval of each tendon for each finding.
+    // The worst interval of each tendon for each finding. Every hole is computed once; the exact
+    // chord distance only where a cheap lower bound (midpoint distance minus the half chord
+    // lengths) does not already clear the backbone radius.
     int jc = -1, jd = -1;
     double worst_c = 1.0, worst_d = rb;
+    Vec3 h0 = hole_position(f[0], t, rt.disk_s[0]);
     for (int j = 1; j <= t.end_disk; ++j) {
-      const double c = curvature_offset(f, rt, t, j);
+      if (quiet(f[j - 1], f[j], rt.disk_s[j] - rt.disk_s[j - 1], disk_radius)) {
+        if (j < t.end_disk) h0 = hole_position(f[j], t, rt.disk_s[j]);
+        continue;
+      }
+      const Vec3 h1 = hole_position(f[j], t, rt.disk_s[j]);
+      const Vec3 dp = f[j].p - f[j - 1].p, dh = h1 - h0;
+      const double c = 1.0 - dh.dot(dp) / dp.squaredNorm();
       if (c >= worst_c) worst_c = c, jc = j;
-      const double d = segment_distance(hole_position(f[j - 1], t, rt.disk_s[j - 1]),
-                                        hole_position(f[j], t, rt.disk_s[j]), f[j - 1].p, f[j].p);
-      if (d < worst_d) worst_d = d, jd = j;
+      const double bound = (0.5 * (h0 + h1 - f[j - 1].p - f[j].p)).norm() - 0.5 * (dh.norm() + dp.norm());
+      if (bound < worst_d) {
+        const double d = segment_distance(h0, h1, f[j - 1].p, f[j].p);
+        if (d < worst_d) worst_d = d, jd = j;
+      }
+      h0 = h1;
     }
     if (jc > 0) {
       std::snprintf(buf, sizeof buf, ": curvature x offset %.4f >= 1, the tendon would cross the backbone", worst_c);
@@ -123,6 +152,7 @@ void check_geometry(const Robot& robot, const TendonRouting& rt, Solution& sol) 
   int pairs = 0, jw = -1;
   double worst = 0.0;
   for (int j = 1; j < rt.disk_count(); ++j) {
+    if (quiet(f[j - 1], f[j], rt.disk_s[j] - rt.disk_s[j - 1], disk_radius)) continue;
     const double o = disk_overlap(f[j - 1], f[j], disk_radius);
     if (o <= 0.0) continue;
     ++pairs;
