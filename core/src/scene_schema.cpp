@@ -220,7 +220,7 @@ const Schema<SolverOptions>& solver_schema() {
                    {"", nullptr, "`\"auto\"`, `\"dense\"` or `\"klu\"`",
                     "VC, VCref (CCsub and PRB always use dense LU)"}),
       boolean_field("continuation", &S::continuation,
-                    {"", nullptr, "load continuation when a direct solve fails", kNewton}),
+                    {"", nullptr, "follow the loading path from rest when the loads are large or a direct solve fails", kNewton}),
       integer_field("max_continuation_steps", &S::max_continuation_steps,
                     {"", nullptr, ">= 1; at most this many Newton solves (converged or failed steps)", kNewton}),
       boolean_field("stability", &S::stability,
