@@ -8,10 +8,11 @@
 namespace tdcr {
 
 namespace {
-void require_finite_vec(const std::string& field, const Vec3& v) {
+// `field` is a literal: no string is built unless there is an error to report.
+void require_finite_vec(const char* field, const Vec3& v) {
   for (int i = 0; i < 3; ++i)
     if (!std::isfinite(v[i]))
-      throw InputError(field + "[" + std::to_string(i) + "]", format_value(v[i]), "must be a finite number");
+      throw InputError(std::string(field) + "[" + std::to_string(i) + "]", format_value(v[i]), "must be a finite number");
 }
 }  // namespace
 
@@ -26,18 +27,19 @@ void Effects::validate() const {
 }
 
 void ModelInput::validate(const Robot& robot) const {
+  // Called on every solve: field names are built only on the error path.
   const int m = robot.tendon_count();
   const bool tensions = actuation.kind == Actuation::Kind::Tensions;
-  const std::string key = tensions ? "actuation.tensions" : "actuation.displacements";
+  const char* key = tensions ? "actuation.tensions" : "actuation.displacements";
   if (static_cast<int>(actuation.values.size()) != m)
     throw InputError(key, std::to_string(actuation.values.size()) + " values",
                      "must list one value per tendon (" + std::to_string(m) + " tendons)");
   for (std::size_t k = 0; k < actuation.values.size(); ++k) {
     const double v = actuation.values[k];
-    const std::string f = key + "[" + std::to_string(k) + "]";
+    if (std::isfinite(v) && !(tensions && v < 0.0)) continue;
+    const std::string f = std::string(key) + "[" + std::to_string(k) + "]";
     if (!std::isfinite(v)) throw InputError(f, format_value(v), "must be a finite number");
-    if (tensions && v < 0.0)
-      throw InputError(f, format_value(v), "a tension must not be negative (tendons can only pull)");
+    throw InputError(f, format_value(v), "a tension must not be negative (tendons can only pull)");
   }
   require_finite_vec("loads.tip_force", loads.tip_force);
   require_finite_vec("loads.tip_moment", loads.tip_moment);
