@@ -7,7 +7,12 @@
 #include <string>
 #include <vector>
 
+#include <gtest/gtest.h>
+
+#include "tdcr/core/scene.hpp"
 #include "tdcr/core/types.hpp"
+#include "tdcr/models/lumped_model.hpp"
+#include "tdcr/models/static_model.hpp"
 
 namespace lumped_reference {
 
@@ -48,6 +53,31 @@ inline std::vector<RefRow> load_reference() {
     rows.push_back(r);
   }
   return rows;
+}
+
+// The banded formulation (disk poses and wrenches as unknowns) solves the same equations as the
+// recursive one: the same tip (1e-9 m: both converge to 1e-10 scaled residuals), and one
+// Solution layout, so each formulation's answer warm-starts the other in at most one iteration.
+template <class Model>
+void expect_banded_matches_recursive(const tdcr::Scene& s) {
+  using tdcr::LumpedFormulation;
+  using tdcr::Solution;
+  const Model rec(s.robot, s.effects, LumpedFormulation::Recursive);
+  const Model band(s.robot, s.effects, LumpedFormulation::Banded);
+  auto wr = rec.make_workspace();
+  auto wb = band.make_workspace();
+  const Solution a = tdcr::solve(rec, *wr, s.input(), s.solver);
+  const Solution b = tdcr::solve(band, *wb, s.input(), s.solver);
+  ASSERT_TRUE(a.converged()) << a.summary.message;
+  ASSERT_TRUE(b.converged()) << b.summary.message;
+  EXPECT_EQ(b.summary.linear_solver, "klu");
+  EXPECT_EQ(b.unknowns.size(), a.unknowns.size());
+  EXPECT_LT((a.tip().p - b.tip().p).norm(), 1e-9);
+  EXPECT_LT((a.unknowns - b.unknowns).cwiseAbs().maxCoeff(), 1e-6);
+  const Solution b2 = tdcr::solve(band, *wb, s.input(), s.solver, &a);
+  ASSERT_TRUE(b2.converged());
+  EXPECT_LE(b2.summary.iterations, 1);
+  EXPECT_LT((b2.tip().p - a.tip().p).norm(), 1e-9);
 }
 
 }  // namespace lumped_reference

@@ -266,28 +266,11 @@ TEST(CcsubModel, WarmStartAcrossInputsWithOtherLoadedSubsegments) {
   EXPECT_LT((sa2.tip().p - sa.tip().p).norm(), 1e-9);
 }
 
-// The banded formulation (disk poses and wrenches as unknowns) solves the same equations as the
-// recursive one: same tip under tendons, a tip force and gravity (backbone centroids), and its
-// Solutions warm-start the recursive formulation and back (one Solution layout).
+// The banded formulation matches the recursive one under tendons, a tip force and gravity
+// (backbone centroids): lumped_reference::expect_banded_matches_recursive.
 TEST(CcsubModel, BandedFormulationMatchesRecursive) {
   const double TM = paper::max_tension(paper::robot(6));
   Scene s = paper_scene(6, {0.3 * TM, 0, 0.6 * TM, 0}, Vec3(0.03, -0.02, 0.0));
   s.loads.gravity = Vec3(0.0, -9.81, 0.0);
-  const CcsubModel rec(s.robot, s.effects, LumpedFormulation::Recursive);
-  const CcsubModel band(s.robot, s.effects, LumpedFormulation::Banded);
-  auto wr = rec.make_workspace();
-  auto wb = band.make_workspace();
-  const Solution a = tdcr::solve(rec, *wr, s.input(), s.solver);
-  const Solution b = tdcr::solve(band, *wb, s.input(), s.solver);
-  ASSERT_TRUE(a.converged()) << a.summary.message;
-  ASSERT_TRUE(b.converged()) << b.summary.message;
-  EXPECT_EQ(b.summary.linear_solver, "klu");
-  EXPECT_EQ(b.unknowns.size(), a.unknowns.size());
-  EXPECT_LT((a.tip().p - b.tip().p).norm(), 1e-9);
-  EXPECT_LT((a.unknowns - b.unknowns).cwiseAbs().maxCoeff(), 1e-6);
-  // Warm starts across formulations: the answer is already there.
-  const Solution b2 = tdcr::solve(band, *wb, s.input(), s.solver, &a);
-  ASSERT_TRUE(b2.converged());
-  EXPECT_LE(b2.summary.iterations, 1);
-  EXPECT_LT((b2.tip().p - a.tip().p).norm(), 1e-9);
+  lumped_reference::expect_banded_matches_recursive<CcsubModel>(s);
 }
