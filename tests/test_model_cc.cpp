@@ -154,3 +154,24 @@ TEST(CcModel, RefusesExternalLoadsNamingTheField) {
   s.robot.backbone.density = 6450;
   EXPECT_EQ(field_of(s), "loads.gravity [0, 0, -9.81]");
 }
+
+TEST(CcModel, GeometryCheckSeesArcsPastTheTendonLimit) {
+  // The driver skips the frame-by-frame geometry check when CC's curvature bound makes every
+  // disk pair quiet (kappa r <= 1/2); past it the check runs. Displacement d bends a segment of
+  // length L to kappa = d / (L r): kappa r = 0.4 is gentle, kappa r = 1.2 puts the inner tendon
+  // beyond the backbone.
+  const double L = 0.05, r = 0.008;
+  for (double kr : {0.4, 1.2}) {
+    SCOPED_TRACE(kr);
+    const double d = kr * L;
+    const Solution sol = solve_cc(one_segment({{0, r}, {0, -r}}, {d, -d}, 10));
+    ASSERT_TRUE(sol.converged());
+    bool crossing = false;
+    for (const GeometryWarning& w : sol.geometry_warnings)
+      if (w.what.find("cross the backbone") != std::string::npos) {
+        crossing = true;
+        EXPECT_NEAR(w.value, kr, 0.01) << w.what;
+      }
+    EXPECT_EQ(crossing, kr > 1.0);
+  }
+}

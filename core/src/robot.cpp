@@ -26,7 +26,7 @@ void require_non_negative(const std::string& field, double v) {
 BackboneStiffness Backbone::effective_stiffness() const {
   if (stiffness) return *stiffness;
   const double ro = outer_radius, ri = inner_radius;
-  const double I = M_PI / 4.0 * (std::pow(ro, 4) - std::pow(ri, 4));
+  const double I = M_PI / 4.0 * (ro * ro * ro * ro - ri * ri * ri * ri);
   const double A = M_PI * (ro * ro - ri * ri);
   const double G = shear_modulus ? *shear_modulus : youngs_modulus / (2.0 * (1.0 + poisson_ratio));
   return BackboneStiffness{youngs_modulus * I, G * 2.0 * I, youngs_modulus * A, G * A};

@@ -1,5 +1,6 @@
 #include "tdcr/models/cc.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include <Eigen/Dense>
@@ -54,9 +55,15 @@ void CcModel::check_input(const ModelInput& input) const {
 }
 
 std::vector<CcArc> CcModel::arcs(const ModelInput& input, double* misfit) const {
+  std::vector<CcArc> out;
+  arcs(input, out, misfit);
+  return out;
+}
+
+void CcModel::arcs(const ModelInput& input, std::vector<CcArc>& out, double* misfit) const {
   const Robot& robot = this->robot();
   const int nseg = static_cast<int>(robot.segments.size());
-  std::vector<CcArc> out(nseg);
+  out.assign(nseg, CcArc{});
   double sq = 0.0;
   if (input.actuation.kind == Actuation::Kind::Tensions) {
     const BackboneStiffness k = robot.backbone.effective_stiffness();
@@ -73,7 +80,7 @@ std::vector<CcArc> CcModel::arcs(const ModelInput& input, double* misfit) const 
       if (effects().shear_extension) out[s].v = Vec3(0.0, 0.0, 1.0 - T / k.EA);
     }
     if (misfit) *misfit = 0.0;
-    return out;
+    return;
   }
 
   const TendonPath path = effects().tendon_path;
@@ -125,7 +132,6 @@ std::vector<CcArc> CcModel::arcs(const ModelInput& input, double* misfit) const 
     out[s].u = Vec3(-k.y(), k.x(), 0.0);
   }
   if (misfit) *misfit = std::sqrt(sq);
-  return out;
 }
 
 namespace {
@@ -142,10 +148,13 @@ class CcProblem final : public detail::ModelProblem {
   void rest_state(Eigen::VectorXd& x) override { x.resize(0); }
   bool warm_guess(const Solution&, Eigen::VectorXd&) override { return false; }
   void extract(const Eigen::VectorXd&, bool, Solution& solution) override;
+  double max_curvature() const override { return max_curvature_; }
 
  private:
   const CcModel& model_;
   const ModelInput* input_ = nullptr;  // the input of the solve under way (bind to extract)
+  std::vector<CcArc> arcs_;            // the arcs of the last extract (reused memory)
+  double max_curvature_ = -1.0;
   bvp::NewtonSolver newton_;
 };
 
@@ -161,7 +170,10 @@ void CcProblem::extract(const Eigen::VectorXd&, bool, Solution& solution) {
   const TendonRouting& routing = model_.routing();
   const Effects& effects = model_.effects();
   double misfit = 0.0;
-  const std::vector<CcArc> a = model_.arcs(input, &misfit);
+  model_.arcs(input, arcs_, &misfit);
+  const std::vector<CcArc>& a = arcs_;
+  max_curvature_ = 0.0;
+  for (const CcArc& arc : a) max_curvature_ = std::max(max_curvature_, arc.u.norm());
 
   solution.disk_frames.reserve(routing.disk_count());
   solution.disk_frames.push_back(Frame{});
@@ -199,9 +211,8 @@ void CcProblem::extract(const Eigen::VectorXd&, bool, Solution& solution) {
   }
   if (input.actuation.kind == Actuation::Kind::Tensions) solution.tensions = input.actuation.values;
 
-  Eigen::VectorXd unknowns(3 * a.size());
-  for (std::size_t s = 0; s < a.size(); ++s) unknowns.segment<3>(3 * s) = a[s].u;
-  solution.unknowns = unknowns;
+  solution.unknowns.resize(3 * static_cast<Eigen::Index>(a.size()));
+  for (std::size_t s = 0; s < a.size(); ++s) solution.unknowns.segment<3>(3 * s) = a[s].u;
 
   SolverSummary& sum = solution.summary;
   sum.termination = TerminationType::Converged;
@@ -209,10 +220,10 @@ void CcProblem::extract(const Eigen::VectorXd&, bool, Solution& solution) {
   sum.message = "closed form";
   sum.physical_residual = misfit;
   sum.residual_norm = 0.0;
-  sum.unknowns = static_cast<int>(unknowns.size());
+  sum.unknowns = static_cast<int>(solution.unknowns.size());
   // CC prescribes its arcs (geometry, or tendon statics without any external load): it has no
   // reduced stiffness to examine, so it does not decide; VC gives the verdict for the same input.
-  solution.stability.method = "kinematic model: not examined";
+  solution.stability.method = "kinematic model";  // short: no allocation on the hot path
 }
 
 }  // namespace

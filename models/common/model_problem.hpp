@@ -89,6 +89,10 @@ class ModelProblem {
     tip = scratch.disk_frames.back().p;
     return tip.allFinite();
   }
+  /// An upper bound of the backbone curvature (1/m) of the last extract(), if the model knows
+  /// one without examining the frames (CC: its arcs); negative: unknown. Lets the geometry check
+  /// skip shapes too gentle to show a finding.
+  virtual double max_curvature() const { return -1.0; }
   /// The integrator's name for the summary ("rk4", "cvode", "none").
   virtual std::string integrator_name() const { return "none"; }
 };

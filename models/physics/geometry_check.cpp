@@ -104,12 +104,14 @@ std::string tendon_limit_message(int tendon, double value, const std::string& wh
          " (at 1 the tendon reaches the centre of curvature; beyond, it would have to cross the backbone)";
 }
 
-void check_geometry(const Robot& robot, const TendonRouting& rt, Solution& sol) {
+void check_geometry(const Robot& robot, const TendonRouting& rt, Solution& sol, double max_curvature) {
   const std::vector<Frame>& f = sol.disk_frames;
   if (static_cast<int>(f.size()) != rt.disk_count() || rt.tendons.empty()) return;
   const double rb = robot.backbone.outer_radius;
   double disk_radius = 0.0;
   for (const RoutedTendon& t : rt.tendons) disk_radius = std::max(disk_radius, t.r.norm());
+  // A known curvature bound kappa turns disks h apart by at most kappa h: quiet() for every pair.
+  if (max_curvature >= 0.0 && max_curvature * disk_radius <= 0.5) return;
   // Most shapes turn gently between every pair of disks: then there is nothing to find.
   bool all_quiet = true;
   for (int j = 1; j < rt.disk_count() && all_quiet; ++j)

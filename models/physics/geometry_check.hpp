@@ -27,7 +27,11 @@ std::string tendon_limit_message(int tendon, double value, const std::string& wh
 /// Append to solution.geometry_warnings what its disk frames show that cannot be built: a tendon
 /// with curvature x offset >= 1, a tendon chord closer to the backbone chord than the backbone's
 /// outer radius, neighbouring disks (radius: the largest tendon offset) interpenetrating.
-void check_geometry(const Robot& robot, const TendonRouting& routing, Solution& solution);
+/// `max_curvature`: an upper bound of the backbone's curvature that the model knows (CC: its
+/// arcs), or negative if unknown; at most 1 / (2 r_max) no pair of disks can show a finding
+/// (see quiet() in the source), so the frames are not examined.
+void check_geometry(const Robot& robot, const TendonRouting& routing, Solution& solution,
+                    double max_curvature = -1.0);
 
 /// For the equilibrium where a loading path stopped (solution's disk frames): true and the reason
 /// in `why` if a tensioned tendon (solution.tensions) has curvature x offset >= kTendonLimitNear.

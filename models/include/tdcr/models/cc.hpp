@@ -57,6 +57,8 @@ class CcModel final : public StaticModel {
   /// checked by tdcr::solve, not here). `misfit` receives the least-squares residual of the
   /// displacement fit (m), 0 if exact.
   std::vector<CcArc> arcs(const ModelInput& input, double* misfit = nullptr) const;
+  /// @brief The same into `out` (resized to the segment count; no allocation once it has it).
+  void arcs(const ModelInput& input, std::vector<CcArc>& out, double* misfit = nullptr) const;
 
  private:
   detail::ModelProblem& bind(ModelWorkspace& workspace, const ModelInput& input,
