@@ -171,8 +171,6 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
   if (sol.tensions.empty() && input.actuation.kind == Actuation::Kind::Tensions) sol.tensions = input.actuation.values;
   if (!sum.converged() && reached < 1.0) name_infeasibility(P, model.routing(), sol.unknowns, reached, sol);
   physics::check_geometry(model.robot(), model.routing(), sol, P.max_curvature());
-  sol.model = model.name();
-  sol.model_fingerprint = model.fingerprint();
   sum.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return sol;
 }
