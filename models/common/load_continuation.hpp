@@ -3,6 +3,7 @@
 // with snaps, its result mapped into the model's SolverSummary and path events.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -10,6 +11,7 @@
 
 #include "tdcr/bvp/arclength.hpp"
 #include "tdcr/bvp/newton_solver.hpp"
+#include "tdcr/core/scene.hpp"
 #include "tdcr/core/solution.hpp"
 #include "tdcr/core/solver_options.hpp"
 
@@ -35,5 +37,20 @@ bvp::ArclengthResult follow_loading_path(ModelProblem& P, bvp::ParameterizedSyst
                                          const bvp::NewtonOptions& newton_options, const SolverOptions& options,
                                          SolverSummary& sum, std::vector<PathEvent>& events, double first_step,
                                          const std::string& purpose);
+
+/// Binds the model's problem to another input (the same ModelProblem of the workspace).
+using Rebind = std::function<ModelProblem&(const ModelInput&)>;
+
+/// @brief A warm start's path (docs/models.md): from the input of the previous Solution
+/// (`from`: its tensions and loads) to `to` in steps of the input fraction t (inputs
+/// interpolated linearly), each a warm direct solve from the last equilibrium; a failed step is
+/// halved, down to 1/64 of the way. On return the problem is bound to `to` again.
+///
+/// @param x In: the warm guess at `to` (the previous Solution's unknowns); out: the solution at
+///        `to` on success (else unchanged).
+/// @return True if every step converged; sum gets the work counters, and on success the
+///         message.
+bool follow_input_path(const Rebind& rebind, const ModelInput& from, const ModelInput& to, const Solution& previous,
+                       const bvp::NewtonOptions& newton_options, Eigen::VectorXd& x, SolverSummary& sum);
 
 }  // namespace tdcr::detail

@@ -103,21 +103,68 @@ std::string path_reason(const StaticModel& model, const ModelInput& input, const
   return why;
 }
 
+// --- Warm starts: the path from the previous answer (docs/models.md). ---
+
+// The input of a previous Solution (its tensions and loads) if a path can start there: tension
+// input with the same tendon count.
+bool previous_input(const Solution& previous, const ModelInput& input, ModelInput& from) {
+  if (input.actuation.kind != Actuation::Kind::Tensions ||
+      previous.tensions.size() != input.actuation.values.size())
+    return false;
+  from = input;
+  from.actuation.values = previous.tensions;
+  from.loads = previous.loads;
+  return true;
+}
+
+// A warm start whose external loads change this much (L^2 |dF| / EI, the load parameter of the
+// change) follows the input path instead of a direct solve, which could jump to another branch.
+bool large_change(const StaticModel& model, const ModelInput& from, const ModelInput& to) {
+  const double EI = model.robot().backbone.effective_stiffness().EI;
+  double L = 0.0;
+  for (const Segment& s : model.robot().segments) L += s.length;
+  const double dF = (to.loads.tip_force - from.loads.tip_force).norm();
+  return L * L * dF / EI > kDirectLoadParameter;
+}
+
 // Cold or warm solve of a system: the direct solve where it lands on the loading branch, else
-// (or when it fails) the loading path from rest. Returns the load factor reached (1: the input).
+// (or when it fails) the loading path: from rest for a cold solve, from the previous answer's
+// input for a warm one (then from rest if that fails too). Returns the load factor reached (1:
+// the input).
 double solve_on_loading_path(const StaticModel& model, const ModelInput& input, detail::ModelProblem& P,
-                           bvp::ParameterizedSystem& sys, const bvp::NewtonOptions& nopt, const SolverOptions& options,
-                           bool warm, Eigen::VectorXd& x, Solution& sol) {
+                             bvp::ParameterizedSystem& sys, const bvp::NewtonOptions& nopt, const SolverOptions& options,
+                             const Solution* warm_start, const detail::Rebind& rebind, Eigen::VectorXd& x,
+                             Solution& sol) {
   SolverSummary& sum = sol.summary;
+  const bool warm = warm_start != nullptr;
   const detail::ColdStart cold = P.cold_start();
   const std::string reason = warm ? "" : path_reason(model, input, cold);
   if (!reason.empty() && options.continuation)
     return detail::follow_loading_path(P, sys, x, nopt, options, sum, sol.path_events, cold.first_step, reason)
         .parameter;
+  ModelInput from;
+  const bool input_path = warm && options.continuation && previous_input(*warm_start, input, from);
   if (!warm) P.cold_guess(x);
-  direct_solve(P, sys, nopt, warm, x, sum);
-  if (sum.converged() || !options.continuation) return 1.0;
-  const std::string why = (warm ? "warm-started direct solve failed: " : "direct solve failed: ") + sum.message;
+  const bool skip_direct = input_path && large_change(model, from, input);
+  if (!skip_direct) {
+    direct_solve(P, sys, nopt, warm, x, sum);
+    if (sum.converged() || !options.continuation) return 1.0;
+  }
+  std::string why = skip_direct ? "the warm start's tip force differs by L^2 |dF| / EI > " + format_value(kDirectLoadParameter)
+                                : (warm ? "warm-started direct solve failed: " : "direct solve failed: ") + sum.message;
+  if (input_path) {
+    const Eigen::VectorXd guess = x;
+    if (detail::follow_input_path(rebind, from, input, *warm_start, nopt, x, sum)) {
+      const std::string path = sum.message;
+      direct_solve(P, sys, nopt, true, x, sum);  // at the path's end: converged in 0-1 iterations
+      if (sum.converged()) {
+        sum.message = path + "; " + sum.message;
+        return 1.0;
+      }
+    }
+    x = guess;
+    why += "; then the input path from the warm start failed: " + sum.message;
+  }
   return detail::follow_loading_path(P, sys, x, nopt, options, sum, sol.path_events, cold.first_step, why).parameter;
 }
 
@@ -160,7 +207,10 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
       sum.message = "no unknowns: the answer follows from the input alone";
       sum.linear_solver = "none";
     } else {
-      reached = solve_on_loading_path(model, input, P, *sys, nopt, options, warm, x, sol);
+      const detail::Rebind rebind = [&](const ModelInput& in) -> detail::ModelProblem& {
+        return model.bind(workspace, in, options);
+      };
+      reached = solve_on_loading_path(model, input, P, *sys, nopt, options, warm ? warm_start : nullptr, rebind, x, sol);
     }
     if (sum.converged()) reached = 1.0;
     const bool evaluated = final_check(P, *sys, x, reached, options.function_tolerance, sum);
@@ -169,6 +219,7 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
     if (sum.converged() && options.stability) sol.stability = P.stability(x);
   }
   if (sol.tensions.empty() && input.actuation.kind == Actuation::Kind::Tensions) sol.tensions = input.actuation.values;
+  sol.loads = input.loads;
   if (!sum.converged() && reached < 1.0) name_infeasibility(P, model.routing(), sol.unknowns, reached, sol);
   physics::check_geometry(model.robot(), model.routing(), sol, P.max_curvature());
   sum.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

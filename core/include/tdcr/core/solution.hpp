@@ -10,6 +10,7 @@
 
 #include <Eigen/Core>
 
+#include "tdcr/core/scene.hpp"
 #include "tdcr/core/types.hpp"
 
 namespace tdcr {
@@ -118,6 +119,9 @@ struct Solution {
   std::vector<Frame> disk_frames;         ///< Base disk (index 0), every disk, tip last.
   std::vector<double> tendon_displacements;  ///< Per tendon (m), positive when pulled, at base.
   std::vector<double> tensions;           ///< Tendon tensions used or implied (N), if known.
+  /// The external loads of the input this answer is for (with `tensions`: where a warm start
+  /// from this Solution begins its input path).
+  Loads loads;
   std::vector<BackboneSample> backbone;   ///< Dense backbone samples (VC, VCref), may be empty.
   Eigen::VectorXd unknowns;               ///< The model's solved unknowns (for warm starts).
   /// Why this model was used when the scene asked for "auto" (model_selection.hpp); empty else.
