@@ -167,6 +167,42 @@ for m in ["ccsub", "prb", "vc", "vcref"]:
                     f"{f(w[0]['mean_iterations'])} |")
 tables["warmstart"] = "\n".join(rows)
 
+# Loaded cases and the loaded trajectory (bench_loaded).
+loaded_sum = read("loaded_summary.csv")
+loaded_opt = read("loaded_options.csv")
+traj = read("trajectory.csv")
+rows = ["| model | options | converged / cases | tdcr failed | paper's code failed | tdcr median | "
+        "speed-up median | speed-up min | max tip error vs tight reference | max tip diff vs paper's code "
+        "(cases over 1e-6 m) |", "| --- " * 10 + "|"]
+for r in loaded_sum:
+    rows.append(f"| {LABEL[r['model']]} | {r['options']} | {r['converged']} / {r['cases']} | {r['failed']} | "
+                f"{r['paper_failed']} | {time_us(r['median_us'])} | {f(r['speedup_median'])}x | "
+                f"{f(r['speedup_min'])}x | {f(r['max_tip_err_ref_m'])} m"
+                + (f" ({r['reference_failed']} references failed)" if r["reference_failed"] != "0" else "")
+                + f" | {f(r['max_tip_diff_paper_m'])} m ({r['tip_diff_paper_over_1e-6']}) |")
+tables["loaded_summary"] = "\n".join(rows)
+rows = ["| model | options | converged / cases | max tip error vs tight reference | median (min of 3) | within tolerance | chosen |",
+        "| --- " * 7 + "|"]
+for r in loaded_opt:
+    if r["options"] == "default" or r["chosen"] == "1" or r["options"].startswith("cvode"):
+        rows.append(f"| {LABEL[r['model']]} | {r['options']} | {r['converged']} / {r['cases']} | "
+                    f"{f(r['max_tip_err_ref_m'])} m | {time_us(r['median_us'])} | "
+                    f"{'yes' if r['within_tol'] == '1' else 'no'} | {'**yes**' if r['chosen'] == '1' else ''} |")
+tables["loaded_options"] = "\n".join(rows)
+rows = ["| model | options | steps | rate | per step | Newton iterations per step (max) | failed | "
+        "max tip error vs tight reference (4 steps) |", "| --- " * 8 + "|"]
+for r in traj:
+    errs = [float(r[k]) for k in ("tip_err_quarter_m", "tip_err_half_m", "tip_err_three_quarter_m", "tip_err_end_m")]
+    rows.append(f"| {LABEL[r['model']]} | {r['options']} | {r['steps']} | {f(r['rate_hz'])} Hz | "
+                f"{time_us(r['mean_us_per_step'])} | {f(r['mean_iterations'])} ({r['max_iterations']}) | {r['failed']} | "
+                f"{f(max(errs))} m |")
+tables["trajectory"] = "\n".join(rows)
+stamp = ""
+if os.path.exists(os.path.join(res, "loaded_summary.csv")):
+    with open(os.path.join(res, "loaded_summary.csv")) as fh:
+        stamp = fh.readline().lstrip("# ").rstrip()
+tables["loaded_machine"] = stamp
+
 with open(os.path.join(res, "machine.txt")) as fh:
     tables["machine"] = "; ".join(line.lstrip("# ").rstrip() for line in fh if line.strip())
 
