@@ -170,7 +170,7 @@ tables["warmstart"] = "\n".join(rows)
 # Loaded cases and the loaded trajectory (bench_loaded).
 def metres(x):
     v = float(x)
-    return "-" if math.isnan(v) else f"{v:.2g} m"
+    return "-" if math.isnan(v) else f"{v:.1e} m"
 
 
 loaded_sum = read("loaded_summary.csv")
