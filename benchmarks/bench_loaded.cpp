@@ -16,8 +16,8 @@
 //   formulation), solved tightly, against the paper code's.
 //   Options: the defaults, and per model the "matched" options: the candidate (RK4 steps per
 //   interval and longest step, CVODE tolerance, Newton tolerance) with the least total time
-//   whose tip error is at most --tip-tol (default 1e-8 m, the paper code's own error at n >= 10)
-//   on every case the reference solves. Every candidate's cost and worst error go to
+//   (minimum of 3 solves per case) whose tip error is at most --tip-tol (default 1e-8 m, the
+//   paper code's own error at n >= 10) on every case the reference solves. Every candidate's cost and worst error go to
 //   loaded_options.csv.
 // Part 2, trajectory: paper robot n = 10, tip force (0.05, 0, 0) N (transverse, base frame),
 //   T1(k) = T_M (1 - cos(2 pi k / N)) / 2 for k = 1..N (one period: 0 -> T_M -> 0), T2 = T3 = T4 = 0,
@@ -26,7 +26,7 @@
 //   k = N/4, N/2, 3N/4, N.
 // Writes DIR/loaded.csv (per case, model, options), loaded_summary.csv (per model and options),
 // loaded_options.csv (the candidates), trajectory.csv. Failures of tdcr or of the paper's code are
-// kept and counted, never dropped. --quick = --cases 2 --repeat 1 --steps 20 (the ctest smoke run).
+// kept and counted, never dropped. --cases N takes the first N cases. --quick = --cases 2 --repeat 1 --steps 20 (the ctest smoke run).
 #include <chrono>
 #include <cmath>
 #include <ctime>
