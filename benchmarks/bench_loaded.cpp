@@ -17,8 +17,8 @@
 //   Options: the defaults, and per model the "matched" options: the candidate (RK4 steps per
 //   interval and longest step, CVODE tolerance, Newton tolerance) with the least total time
 //   (minimum of 3 solves per case) whose tip error is at most --tip-tol (default 1e-8 m, the
-//   paper code's own error at n >= 10) on every case the reference solves. Every candidate's cost and worst error go to
-//   loaded_options.csv.
+//   paper code's own error at n >= 10) on every case the reference solves. Every candidate's
+//   cost and worst error go to loaded_options.csv.
 // Part 2, trajectory: paper robot n = 10, tip force (0.05, 0, 0) N (transverse, base frame),
 //   T1(k) = T_M (1 - cos(2 pi k / N)) / 2 for k = 1..N (one period: 0 -> T_M -> 0), T2 = T3 = T4 = 0,
 //   N = 1000 steps (--steps), each warm-started from the previous Solution, one model and one
