@@ -167,6 +167,63 @@ for m in ["ccsub", "prb", "vc", "vcref"]:
                     f"{f(w[0]['mean_iterations'])} |")
 tables["warmstart"] = "\n".join(rows)
 
+# Loaded cases and the loaded trajectory (bench_loaded).
+def metres(x):
+    v = float(x)
+    return "-" if math.isnan(v) else f"{v:.1e} m"
+
+
+loaded_sum = read("loaded_summary.csv")
+loaded_opt = read("loaded_options.csv")
+traj = read("trajectory.csv")
+rows = ["| model | options | converged / cases | tdcr failed | paper's code failed | tdcr median | "
+        "speed-up median | speed-up min | max tip error vs tight reference | max tip diff vs paper's code "
+        "(cases over 1e-6 m) |", "| --- " * 10 + "|"]
+for r in loaded_sum:
+    rows.append(f"| {LABEL[r['model']]} | {r['options']} | {r['converged']} / {r['cases']} | {r['failed']} | "
+                f"{r['paper_failed']} | {time_us(r['median_us'])} | {f(r['speedup_median'])}x | "
+                f"{f(r['speedup_min'])}x | {metres(r['max_tip_err_ref_m'])}"
+                + (f" ({r['reference_failed']} references failed)" if r["reference_failed"] != "0" else "")
+                + f" | {metres(r['max_tip_diff_paper_m'])} ({r['tip_diff_paper_over_1e-6']}) |")
+tables["loaded_summary"] = "\n".join(rows)
+# Consistency with the paper code's tips, per n (default options; its rows with a squared residual < 1e-12).
+loaded_rows = [r for r in read("loaded.csv") if r["options"] == "default"]
+ns = sorted({int(r["n"]) for r in loaded_rows})
+rows = ["| n | " + " | ".join(f"{LABEL[m]}" for m in ["ccsub", "prb", "vc", "vcref"])
+        + " | VC without kink forces (paper code's formulation) |", "| --- " * 6 + "|"]
+for n in ns:
+    def worst(m, col="tip_diff_paper_m"):
+        v = [float(r[col]) for r in loaded_rows if r["model"] == m and int(r["n"]) == n
+             and r["converged"] == "1" and r["paper_converged"] == "1" and float(r["paper_residual"]) < 1e-12]
+        v = [x for x in v if not math.isnan(x)]
+        return metres(max(v)) if v else "-"
+    rows.append(f"| {n} | " + " | ".join(worst(m) for m in ["ccsub", "prb", "vc", "vcref"])
+                + f" | {worst('vc', 'paper_form_tip_diff_paper_m')} |")
+tables["loaded_consistency"] = "\n".join(rows)
+
+rows = ["| model | options | converged / cases | max tip error vs tight reference | median (min of 3) | within tolerance | chosen |",
+        "| --- " * 7 + "|"]
+for r in loaded_opt:
+    if r["options"] == "default" or r["chosen"] == "1" or r["options"].startswith("cvode"):
+        rows.append(f"| {LABEL[r['model']]} | {r['options']} | {r['converged']} / {r['cases']} | "
+                    f"{metres(r['max_tip_err_ref_m'])} | {time_us(r['median_us'])} | "
+                    f"{'yes' if r['within_tol'] == '1' else 'no'} | {'**yes**' if r['chosen'] == '1' else ''} |")
+tables["loaded_options"] = "\n".join(rows)
+rows = ["| model | options | steps | rate | per step | Newton iterations per step (max) | failed | "
+        "max tip error vs tight reference (4 steps) |", "| --- " * 8 + "|"]
+for r in traj:
+    errs = [float(r[k]) for k in ("tip_err_quarter_m", "tip_err_half_m", "tip_err_three_quarter_m", "tip_err_end_m")]
+    errs = [float("nan")] if any(math.isnan(e) for e in errs) else errs  # a failed check shows as "-"
+    rows.append(f"| {LABEL[r['model']]} | {r['options']} | {r['steps']} | {f(r['rate_hz'])} Hz | "
+                f"{time_us(r['mean_us_per_step'])} | {f(r['mean_iterations'])} ({r['max_iterations']}) | {r['failed']} | "
+                f"{metres(max(errs))} |")
+tables["trajectory"] = "\n".join(rows)
+stamp = ""
+if os.path.exists(os.path.join(res, "loaded_summary.csv")):
+    with open(os.path.join(res, "loaded_summary.csv")) as fh:
+        stamp = fh.readline().lstrip("# ").rstrip()
+tables["loaded_machine"] = stamp
+
 with open(os.path.join(res, "machine.txt")) as fh:
     tables["machine"] = "; ".join(line.lstrip("# ").rstrip() for line in fh if line.strip())
 

@@ -21,6 +21,7 @@ py=/usr/bin/python3; [ -x "$py" ] || py=python3
 "$build/bin/bench_vcref" $quick --csv "$out/vcref.csv" | tee "$out/bench_vcref.txt"
 "$build/bin/bench_vc" $quick | tee "$out/bench_vc.txt"
 "$build/bin/bench_lumped" $quick | tee "$out/bench_lumped.txt"
+"$build/bin/bench_loaded" $quick --out "$out"
 "$py" benchmarks/plot_results.py "$out" "$out"
 if [ "$out" = docs/benchmark-results ]; then
   "$py" benchmarks/make_report.py "$out" benchmarks/report_template.md docs/benchmarks.md

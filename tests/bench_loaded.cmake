@@ -1,0 +1,7 @@
+# Smoke run of the loaded benchmark (2 cases, 1 repeat, 20 trajectory steps: seconds); the full
+# run (60 cases, 1000 steps) stays out of ctest.
+if(TARGET bench_loaded)
+  add_test(NAME bench_loaded_smoke
+    COMMAND bench_loaded --quick --out ${PROJECT_BINARY_DIR}/bench_loaded_smoke)
+  set_tests_properties(bench_loaded_smoke PROPERTIES TIMEOUT 120)
+endif()
