@@ -102,14 +102,19 @@ bool LumpedProblem::banded_residual(const double* y, double* f) {
 void LumpedProblem::banded_scale(double* s) const {
   const Node n{body_.per_subsegment};
   const double L = body_.length, EI = body_.EI;
+  // Internal wrenches: the larger of the bending scales and the loads' own (tendon tensions
+  // compress the backbone by up to ~(L / r)^2 EI / L^2; an underestimate caps Newton steps and
+  // stretches the loading path's scaled arclength).
+  const double f_scale = 1.0 / std::max(EI / (L * L), loads_.loads.force_scale());
+  const double m_scale = 1.0 / std::max(EI / L, loads_.loads.moment_scale());
   for (int j = 0; j < active(); ++j) {
     double* sj = s + n.size() * j;
     x_scale(sj);
     for (int i = 0; i < 3; ++i) {
       sj[n.P() + i] = 1.0 / L;
       sj[n.T() + i] = 1.0;
-      sj[n.F() + i] = L * L / EI;
-      sj[n.M() + i] = L / EI;
+      sj[n.F() + i] = f_scale;
+      sj[n.M() + i] = m_scale;
     }
   }
 }
