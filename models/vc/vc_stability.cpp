@@ -15,11 +15,18 @@
 // is treated as if it were (its variation is zero in the residual, as in Newton's Jacobian),
 // exact for a moment normal to a planar deformation.
 //
-// J(s) is sampled at every disk (after its point loads) by forward differences: 6 shots from the
+// The wrench at a cut s is the whole wrench the distal part transmits: the backbone's (n, m) plus
+// the pull of every tensioned tendon crossing the cut, as if it ended there (the termination
+// wrench of Eq. 40-41, T_k R t_k at p + R r_k, with u, v at s). It is the natural boundary
+// condition of the rod truncated at s, whose tendons end at s; the backbone's (n, m) alone misses
+// how the tendon pull turns with the section, and finds conjugate points on stable robots bent
+// by strongly tensioned tendons. At the tip no tendon crosses and it is the shooting residual.
+//
+// J(s) is sampled at the base and at every disk (after its point loads) by forward differences: 6 shots from the
 // converged base wrench, each perturbed in one component, recording the wrench at every disk.
 // It is scaled to be dimensionless, Js = D J D^-1 with D = diag(1/F_s I, 1/M_s I) (the residual
-// scales of the solve); Js(0) = I. A conjugate point lies between two disks where det Js changes
-// sign. The margin is
+// scales of the solve); Js(0) = I plus the variation of the crossing tendons' pull at the base. A
+// conjugate point lies between two samples where det Js changes sign (from its sign at s = 0). The margin is
 //   margin = min over disks of +-sigma_min(Js(s)),
 // the smallest singular value of the scaled Jacobian, with the sign turned negative from the
 // first sign change on. Between -u and u, u = max(1e-6, 10 sqrt(integrator noise)), the test
@@ -28,6 +35,8 @@
 // at once); eigenvalue counting, which would see it, misreads the rotation-like Jacobians of
 // bent robots (complex pairs meeting on the negative axis), so it is not used.
 #include "vc/vc_stability.hpp"
+
+#include "physics/tendon_path.hpp"
 
 #include <cmath>
 #include <limits>
@@ -46,7 +55,36 @@ using Mat6 = Eigen::Matrix<double, 6, 6>;
 /// carry relative errors near 1e-8).
 constexpr double kUndecided = 1e-6;
 
-// The wrench (n, m) at every disk after its point loads, disk 1 to the tip.
+// The tensioned tendons crossing the cut just distal of disk j (0 = base): those running on
+// past it in its segment, or in the next segment at a segment's end.
+const std::vector<cosserat::TendonLoad>* crossing(const VcWorkspace::Impl& W, int j) {
+  const TendonRouting& rt = W.model->routing();
+  const int nseg = static_cast<int>(W.segments.size());
+  for (int i = 0; i < nseg; ++i) {
+    if (j < rt.segment_end_disk[i]) return &W.segments[i].tendons;
+    if (j == rt.segment_end_disk[i]) return i + 1 < nseg ? &W.segments[i + 1].tendons : nullptr;
+  }
+  return nullptr;
+}
+
+// The wrench transmitted across the cut at sample j (see the top of the file), base frame.
+Vec6 cut_wrench(const VcWorkspace::Impl& W, int j, const BackboneSample& b) {
+  Vec6 w;
+  w << b.n, b.m;
+  const std::vector<cosserat::TendonLoad>* tendons = crossing(W, j);
+  if (!tendons) return w;
+  const Mat3& R = b.frame.R;
+  const Vec3 u = W.section.curvature(R, b.m), v = W.section.strain(R, b.n);
+  for (const cosserat::TendonLoad& t : *tendons) {
+    const Vec3 q = physics::tendon_tangent(v, u, t.r);
+    const Vec3 F = (t.T / q.norm()) * (R * q);
+    w.head<3>() += F;
+    w.tail<3>() += (R * t.r).cross(F);
+  }
+  return w;
+}
+
+// The cut wrench at the base and at every disk after its point loads, to the tip.
 bool sweep(VcWorkspace::Impl& W, const Vec6& base, std::vector<Frame>& frames, std::vector<BackboneSample>& samples,
            std::vector<Vec6>& wrench) {
   frames.clear();
@@ -54,11 +92,8 @@ bool sweep(VcWorkspace::Impl& W, const Vec6& base, std::vector<Frame>& frames, s
   const Record rec{&frames, &samples, nullptr};
   Vec6 res;
   if (!shoot(W, *W.shot_integrator, *W.shot_rod, base, res, &rec)) return false;
-  wrench.resize(samples.size() - 1);
-  for (std::size_t j = 1; j < samples.size(); ++j) {
-    wrench[j - 1].head<3>() = samples[j].n;
-    wrench[j - 1].tail<3>() = samples[j].m;
-  }
+  wrench.resize(samples.size());
+  for (std::size_t j = 0; j < samples.size(); ++j) wrench[j] = cut_wrench(W, static_cast<int>(j), samples[j]);
   return true;
 }
 
@@ -66,7 +101,7 @@ bool sweep(VcWorkspace::Impl& W, const Vec6& base, std::vector<Frame>& frames, s
 
 Stability conjugate_point_test(VcWorkspace::Impl& W, const Vec6& base) {
   Stability out;
-  out.method = "conjugate points (Till & Rucker 2017): d(n, m)(s) / d(n, m)(0) at every disk";
+  out.method = "conjugate points (Till & Rucker 2017): d(cut wrench)(s) / d(n, m)(0) at every disk";
   set_load_factor(W, 1.0);
   std::vector<Frame> frames;
   std::vector<BackboneSample> samples;
@@ -96,8 +131,9 @@ Stability conjugate_point_test(VcWorkspace::Impl& W, const Vec6& base) {
   const double undecided = std::max(kUndecided, 10.0 * rel);
   double margin = std::numeric_limits<double>::infinity();
   bool passed = false;  // a conjugate point lies before the current disk
-  double det = 1.0;
-  for (const Mat6& Js : J) {
+  double det = J[0].determinant();  // the sign at s = 0, where no point is conjugate
+  for (std::size_t j = 1; j < disks; ++j) {
+    const Mat6& Js = J[j];
     const double d = Js.determinant();
     if ((d > 0.0) != (det > 0.0)) passed = true;
     det = d;
