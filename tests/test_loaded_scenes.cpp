@@ -52,8 +52,6 @@ struct KnownFailure {
 };
 
 // Diagnoses: docs/hard-cases.md, "Loaded-scene suite (issue 12)".
-constexpr const char* kPrb20 =
-    "PRB at n = 20 (banded): direct solve fails, the loading path spends its 400 corrector solves before full load";
 constexpr const char* kCcsubN5 = "CCsub model error near the limit at n = 5 (PRB within 1 %)";
 
 const std::vector<KnownFailure> kKnownFailures = {
@@ -63,9 +61,7 @@ const std::vector<KnownFailure> kKnownFailures = {
     {"s1001", ModelKind::CCsub, "CCsub 14 % off VCref at n = 10 near the limit (PRB 0.8 %)"},
     {"s1006", ModelKind::VCref, "VCref: no landing past a fold at 99 % of the load"},
     {"s1006", ModelKind::PRB, "PRB: snap with no landing"},
-    {"s1008", ModelKind::PRB, kPrb20},
     {"s1011", ModelKind::VCref, "VCref at n = 20: the loading path spends its 400 corrector solves by 58 %"},
-    {"s1011", ModelKind::PRB, kPrb20},
     {"s1015", ModelKind::CCsub, "CCsub converges at c = 0.995 without a warning, VCref names T2 infeasible"},
 };
 
