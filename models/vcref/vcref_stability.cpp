@@ -27,7 +27,7 @@
 // A Kirchhoff rod (no shear or extension) has a singular B when straight: its shear and
 // extension compliance is added as a penalty (stiff directions, inertia of the rest unchanged).
 //   margin = the smallest eigenvalue of the symmetric part of Ks,
-// by bisection on Sylvester's inertia of its block LDL^T factorisation (O(N)); stable if
+// by bisection on whether the block Cholesky factorisation of Ks - sigma I exists (O(N)); stable if
 // > 1e-6, unstable if < -1e-6, else undetermined (forward-difference noise). With Eq. 58 (disk
 // normal forces removed) and a tensioned tendon the loads are not conservative and K is not
 // symmetric; a positive definite symmetric part still excludes divergence (x' K x > 0 for every
@@ -108,34 +108,34 @@ class BlockTridiagonal {
       if (i + 1 < n_) upper_[i] = lower_[i].transpose() = (0.5 * (upper_[i] + lower_[i].transpose())).eval();
     }
   }
-  // Symmetric: the number of eigenvalues below sigma, by Sylvester's law of inertia on the block
-  // LDL^T factorisation of K - sigma I (pivots P_i = K_ii - sigma I - K_i,i-1 P_i-1^-1 K_i-1,i).
-  int count_below(double sigma) const {
-    int count = 0;
+  // Symmetric: whether K - sigma I is positive definite, i.e. no eigenvalue lies below sigma
+  // (Sylvester's law of inertia): the block Cholesky factorisation, pivots
+  // P_i = K_ii - sigma I - K_i,i-1 P_i-1^-1 K_i-1,i, succeeds.
+  bool above(double sigma) const {
     Mat6 P, Pinv_U;
     for (int i = 0; i < n_; ++i) {
       P = diag_[i] - sigma * Mat6::Identity();
       if (i > 0) P -= lower_[i - 1] * Pinv_U;
-      const Eigen::LDLT<Mat6> ldlt(P);
-      count += static_cast<int>((ldlt.vectorD().array() < 0.0).count());
-      if (i + 1 < n_) Pinv_U = ldlt.solve(upper_[i]);
+      const Eigen::LLT<Mat6> llt(P);
+      if (llt.info() != Eigen::Success) return false;
+      if (i + 1 < n_) Pinv_U = llt.solve(upper_[i]);
     }
-    return count;
+    return true;
   }
-  // Symmetric: the smallest eigenvalue by bisection on count_below(), from [0, smallest diagonal
-  // entry] (or a negative bound found by doubling), to 1e-5 relative and 1e-9 absolute.
+  // Symmetric: the smallest eigenvalue by bisection on above(), from [0, smallest diagonal
+  // entry] (or a negative bound found by doubling), to 1e-4 relative and 1e-9 absolute.
   double smallest_eigenvalue() const {
     double hi = std::numeric_limits<double>::infinity();
     for (const Mat6& D : diag_) hi = std::min(hi, D.diagonal().minCoeff());
     double lo = 0.0;
-    if (hi > 0.0 && count_below(0.0) > 0) hi = 0.0;
+    if (hi > 0.0 && !above(0.0)) hi = 0.0;
     if (hi <= 0.0) {
       lo = std::min(hi, -1e-3);
-      for (int it = 0; it < 60 && count_below(lo) > 0; ++it) lo *= 4.0;
+      for (int it = 0; it < 60 && !above(lo); ++it) lo *= 4.0;
     }
-    for (int it = 0; it < 200 && hi - lo > 1e-9 + 1e-5 * std::min(std::abs(lo), std::abs(hi)); ++it) {
+    for (int it = 0; it < 200 && hi - lo > 1e-9 + 1e-4 * std::min(std::abs(lo), std::abs(hi)); ++it) {
       const double mid = 0.5 * (lo + hi);
-      (count_below(mid) > 0 ? hi : lo) = mid;
+      (above(mid) ? lo : hi) = mid;
     }
     return 0.5 * (lo + hi);
   }
