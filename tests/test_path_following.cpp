@@ -104,7 +104,8 @@ TEST(PathFollowing, SnapThroughMatchesAFineNaturalPath) {
 
 // Issue 12, example b: every static model's loading path lands on one stable branch near
 // (-11, 27, -10) mm. VCref meets a fold near 57 % and snaps (its first landing 1e-4 past the
-// fold does not converge: the snap lands further past it); it used to stop at the fold.
+// fold does not converge: the snap lands further past it); it used to stop at the fold. Its
+// stability margin falls towards zero at the fold.
 TEST(PathFollowing, IssueExampleBAllStaticModelsOnOneStableBranch) {
   const Scene scene = scene_file("issue12_b.json");
   const double length = 0.1;
@@ -125,6 +126,16 @@ TEST(PathFollowing, IssueExampleBAllStaticModelsOnOneStableBranch) {
       EXPECT_GT(s.path_events[0].load_fraction, 0.5);
       EXPECT_LT(s.path_events[0].load_fraction, 0.65);
       EXPECT_GT(s.path_events[1].tip_jump, 0.02);
+      // Below the fold the lower branch is stable and its margin falls towards zero at the fold:
+      // 0.05 % below it, under 5 % of the margin of the answer and 3 times smaller than 0.3 %
+      // below it.
+      const double fold = s.path_events[0].load_fraction;
+      const Solution a = solve(*m, *ws, scaled(scene, fold - 0.003), options);
+      const Solution b = solve(*m, *ws, scaled(scene, fold - 0.0005), options);
+      ASSERT_TRUE(a.converged() && b.converged());
+      EXPECT_EQ(b.stability.status, StabilityStatus::Stable) << b.stability.margin;
+      EXPECT_GT(a.stability.margin, 3.0 * b.stability.margin);
+      EXPECT_LT(b.stability.margin, 0.05 * s.stability.margin) << s.stability.margin;
     }
     EXPECT_LT((s.tip().p - ref).norm(), 0.05 * length) << m->name() << " tip " << s.tip().p.transpose();
   }
