@@ -297,10 +297,11 @@ bool Run::finish(const Point& a, const Point& b, bool b_is_fold) {
   return true;
 }
 
-// Jump from a fold to another branch at lambda slightly past it (see FoldAction::Snap).
+// Jump from a fold to another branch at lambda slightly past it (see FoldAction::Snap). Close
+// to the fold the vanished equilibrium leaves a local minimum of |F| that can hold every attempt
+// (VCref on issue 12's example b); the landing then moves 10 times further past the fold, up to
+// a tenth of the span (or the target).
 bool Run::snap(const Point& fold) {
-  double landing = lambda(fold) + dir_ * opt_.snap_overshoot * std::abs(span_);
-  if (!before_target(landing)) landing = opt_.target;
   phi_ = fold.t.head(n_);
   const double norm = phi_.norm();
   if (!(norm > 0.0)) {
@@ -310,27 +311,32 @@ bool Run::snap(const Point& fold) {
   phi_ /= norm;
   NewtonOptions attempt = nopt_;
   attempt.max_iterations = std::min(nopt_.max_iterations, opt_.snap_max_iterations);
-  double amplitude = opt_.snap_perturbation;
-  for (int k = 0; k < opt_.snap_tries; ++k, amplitude *= 2.0) {
-    for (double sign : {1.0, -1.0}) {
-      xn_ = fold.y.head(n_) + sign * amplitude * phi_.cwiseQuotient(w_.head(n_));
-      if (!natural_solve(landing, xn_, &attempt)) continue;
-      const double jump = (xn_ - fold.y.head(n_)).cwiseProduct(w_.head(n_)).norm();
-      cur_.y << xn_, landing;
-      cur_.s = fold.s;
-      y_pred_.setZero();
-      y_pred_[n_] = dir_;
-      if (!tangent(cur_, y_pred_)) {
-        stall("snap: singular augmented Jacobian at the landing point");
-        return false;
+  for (double overshoot = opt_.snap_overshoot; overshoot <= std::max(0.1 + 1e-12, opt_.snap_overshoot); overshoot *= 10.0) {
+    double landing = lambda(fold) + dir_ * overshoot * std::abs(span_);
+    if (!before_target(landing)) landing = opt_.target;
+    double amplitude = opt_.snap_perturbation;
+    for (int k = 0; k < opt_.snap_tries; ++k, amplitude *= 2.0) {
+      for (double sign : {1.0, -1.0}) {
+        xn_ = fold.y.head(n_) + sign * amplitude * phi_.cwiseQuotient(w_.head(n_));
+        if (!natural_solve(landing, xn_, &attempt)) continue;
+        const double jump = (xn_ - fold.y.head(n_)).cwiseProduct(w_.head(n_)).norm();
+        cur_.y << xn_, landing;
+        cur_.s = fold.s;
+        y_pred_.setZero();
+        y_pred_[n_] = dir_;
+        if (!tangent(cur_, y_pred_)) {
+          stall("snap: singular augmented Jacobian at the landing point");
+          return false;
+        }
+        record(ArclengthEventType::Snap, cur_, true, jump);
+        if (landing == opt_.target) {
+          sol_ = cur_.y;
+          res_.status = ArclengthStatus::Reached;
+        }
+        return true;
       }
-      record(ArclengthEventType::Snap, cur_, true, jump);
-      if (landing == opt_.target) {
-        sol_ = cur_.y;
-        res_.status = ArclengthStatus::Reached;
-      }
-      return true;
     }
+    if (landing == opt_.target) break;
   }
   stall("snap: no Newton solve past the fold converged");
   return false;

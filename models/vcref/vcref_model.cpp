@@ -12,6 +12,7 @@
 #include "tdcr/core/lie.hpp"
 #include "tdcr/models/tendon_physics.hpp"
 #include "vcref/vcref_shooting.hpp"
+#include "vcref/vcref_stability.hpp"
 
 namespace tdcr {
 
@@ -95,9 +96,12 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
   void cold_guess(Eigen::VectorXd& x) override { shape_guess(x, d_.arc_guess); }
   void rest_state(Eigen::VectorXd& x) override { shape_guess(x, false); }
   std::string integrator_name() const override { return integrator_->name(); }
-  // Not implemented yet: its disk forces couple neighbouring disks, so no conjugate-point sweep
-  // from the base applies; the Hessian of its discrete energy would (docs/models.md, Stability).
-  Stability stability(const Eigen::VectorXd&) override { return Stability{StabilityStatus::Undetermined, NAN, "not implemented"}; }
+  // The reduced stiffness in the disk poses (vcref_stability.cpp).
+  Stability stability(const Eigen::VectorXd& x) override {
+    if (problem_.loads().load_factor() != 1.0) system_.set_parameter(1.0);
+    if (!shooting_.evaluate(x)) return Stability{StabilityStatus::Undetermined, NAN, "the shots at the answer failed"};
+    return disk_pose_stability(problem_, *integrator_, shooting_.nodes());
+  }
 
   // The previous unknowns, its disk rotations as the chart references (w = 0).
   bool warm_guess(const Solution& prev, Eigen::VectorXd& x) override {

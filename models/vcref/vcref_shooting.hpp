@@ -41,6 +41,7 @@ class VcrefShooting final : public bvp::ShootingProblem {
   void bind(const ModelInput& input, const SolverOptions& options);
   // Scale every load (tensions, tip wrench, weights) by `lambda`.
   void set_load_factor(double lambda);
+  const VcrefModel::Data& data() const { return d_; }
   const physics::LoadCase& loads() const { return load_; }
   const std::vector<double>& tensions() const { return tension_; }
   const TendonRouting& active() const { return active_; }

@@ -81,7 +81,8 @@ struct ArclengthOptions {
   double event_tolerance = 1e-8;
   int max_refine_iterations = 40;  ///< Corrector solves per event refinement.
   FoldAction at_fold = FoldAction::Continue;  ///< See FoldAction.
-  /// Snap: landing parameter lambda_fold + snap_overshoot (target - start) (capped at target).
+  /// Snap: landing parameter lambda_fold + snap_overshoot (target - start) (capped at target);
+  /// if no attempt lands there, 10, 100, ... times further, up to 0.1 (target - start).
   double snap_overshoot = 1e-4;
   /// Snap: first perturbation amplitude along the unit null vector (scaled units); doubled
   /// after every pair of failed attempts (one per direction), snap_tries times.

@@ -1,0 +1,268 @@
+// Stability of a VCref equilibrium: the reduced stiffness in the disk poses.
+//
+// VCref's loads are conservative (Eq. 58 aside): the tendon pieces between the disks derive from
+// the potential sum T_k l_k (l_k the chord lengths, functions of the disk poses), the tip force
+// and the weights are dead loads. With the disk poses g_1..g_N as coordinates (g_0 the clamped
+// base) and every rod between two disks in its equilibrium for the given end poses, the total
+// potential is V(g) = sum_j E_j(g_j, g_j+1) + sum_k T_k l_k(g) - dead loads . displacements. Its
+// gradient along (dp, R dtheta) at disk i is the disk's equilibrium residual E_i = (F_i, R_i^T M_i)
+// (rod end wrenches minus the disk's tendon and weight loads, moments about the disk's backbone
+// point), and at an equilibrium its Hessian is
+//   K = dE / dg,  block tridiagonal, symmetric.
+// The equilibrium is stable iff K is positive definite. This is the Hessian of the full potential
+// reduced onto the disk poses (a Schur complement over the rod shapes); the two agree in inertia
+// as long as each rod between two disks is itself stable with clamped ends, i.e. below its own
+// buckling loads ~ pi^2 EI / h^2 (h the disk spacing), far above VCref's loads.
+//
+// Each rod's contribution comes from its transfer matrix: the variation of its end (pose, wrench)
+// with its start (pose, wrench), [A B; C D], by forward differences (12 shots per interval, 6
+// for the first, whose start pose is the clamp). Its start wrench follows from both end poses,
+// dw_j = B^-1 (dg_j+1 - A dg_j), and its end wrench dv_j+1 = C dg_j + D dw_j; disk i receives
+// +dv_i - dw_i. The tendon wrenches are differentiated by forward differences of
+// tendon::disk_wrench in the poses of the disks i-1, i, i+1 (no integration). Rows of moments are
+// turned into the disk's body frame (R_i^T), the terms of R_i^T's variation vanish at an
+// equilibrium. Dimensionless and per backbone length: Ks = (L / EI) S K S, S = sqrt(L / w_i)
+// diag(L I, I) at disk i (w_i the backbone length it stands for), so that the margin converges
+// as disks are added.
+// A Kirchhoff rod (no shear or extension) has a singular B when straight: its shear and
+// extension compliance is added as a penalty (stiff directions, inertia of the rest unchanged).
+//   margin = the smallest eigenvalue of the symmetric part of Ks,
+// by bisection on whether the block Cholesky factorisation of Ks - sigma I exists (O(N)); stable if
+// > 1e-6, unstable if < -1e-6, else undetermined (forward-difference noise). With Eq. 58 (disk
+// normal forces removed) and a tensioned tendon the loads are not conservative and K is not
+// symmetric; a positive definite symmetric part still excludes divergence (x' K x > 0 for every
+// x: no real eigenvalue <= 0), so "stable" stays sound, "unstable" is then the energy criterion.
+// On the paper's configurations with tip forces its smallest eigenvalue and the smallest real
+// part of K's eigenvalues agree within 1 % (docs/design-notes/vcref.md).
+#include "vcref/vcref_stability.hpp"
+
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+
+#include "tdcr/core/lie.hpp"
+#include "tdcr/models/tendon_physics.hpp"
+
+namespace tdcr {
+
+namespace {
+
+using Mat6 = Eigen::Matrix<double, 6, 6>;
+using Vec6 = Eigen::Matrix<double, 6, 1>;
+using State = cosserat::State;
+
+constexpr double kUndecided = 1e-6;
+
+// Moves the state y along its local coordinate c (0-2 position, 3-5 rotation in the body frame,
+// 6-8 force, 9-11 moment) by h.
+void perturb(double* y, int c, double h) {
+  if (c < 3) {
+    cosserat::position(y)[c] += h;
+  } else if (c < 6) {
+    Vec3 w = Vec3::Zero();
+    w[c - 3] = h;
+    const Mat3 R = cosserat::rotation(y) * lie::exp_so3(w);
+    cosserat::rotation(y) = R;
+  } else if (c < 9) {
+    cosserat::force(y)[c - 6] += h;
+  } else {
+    cosserat::moment(y)[c - 9] += h;
+  }
+}
+
+// a - b in the local coordinates of b.
+Eigen::Matrix<double, 12, 1> difference(const State& a, const State& b) {
+  Eigen::Matrix<double, 12, 1> d;
+  d.segment<3>(0) = cosserat::position(a.data()) - cosserat::position(b.data());
+  d.segment<3>(3) = lie::log_so3(cosserat::rotation(b.data()).transpose() * cosserat::rotation(a.data()));
+  d.segment<3>(6) = cosserat::force(a.data()) - cosserat::force(b.data());
+  d.segment<3>(9) = cosserat::moment(a.data()) - cosserat::moment(b.data());
+  return d;
+}
+
+// Frame f moved along its local coordinate c (0-2 position, 3-5 body rotation) by h.
+Frame moved(const Frame& f, int c, double h) {
+  Frame g = f;
+  if (c < 3) {
+    g.p[c] += h;
+  } else {
+    Vec3 w = Vec3::Zero();
+    w[c - 3] = h;
+    g.R = f.R * lie::exp_so3(w);
+  }
+  return g;
+}
+
+// A block tridiagonal matrix of 6 x 6 blocks (the reduced stiffness: disk i couples to i +- 1).
+class BlockTridiagonal {
+ public:
+  explicit BlockTridiagonal(int n) : n_(n), diag_(n, Mat6::Zero()), upper_(n, Mat6::Zero()), lower_(n, Mat6::Zero()) {}
+  // Block (i, k), |i - k| <= 1, zero-based.
+  Mat6& at(int i, int k) { return k == i ? diag_[i] : k > i ? upper_[i] : lower_[k]; }
+  void symmetrize() {
+    for (int i = 0; i < n_; ++i) {
+      diag_[i] = (0.5 * (diag_[i] + diag_[i].transpose())).eval();
+      if (i + 1 < n_) upper_[i] = lower_[i].transpose() = (0.5 * (upper_[i] + lower_[i].transpose())).eval();
+    }
+  }
+  // Symmetric: whether K - sigma I is positive definite, i.e. no eigenvalue lies below sigma
+  // (Sylvester's law of inertia): the block Cholesky factorisation, pivots
+  // P_i = K_ii - sigma I - K_i,i-1 P_i-1^-1 K_i-1,i, succeeds.
+  bool above(double sigma) const {
+    Mat6 P, Pinv_U;
+    for (int i = 0; i < n_; ++i) {
+      P = diag_[i] - sigma * Mat6::Identity();
+      if (i > 0) P -= lower_[i - 1] * Pinv_U;
+      const Eigen::LLT<Mat6> llt(P);
+      if (llt.info() != Eigen::Success) return false;
+      if (i + 1 < n_) Pinv_U = llt.solve(upper_[i]);
+    }
+    return true;
+  }
+  // Symmetric: the smallest eigenvalue by bisection on above(), from [0, smallest diagonal
+  // entry] (or a negative bound found by doubling), to 1e-4 relative and 1e-9 absolute.
+  double smallest_eigenvalue() const {
+    double hi = std::numeric_limits<double>::infinity();
+    for (const Mat6& D : diag_) hi = std::min(hi, D.diagonal().minCoeff());
+    double lo = 0.0;
+    if (hi > 0.0 && !above(0.0)) hi = 0.0;
+    if (hi <= 0.0) {
+      lo = std::min(hi, -1e-3);
+      for (int it = 0; it < 60 && !above(lo); ++it) lo *= 4.0;
+    }
+    for (int it = 0; it < 200 && hi - lo > 1e-9 + 1e-4 * std::min(std::abs(lo), std::abs(hi)); ++it) {
+      const double mid = 0.5 * (lo + hi);
+      (above(mid) ? lo : hi) = mid;
+    }
+    return 0.5 * (lo + hi);
+  }
+
+ private:
+  int n_;
+  std::vector<Mat6> diag_, upper_, lower_;  // upper_[i] = (i, i+1), lower_[i] = (i+1, i)
+};
+
+}  // namespace
+
+Stability disk_pose_stability(const VcrefShooting& problem, bvp::Integrator& integrator,
+                              const bvp::ShootingNodes& nodes) {
+  Stability out;
+  out.method = "reduced stiffness in the disk poses (rod transfer matrices and tendon chords), smallest eigenvalue";
+  const VcrefModel::Data& d = problem.data();
+  const int N = d.N;
+  const std::vector<double>& s = d.routing->disk_s;
+  const double EI = d.section.kbt.x(), L = d.length;
+  const double rel = std::sqrt(std::max(std::numeric_limits<double>::epsilon(), integrator.relative_noise()));
+  BlockTridiagonal K(N);
+  auto block = [&](int i, int k) -> Mat6& { return K.at(i - 1, k - 1); };
+
+  // The rods: transfer matrices, integrated from p = 0 (the free rod is translation invariant).
+  std::vector<Frame> frames(N + 1);
+  State y0, nominal, y;
+  Eigen::Matrix<double, 12, 12> T;
+  for (int j = 0; j < N; ++j) {
+    y0 = Eigen::Map<const State>(nodes.start(j));
+    frames[j] = cosserat::frame_of(y0.data());
+    cosserat::position(y0.data()).setZero();
+    nominal = y0;
+    const bvp::OdeSystem& rod = problem.ode(j);
+    if (!integrator.integrate(rod, s[j], s[j + 1], nominal.data())) {
+      out.method += "; a rod shot failed";
+      return out;
+    }
+    if (j == N - 1) {
+      frames[N] = cosserat::frame_of(nodes.end(N - 1));
+      frames[N].R = lie::nearest_rotation(frames[N].R);
+    }
+    // Natural scales of the interval: h, 1, EI / h^2, EI / h.
+    const double h = s[j + 1] - s[j];
+    const double scale[4] = {h, 1.0, EI / (h * h), EI / h};
+    for (int c = j == 0 ? 6 : 0; c < 12; ++c) {
+      const double value = c < 6 ? 0.0 : y0[12 + c - 6];
+      const double step = rel * std::max(std::abs(value), scale[c / 3]);
+      y = y0;
+      perturb(y.data(), c, step);
+      if (!integrator.integrate(rod, s[j], s[j + 1], y.data())) {
+        out.method += "; a perturbed rod shot failed";
+        return out;
+      }
+      T.col(c) = difference(y, nominal) / step;
+    }
+    // A Kirchhoff rod's end pose does not see an axial force (B is singular when straight): the
+    // compliance of shear and extension is added as a penalty on the constrained directions
+    // (their stiffness ~ GA / h, EA / h, far above every other term; the sign of the smallest
+    // eigenvalue is the constrained one's).
+    if (!d.section.shear_extension) {
+      const Mat3 R = cosserat::rotation(y0.data());
+      T.block<3, 3>(0, 6) += h * R * d.section.inv_kse.asDiagonal() * R.transpose();
+    }
+    // B^-1 through the dimensionless B (its entries span h^3 / EI to 1 otherwise).
+    Vec6 pose_scale, wrench_scale;
+    pose_scale << h, h, h, 1.0, 1.0, 1.0;
+    wrench_scale << scale[2], scale[2], scale[2], scale[3], scale[3], scale[3];
+    const Eigen::FullPivLU<Mat6> B(pose_scale.asDiagonal().inverse() * T.block<6, 6>(0, 6) *
+                                   wrench_scale.asDiagonal());
+    if (!B.isInvertible()) {
+      out.method += "; a rod's end pose does not determine its wrench";
+      return out;
+    }
+    const Mat6 Binv = wrench_scale.asDiagonal() * B.inverse() * pose_scale.asDiagonal().inverse();
+    const Mat6 D = T.block<6, 6>(6, 6);
+    block(j + 1, j + 1) += D * Binv;
+    if (j == 0) continue;
+    const Mat6 A = T.block<6, 6>(0, 0), C = T.block<6, 6>(6, 0);
+    block(j + 1, j) += C - D * Binv * A;
+    block(j, j + 1) -= Binv;
+    block(j, j) += Binv * A;
+  }
+
+  // The tendons: disk i's wrench depends on the poses of disks i-1, i, i+1.
+  const TendonRouting& active = problem.active();
+  const double* tensions = problem.tensions().data();
+  std::vector<Frame> moved_frames = frames;
+  for (int k = 1; k <= N && !active.tendons.empty(); ++k) {
+    for (int c = 0; c < 6; ++c) {
+      const double step = rel * (c < 3 ? d.l_min : 1.0);
+      moved_frames[k] = moved(frames[k], c, step);
+      for (int i = std::max(1, k - 1); i <= std::min(N, k + 1); ++i) {
+        if (!problem.tendon_at(i)) continue;
+        const tendon::DiskWrench a = tendon::disk_wrench(i, moved_frames.data(), active, tensions, d.remove_normal);
+        const tendon::DiskWrench b = tendon::disk_wrench(i, frames.data(), active, tensions, d.remove_normal);
+        block(i, k).col(c).head<3>() -= (a.force - b.force) / step;
+        block(i, k).col(c).tail<3>() -= (a.moment - b.moment) / step;
+      }
+      moved_frames[k] = frames[k];
+    }
+  }
+
+  // Body-frame moment rows, dimensionless, per backbone length of each disk (w_i: half its two
+  // intervals), so that the margin does not shrink with the number of disks.
+  std::vector<Mat6> S(N + 1, Mat6::Identity());
+  for (int i = 1; i <= N; ++i) {
+    const double w = 0.5 * (s[i] - s[i - 1] + (i < N ? s[i + 1] - s[i] : 0.0));
+    S[i].diagonal().head<3>().setConstant(L);
+    S[i] *= std::sqrt(L / w);
+  }
+  Mat6 Ri = Mat6::Identity();
+  for (int i = 1; i <= N; ++i) {
+    Ri.bottomRightCorner<3, 3>() = frames[i].R.transpose();
+    for (int k = std::max(1, i - 1); k <= std::min(N, i + 1); ++k)
+      block(i, k) = (L / EI) * S[i] * Ri * block(i, k) * S[k];
+  }
+
+  // Symmetric up to the difference noise when the loads are conservative.
+  K.symmetrize();
+  out.margin = K.smallest_eigenvalue();
+  if (d.remove_normal && !active.tendons.empty())
+    out.method += " of the symmetric part (disk normal forces removed: not conservative, a sufficient test)";
+  if (out.margin > kUndecided)
+    out.status = StabilityStatus::Stable;
+  else if (out.margin < -kUndecided)
+    out.status = StabilityStatus::Unstable;
+  return out;
+}
+
+}  // namespace tdcr
