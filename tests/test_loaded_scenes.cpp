@@ -9,8 +9,8 @@
 // c >= 1 in some disk interval (c = 1 - dh.dp / |dp|^2); feasible when VCref converges with every
 // c < 1 and no warning; unclassified when VCref fails otherwise (a VCref failure; the other
 // models must then converge stable or name the scene infeasible).
-// A feasible scene must, in every model: converge, be stable (VCref: not unstable, its check is
-// "not implemented"), and put the tip within model error of VCref's: 5 % of the robot length at
+// A feasible scene must, in every model: converge, be stable, and put the tip within model error
+// of VCref's: 5 % of the robot length at
 // n >= 10, 15 % at n = 5. An infeasible scene must be named: status infeasible, or (VCref, CCsub,
 // PRB) converged with a geometry warning.
 //
@@ -55,7 +55,6 @@ struct KnownFailure {
 constexpr const char* kCcsubN5 = "CCsub model error near the limit at n = 5 (PRB within 1 %)";
 
 const std::vector<KnownFailure> kKnownFailures = {
-    {"issue12_b", ModelKind::VCref, "VCref: no landing past the fold (docs/models.md, open)"},
     {"s1000", ModelKind::CCsub, kCcsubN5},
     {"s1001", ModelKind::VC, "VC: loading path stops (integration_failed at a fold, no landing)"},
     {"s1001", ModelKind::CCsub, "CCsub 14 % off VCref at n = 10 near the limit (PRB 0.8 %)"},
@@ -124,7 +123,7 @@ std::string check_model(const LoadedScene& ls, ModelKind kind, const Solution& r
       failures.push_back("not converged: " + to_string(sum.termination));
     } else {
       const StabilityStatus st = sol.stability.status;
-      const bool stable_ok = kind == ModelKind::VCref ? st != StabilityStatus::Unstable : st == StabilityStatus::Stable;
+      const bool stable_ok = st == StabilityStatus::Stable;
       if (!stable_ok) failures.push_back("stability " + to_string(st));
       if (cls == Class::Feasible) {
         tip_error = (sol.tip().p - ref.tip().p).norm() / kLength;

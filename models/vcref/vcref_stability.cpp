@@ -41,6 +41,7 @@
 #include <vector>
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 
 #include "tdcr/core/lie.hpp"
@@ -55,6 +56,8 @@ using Vec6 = Eigen::Matrix<double, 6, 1>;
 using State = cosserat::State;
 
 constexpr double kUndecided = 1e-6;
+/// Largest disk count for a dense eigen-solve of a non-symmetric K (6 N unknowns; 240 at 40 disks).
+constexpr int kDenseDisks = 100;
 
 // Moves the state y along its local coordinate c (0-2 position, 3-5 rotation in the body frame,
 // 6-8 force, 9-11 moment) by h.
@@ -107,6 +110,18 @@ class BlockTridiagonal {
       diag_[i] = (0.5 * (diag_[i] + diag_[i].transpose())).eval();
       if (i + 1 < n_) upper_[i] = lower_[i].transpose() = (0.5 * (upper_[i] + lower_[i].transpose())).eval();
     }
+  }
+  // The whole matrix (for the eigenvalues of a non-symmetric K).
+  Eigen::MatrixXd dense() const {
+    Eigen::MatrixXd A = Eigen::MatrixXd::Zero(6 * n_, 6 * n_);
+    for (int i = 0; i < n_; ++i) {
+      A.block<6, 6>(6 * i, 6 * i) = diag_[i];
+      if (i + 1 < n_) {
+        A.block<6, 6>(6 * i, 6 * i + 6) = upper_[i];
+        A.block<6, 6>(6 * i + 6, 6 * i) = lower_[i];
+      }
+    }
+    return A;
   }
   // Symmetric: whether K - sigma I is positive definite, i.e. no eigenvalue lies below sigma
   // (Sylvester's law of inertia): the block Cholesky factorisation, pivots
@@ -253,11 +268,27 @@ Stability disk_pose_stability(const VcrefShooting& problem, bvp::Integrator& int
       block(i, k) = (L / EI) * S[i] * Ri * block(i, k) * S[k];
   }
 
+  // Non-conservative loads (Eq. 58 with a tensioned tendon): a positive definite symmetric part
+  // proves stability; where it is indefinite, the real parts of K's eigenvalues decide (the
+  // quasi-static divergence criterion, as for CCsub and PRB), by a dense eigen-solve up to
+  // kDenseDisks disks, else undetermined.
+  const bool conservative = !(d.remove_normal && !active.tendons.empty());
+  const Eigen::MatrixXd full = conservative || N > kDenseDisks ? Eigen::MatrixXd() : K.dense();
   // Symmetric up to the difference noise when the loads are conservative.
   K.symmetrize();
   out.margin = K.smallest_eigenvalue();
-  if (d.remove_normal && !active.tendons.empty())
+  if (!conservative) {
     out.method += " of the symmetric part (disk normal forces removed: not conservative, a sufficient test)";
+    if (!(out.margin > kUndecided)) {
+      if (full.size() == 0) {
+        out.method += "; indefinite, and the eigenvalues of K are not computed above " + std::to_string(kDenseDisks) +
+                      " disks: undetermined";
+        return out;
+      }
+      out.margin = Eigen::EigenSolver<Eigen::MatrixXd>(full, false).eigenvalues().real().minCoeff();
+      out.method += "; indefinite: smallest real part of the eigenvalues of K (quasi-static divergence)";
+    }
+  }
   if (out.margin > kUndecided)
     out.status = StabilityStatus::Stable;
   else if (out.margin < -kUndecided)
