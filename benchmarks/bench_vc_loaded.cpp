@@ -3,6 +3,9 @@
 // force 0.05 N along x, tendon 1 at 0.5 T_M (1 - cos(2 pi k / 1000)), one model and one
 // workspace, each step warm-started from the last). Tip errors against CVODE at rtol 1e-12.
 //
+// Every case runs with forward-difference and exact Jacobians (VcOptions::exact_jacobian), each
+// with and without Jacobian reuse along warm starts (VcOptions::reuse_jacobian), in one run.
+//
 // Usage: bench_vc_loaded [--quick] [--steps N]   (--quick: a few repeats and 20 steps)
 #include <algorithm>
 #include <chrono>
@@ -40,6 +43,11 @@ Solution solve_once(const Scene& s, const Solution* warm = nullptr) {
   return solve(model, *ws, s.input(), s.solver, warm);
 }
 
+struct Variant {
+  const char* name;
+  VcOptions options;
+};
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -55,6 +63,14 @@ int main(int argc, char** argv) {
   }
   const int repeat = quick ? 3 : 100;
   bool ok = true;
+  std::vector<Variant> variants;
+  for (bool exact : {false, true})
+    for (bool reuse : {false, true}) {
+      VcOptions o;
+      o.exact_jacobian = exact;
+      o.reuse_jacobian = reuse;
+      variants.push_back({exact ? (reuse ? "exact J, reuse" : "exact J") : (reuse ? "FD J, reuse" : "FD J"), o});
+    }
 
   // Loaded case, cold.
   Scene loaded = paper::scene(10, 1, "vc");
@@ -62,8 +78,9 @@ int main(int argc, char** argv) {
   loaded.actuation.values = {0.3 * tm, 0.0, 0.5 * tm, 0.1 * tm};
   loaded.loads.tip_force = Vec3(0.2, -0.3, 0.1);
   const Solution ref = solve_once(reference_settings(loaded));
-  {
-    VcModel model(loaded.robot, loaded.effects);
+  std::printf("loaded cold (n = 10, T = (0.3, 0, 0.5, 0.1) T_M, F = (0.2, -0.3, 0.1) N), %d repeats:\n", repeat);
+  for (const Variant& v : variants) {
+    VcModel model(loaded.robot, loaded.effects, v.options);
     auto ws = model.make_workspace();
     std::vector<double> t;
     Solution sol;
@@ -73,37 +90,47 @@ int main(int argc, char** argv) {
       t.push_back(elapsed_us(t0));
     }
     std::sort(t.begin(), t.end());
-    std::printf("loaded cold (n = 10, T = (0.3, 0, 0.5, 0.1) T_M, F = (0.2, -0.3, 0.1) N), %d repeats:\n", repeat);
-    std::printf("  median %.1f us, min %.1f us, %d iterations, %d Jacobians, tip error %.3e m%s\n",
+    std::printf("  %-15s median %8.1f us, min %8.1f us, %d iterations, %d Jacobians, tip error %.3e m%s\n", v.name,
                 t[t.size() / 2], t.front(), sol.summary.iterations, sol.summary.jacobian_evaluations,
                 (sol.tip().p - ref.tip().p).norm(), sol.converged() ? "" : "  NOT CONVERGED");
     ok = ok && sol.converged();
   }
 
-  // Trajectory, warm-started.
+  // Trajectory, warm-started; references every 20 steps.
   Scene traj = paper::scene(10, 1, "vc");
-  traj.actuation.values = {0.0, 0.0, 0.0, 0.0};
   traj.loads.tip_force = Vec3(0.05, 0.0, 0.0);
-  VcModel model(traj.robot, traj.effects);
-  auto ws = model.make_workspace();
-  Solution previous;
-  double total_us = 0.0, max_err = 0.0;
-  long iterations = 0, jacobians = 0;
-  for (int k = 0; k < steps; ++k) {
-    traj.actuation.values[0] = 0.5 * tm * (1.0 - std::cos(2.0 * M_PI * k / 1000.0));
-    const auto t0 = Clock::now();
-    Solution sol = solve(model, *ws, traj.input(), traj.solver, k == 0 ? nullptr : &previous);
-    total_us += elapsed_us(t0);
-    iterations += sol.summary.iterations;
-    jacobians += sol.summary.jacobian_evaluations;
-    ok = ok && sol.converged();
-    if (k % 20 == 0 || k + 1 == steps)
-      max_err = std::max(max_err, (sol.tip().p - solve_once(reference_settings(traj)).tip().p).norm());
-    previous = std::move(sol);
+  const auto set_step = [&](int k) {
+    traj.actuation.values = {0.5 * tm * (1.0 - std::cos(2.0 * M_PI * k / 1000.0)), 0.0, 0.0, 0.0};
+  };
+  std::vector<Vec3> ref_tips;
+  for (int k = 0; k < steps; k += 20) {
+    set_step(k);
+    ref_tips.push_back(solve_once(reference_settings(traj)).tip().p);
   }
   std::printf("trajectory (n = 10, F = 0.05 N x, T1 = 0.5 T_M (1 - cos(2 pi k/1000)), %d warm steps):\n", steps);
-  std::printf("  %.1f us per step (%.0f Hz), %.2f iterations, %.2f Jacobians per step, max tip error %.3e m%s\n",
-              total_us / steps, 1e6 * steps / total_us, double(iterations) / steps, double(jacobians) / steps,
-              max_err, ok ? "" : "  NOT CONVERGED");
+  for (const Variant& v : variants) {
+    VcModel model(traj.robot, traj.effects, v.options);
+    auto ws = model.make_workspace();
+    Solution previous;
+    double total_us = 0.0, max_err = 0.0;
+    long iterations = 0, jacobians = 0;
+    bool converged = true;
+    for (int k = 0; k < steps; ++k) {
+      set_step(k);
+      const auto t0 = Clock::now();
+      Solution sol = solve(model, *ws, traj.input(), traj.solver, k == 0 ? nullptr : &previous);
+      total_us += elapsed_us(t0);
+      iterations += sol.summary.iterations;
+      jacobians += sol.summary.jacobian_evaluations;
+      converged = converged && sol.converged();
+      if (k % 20 == 0) max_err = std::max(max_err, (sol.tip().p - ref_tips[k / 20]).norm());
+      previous = std::move(sol);
+    }
+    std::printf("  %-15s %8.1f us per step (%5.0f Hz), %.2f iterations, %.2f Jacobians per step, max tip error "
+                "%.3e m%s\n",
+                v.name, total_us / steps, 1e6 * steps / total_us, double(iterations) / steps,
+                double(jacobians) / steps, max_err, converged ? "" : "  NOT CONVERGED");
+    ok = ok && converged;
+  }
   return ok ? 0 : 1;
 }
