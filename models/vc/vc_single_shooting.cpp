@@ -13,8 +13,11 @@ namespace {
 /// equilibrium waits).
 constexpr double kMaxNewtonStep = 1.0;
 
-/// Newton iterations a Jacobian serves in warm-started solves (VcOptions::reuse_jacobian).
+/// Warm-started solves (VcOptions::reuse_jacobian): the Newton iterations a Jacobian serves
+/// (modified Newton), and the iterations of the previous solve above which its Jacobian is too
+/// stale to start from (a fresh one at the warm guess then).
 constexpr int kReuseSetupCalls = 10;
+constexpr int kStaleAfterIterations = 3;
 
 /// The shooting residual as Newton sees it; its parameter is the load factor.
 class ShootingSystem final : public bvp::ParameterizedSystem {
@@ -60,7 +63,7 @@ class SingleShooting final : public detail::ModelProblem {
   void adjust(bvp::NewtonOptions& options) const override { options.max_newton_step = kMaxNewtonStep; }
   void adjust_warm(bvp::NewtonOptions& options) const override {
     if (!W_.model->options().reuse_jacobian) return;
-    options.reuse_jacobian = true;
+    options.reuse_jacobian = last_iterations_ <= kStaleAfterIterations;
     options.max_setup_calls = kReuseSetupCalls;
   }
   void cold_guess(Eigen::VectorXd& x) override { x = guess(W_.model->options().initial_guess); }
@@ -97,6 +100,7 @@ class SingleShooting final : public detail::ModelProblem {
     return ok;
   }
   void extract(const Eigen::VectorXd&, bool evaluated, Solution& sol) override {
+    last_iterations_ = sol.summary.iterations;
     sol.tensions = W_.loads.full_tensions();
     if (!evaluated) {
       if (sol.summary.converged()) {
@@ -191,6 +195,7 @@ class SingleShooting final : public detail::ModelProblem {
   bvp::NewtonSolver newton_;
   std::vector<Frame> frames_;
   std::vector<BackboneSample> samples_;
+  int last_iterations_ = 0;  ///< Newton iterations of the last solve (Jacobian reuse).
 };
 
 }  // namespace
