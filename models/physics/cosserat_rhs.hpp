@@ -1,7 +1,7 @@
 // Private to models/: the Cosserat rod's right-hand side as a template (cosserat_rod.hpp,
 // cosserat::rod_rhs), specialised at compile time for shear/extension and gravity so that the
 // inner loop carries no branch for an effect that is off, and on the scalar type: double, or a
-// forward-mode dual number (Eigen's AutoDiffScalar) for exact derivatives of a shot (VC's
+// forward-mode dual number (models/vc/vc_dual.hpp) for exact derivatives of a shot (VC's
 // shooting Jacobian). Included where a rod ODE wants it inlined (the public rod_rhs and FreeRod
 // dispatch to it at run time).
 #pragma once

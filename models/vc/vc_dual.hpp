@@ -19,7 +19,7 @@ using Mat6 = Eigen::Matrix<double, 6, 6>;
 
 /// A value and its derivatives with respect to the 6 base unknowns n(0), m(0): forward-mode
 /// automatic differentiation on plain fixed arrays (no allocation, loops the compiler
-/// vectorises; Eigen's AutoDiffScalar was 3x slower than the 6 shots of finite differences).
+/// vectorises).
 struct Dual {
   double v = 0.0;
   double d[6];  ///< Uninitialised by the default constructor (every use writes it first).

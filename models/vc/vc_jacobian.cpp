@@ -14,7 +14,7 @@ namespace {
 constexpr int kN = cosserat::kStateSize;
 
 // Eigen's functors are only `inline` on GCC and Clang, and too many of them stay calls on dual
-// numbers: flatten inlines the whole right-hand side (3x faster).
+// numbers: flatten inlines the whole right-hand side.
 #if defined(__GNUC__)
 #define TDCR_FLATTEN __attribute__((flatten))
 #else
