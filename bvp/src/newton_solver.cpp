@@ -90,6 +90,8 @@ struct NewtonSolver::Impl {
   std::vector<double> values;  // sparse Jacobian values when the linear solver is dense
   Eigen::VectorXd f_final;
   int nfe = 0, nje = 0;
+  // The system whose Jacobian the linear solver holds factored (NewtonOptions::reuse_jacobian).
+  const ResidualSystem* factored = nullptr;
   EvalFailure last_failure = EvalFailure::None;
   EvalFailure jac_failure = EvalFailure::None;
   std::string kinsol_message;
@@ -127,6 +129,7 @@ struct NewtonSolver::Impl {
 
   /// Adopt a new Jacobian structure (nullptr: none) without rebuilding the SUNDIALS objects.
   void set_pattern(const SparsityPattern* p, bool dense) {
+    factored = nullptr;
     has_pattern = p != nullptr;
     pattern = p ? *p : SparsityPattern();
     dense_fallback = dense;
@@ -136,6 +139,7 @@ struct NewtonSolver::Impl {
 
   void build(int size, bool use_klu, const SparsityPattern* p) {
     destroy();
+    factored = nullptr;
     ++rebuilds;
     u = N_VNew_Serial(size, ctx);
     uscale = N_VNew_Serial(size, ctx);
@@ -390,6 +394,8 @@ NewtonResult NewtonSolver::solve(ResidualSystem& system, Eigen::VectorXd& x,
   if (ret == KIN_SUCCESS) ret = KINSetNumMaxIters(s.kin, options.max_iterations);
   if (ret == KIN_SUCCESS) ret = KINSetMaxSetupCalls(s.kin, options.max_setup_calls);
   if (ret == KIN_SUCCESS) ret = KINSetMaxNewtonStep(s.kin, mxnewt);
+  const bool reuse = options.reuse_jacobian && s.factored == &system;
+  if (ret == KIN_SUCCESS) ret = KINSetNoInitSetup(s.kin, reuse ? SUNTRUE : SUNFALSE);
   int flag = ret;
   if (ret == KIN_SUCCESS)
     flag = KINSol(s.kin, s.u, options.line_search ? KIN_LINESEARCH : KIN_NONE, s.uscale,
@@ -406,6 +412,7 @@ NewtonResult NewtonSolver::solve(ResidualSystem& system, Eigen::VectorXd& x,
 
   long nni = 0;
   KINGetNumNonlinSolvIters(s.kin, &nni);
+  s.factored = s.jac_failure == EvalFailure::None && (s.nje > 0 || reuse) ? &system : nullptr;
   result.flag = flag;
   result.iterations = static_cast<int>(nni);
   result.jacobian_evaluations = s.nje;

@@ -40,6 +40,8 @@ class ModelProblem {
   virtual bvp::NewtonSolver& newton() = 0;
   /// Model-specific Newton settings on top of the options (e.g. a bounded step).
   virtual void adjust(bvp::NewtonOptions& options) const { (void)options; }
+  /// Newton settings for a warm-started solve, after adjust() (e.g. Jacobian reuse).
+  virtual void adjust_warm(bvp::NewtonOptions& options) const { (void)options; }
   /// The cold-start rule for the bound input.
   virtual ColdStart cold_start() const { return {}; }
   /// Cold guess at load factor 1 (system parameter already 1).

@@ -201,6 +201,7 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
     Eigen::VectorXd x;
     sys->set_parameter(1.0);
     const bool warm = warm_start && P.warm_guess(*warm_start, x);
+    if (warm) P.adjust_warm(nopt);
     if (sys->size() == 0) {
       x.resize(0);
       sum.termination = TerminationType::Converged;

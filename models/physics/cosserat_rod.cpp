@@ -40,11 +40,14 @@ Section Section::from(const Scene& scene) {
 TendonLoad TendonLoad::make(const Vec3& r, double T) { return TendonLoad{r, lie::hat(r), T}; }
 
 Strains rod_rhs(const Section& section, const TendonLoad* tendons, int count, const double* y, double* dyds) {
+  detail::StrainsT<double> e;
   if (section.shear_extension)
-    return section.gravity ? detail::rod_rhs<true, true>(section, tendons, count, y, dyds)
-                           : detail::rod_rhs<true, false>(section, tendons, count, y, dyds);
-  return section.gravity ? detail::rod_rhs<false, true>(section, tendons, count, y, dyds)
-                         : detail::rod_rhs<false, false>(section, tendons, count, y, dyds);
+    e = section.gravity ? detail::rod_rhs<true, true>(section, tendons, count, y, dyds)
+                        : detail::rod_rhs<true, false>(section, tendons, count, y, dyds);
+  else
+    e = section.gravity ? detail::rod_rhs<false, true>(section, tendons, count, y, dyds)
+                        : detail::rod_rhs<false, false>(section, tendons, count, y, dyds);
+  return {e.u, e.v};
 }
 
 void FreeRod::rhs(double, const double* y, double* dyds) const { rod_rhs(section_, nullptr, 0, y, dyds); }

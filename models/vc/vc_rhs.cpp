@@ -8,7 +8,7 @@ namespace tdcr::vc {
 // The rod's right-hand side inlined, so that the strains feed the tendon lengths from registers.
 template <bool Shear, bool Gravity>
 void TendonRod::eval(double s, const double* y, double* dyds) const {
-  const cosserat::Strains e = cosserat::detail::rod_rhs<Shear, Gravity>(
+  const auto e = cosserat::detail::rod_rhs<Shear, Gravity>(
       *section_, seg_->tendons.data(), static_cast<int>(seg_->tendons.size()), y, dyds);
   if (watch_) {
     const double inv_v2 = 1.0 / e.v.squaredNorm();

@@ -22,36 +22,12 @@ namespace vc {
 
 namespace {
 
-/// The wrench just distal of a disk's kinks as a function of itself: z = (n+, m+) maps to the
-/// wrench before the kinks minus the kink wrench of the continuing tendons at the strains z gives.
-struct KinkMap {
-  const cosserat::Section& S;
-  const Mat3& R;
-  const Vec3& u;  ///< Strains just proximal of the disk.
-  const Vec3& v;
-  const std::vector<cosserat::TendonLoad>& tendons;
-  Vec6 base;      ///< The wrench before the kinks.
-  Vec6 operator()(const Vec6& z) const {
-    const Vec3 up = S.curvature(R, z.tail<3>());
-    const Vec3 vp = S.strain(R, z.head<3>());
-    Vec6 g = base;
-    for (const cosserat::TendonLoad& t : tendons) {
-      const Vec3 qm = physics::tendon_tangent(v, u, t.r);
-      const Vec3 qp = physics::tendon_tangent(vp, up, t.r);
-      const Vec3 K = t.T * (R * (qp / qp.norm() - qm / qm.norm()));
-      g.head<3>() -= K;
-      g.tail<3>() -= (R * t.r).cross(K);
-    }
-    return g;
-  }
-};
-
 /// Solve z = G(z), z in: the start. Fixed-point iteration while it contracts (its factor is about
 /// T r^2 / (EI |q_k|), small for moderate bends); once it stops contracting (a strong tendon
 /// continuing past a large point load on a strongly bent robot: the factor passes 1 and the
 /// iteration falls into a 2-cycle), Newton on z - G(z) from the start with a forward-difference
 /// Jacobian. False if neither settles.
-bool kink_fixed_point(const KinkMap& G, double force_scale, double moment_scale, Vec6& z) {
+bool kink_fixed_point(const KinkMap<double>& G, double force_scale, double moment_scale, Vec6& z) {
   Vec6 scale;
   scale << Vec3::Constant(force_scale), Vec3::Constant(moment_scale);
   const Vec6 start = z;
@@ -149,7 +125,52 @@ void set_load_factor(VcWorkspace::Impl& W, double lambda) {
   W.lambda = lambda;
 }
 
-bool disk_point_loads(const VcWorkspace::Impl& W, int i, int j, double* y) {
+namespace {
+
+/// The kinks' fixed point in double (kink_fixed_point).
+bool solve_kinks(const KinkMap<double>& G, double force_scale, double moment_scale, Vec6& z) {
+  return kink_fixed_point(G, force_scale, moment_scale, z);
+}
+
+/// The kinks' fixed point with its derivative: the value by kink_fixed_point, the derivative
+/// implicitly, dz = (I - dG/dz)^-1 (dG/dp dp), exact at the fixed point.
+bool solve_kinks(const KinkMap<Dual>& G, double force_scale, double moment_scale, Vec6T<Dual>& z) {
+  const auto value = [](const Dual& d) { return d.v; };
+  const auto constant = [](double d) { return Dual(d); };
+  const Mat3 R = G.R.unaryExpr(value);
+  const Vec3 u = G.u.unaryExpr(value), v = G.v.unaryExpr(value);
+  Vec6 zv = z.unaryExpr(value);
+  if (!kink_fixed_point(KinkMap<double>{G.S, R, u, v, G.tendons, G.base.unaryExpr(value)}, force_scale,
+                        moment_scale, zv))
+    return false;
+  // dG/dp dp: G at the (constant) fixed point with the inputs' derivatives.
+  const Vec6T<Dual> gp = G(zv.unaryExpr(constant));
+  // dG/dz: G with constant inputs and z seeded with the identity.
+  Vec6T<Dual> zs;
+  for (int c = 0; c < 6; ++c) zs[c] = Dual::variable(zv[c], c);
+  const KinkMap<Dual> Gc{G.S, R.unaryExpr(constant), u.unaryExpr(constant), v.unaryExpr(constant), G.tendons,
+                         G.base.unaryExpr(value).unaryExpr(constant)};
+  const Vec6T<Dual> gz = Gc(zs);
+  Mat6 A, B;
+  for (int r = 0; r < 6; ++r) {
+    A.row(r) = -gz[r].derivatives().transpose();
+    B.row(r) = gp[r].derivatives().transpose();
+  }
+  A.diagonal().array() += 1.0;
+  const Mat6 dz = A.partialPivLu().solve(B);
+  if (!dz.allFinite()) return false;
+  for (int r = 0; r < 6; ++r) {
+    z[r].v = zv[r];
+    for (int k = 0; k < 6; ++k) z[r].d[k] = dz(r, k);
+  }
+  return true;
+}
+
+}  // namespace
+
+template <typename T>
+bool disk_point_loads(const VcWorkspace::Impl& W, int i, int j, T* y) {
+  using V3 = Vec3T<T>;
   const TendonRouting& rt = W.model->routing();
   const cosserat::Section& S = W.section;
   const int nseg = static_cast<int>(W.segments.size());
@@ -159,22 +180,23 @@ bool disk_point_loads(const VcWorkspace::Impl& W, int i, int j, double* y) {
   const bool weighted = W.loads.has_disk_weight() && W.loads.disk_weight(j).squaredNorm() > 0.0;
   if (!terminates && !weighted) return true;
   // Point loads at disk j, with u, v just proximal of it.
-  const Mat3 R = cosserat::rotation(static_cast<const double*>(y));
-  const Vec3 u = S.curvature(R, cosserat::moment(y));
-  const Vec3 v = S.strain(R, cosserat::force(y));
+  const Mat3T<T> R = Eigen::Map<const Mat3T<T>>(y + 3);
+  Eigen::Map<V3> n(y + 12), m(y + 15);
+  const V3 u = cosserat::detail::curvature<T>(S, R, m);
+  const V3 v = cosserat::detail::strain<T>(S, R, n);
   if (terminates) {
     // Eq. 40-41: tendon termination forces F_k = -T_k R t_k at p + R r_k.
-    Vec3 dn = Vec3::Zero(), dm = Vec3::Zero();
+    V3 dn = V3::Zero(), dm = V3::Zero();
     for (const cosserat::TendonLoad& t : seg.terminating) {
-      const Vec3 q = physics::tendon_tangent(v, u, t.r);
-      const Vec3 F = -(t.T / q.norm()) * (R * q);
+      const V3 q = cosserat::detail::tangent(v, u, t.r);
+      const V3 F = -(t.T / q.norm()) * (R * q);
       dn += F;
       dm += (R * t.r).cross(F);
     }
-    cosserat::force(y) -= dn;
-    cosserat::moment(y) -= dm;
+    n -= dn;
+    m -= dm;
   }
-  if (weighted) cosserat::force(y) -= W.loads.disk_weight(j);
+  if (weighted) n -= W.loads.disk_weight(j);
   // Kinks: the point loads make u, v jump, so every tensioned tendon continuing past disk j
   // changes direction there and pulls on the backbone with T_k R (t_k+ - t_k-) at p + R r_k.
   // t_k+ depends on the wrench after the kink: a fixed point z = G(z) (kink_fixed_point).
@@ -184,14 +206,17 @@ bool disk_point_loads(const VcWorkspace::Impl& W, int i, int j, double* y) {
   else if (i + 1 < nseg)
     cont = &W.segments[i + 1].tendons;
   if (!W.model->options().kink_forces || !cont || cont->empty()) return true;
-  Vec6 z;
-  z << cosserat::force(y), cosserat::moment(y);
-  const KinkMap G{S, R, u, v, *cont, z};
-  if (!kink_fixed_point(G, W.loads.force_scale(), W.loads.moment_scale(), z)) return false;
-  cosserat::force(y) = z.head<3>();
-  cosserat::moment(y) = z.tail<3>();
+  Vec6T<T> z;
+  z << n, m;
+  const KinkMap<T> G{S, R, u, v, *cont, z};
+  if (!solve_kinks(G, W.loads.force_scale(), W.loads.moment_scale(), z)) return false;
+  n = z.template head<3>();
+  m = z.template tail<3>();
   return true;
 }
+
+template bool disk_point_loads<double>(const VcWorkspace::Impl&, int, int, double*);
+template bool disk_point_loads<Dual>(const VcWorkspace::Impl&, int, int, Dual*);
 
 bool shoot(VcWorkspace::Impl& W, bvp::Integrator& integ, TendonRod& rod, const Vec6& x, Vec6& res,
            const Record* rec) {

@@ -13,6 +13,7 @@
 #include "tdcr/bvp/integrator.hpp"
 #include "tdcr/models/cosserat_rod.hpp"
 #include "tdcr/models/vc.hpp"
+#include "vc/vc_dual.hpp"
 #include "vc/vc_rhs.hpp"
 
 namespace tdcr {
@@ -66,12 +67,20 @@ void bind_input(VcWorkspace::Impl& W, const VcModel& model, const ModelInput& in
 void set_load_factor(VcWorkspace::Impl& W, double lambda);
 /// Point loads at disk j, the end of an interval of segment i, applied to the rod state y (its
 /// first 18 values): tendon terminations (Eq. 40-41), the disk's weight and the kink forces of
-/// passing tendons. False if the kink fixed-point iteration did not settle.
-bool disk_point_loads(const VcWorkspace::Impl& W, int i, int j, double* y);
+/// passing tendons. False if the kink fixed-point iteration did not settle. T: double, or Dual
+/// (with the derivatives; the kinks' by the implicit function theorem).
+template <typename T>
+bool disk_point_loads(const VcWorkspace::Impl& W, int i, int j, T* y);
 /// One shot from the base with unknowns x = (n(0), m(0)) through W.y: false if the integration
 /// failed, else `res` = (n(L+) - F_tip, m(L+) - M_tip).
 bool shoot(VcWorkspace::Impl& W, bvp::Integrator& integrator, TendonRod& rod, const Vec6& x, Vec6& res,
            const Record* rec);
+/// Whether the exact Jacobian of `shoot` is available: with RK4 (the derivative of the discrete
+/// map); CVODE's error-controlled map is differentiated by finite differences.
+bool has_exact_jacobian(const VcWorkspace::Impl& W);
+/// `shoot` with the shot integrator and its exact Jacobian J = d res / d x (vc_jacobian.cpp):
+/// one pass of dual numbers through the same RK4 steps and disk point loads.
+bool shoot_jacobian(VcWorkspace::Impl& W, const Vec6& x, Vec6& res, Mat6& J);
 /// Whether the last final pass (at the load factor where a loading path stopped) had a tensioned
 /// tendon at its geometric limit (curvature x offset >= physics::kTendonLimitNear): the reason.
 bool tendon_limit(const VcWorkspace::Impl& W, std::string& why);

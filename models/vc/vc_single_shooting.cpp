@@ -13,6 +13,12 @@ namespace {
 /// equilibrium waits).
 constexpr double kMaxNewtonStep = 1.0;
 
+/// Warm-started solves (VcOptions::reuse_jacobian): the Newton iterations a Jacobian serves
+/// (modified Newton), and the iterations of the previous solve above which its Jacobian is too
+/// stale to start from (a fresh one at the warm guess then).
+constexpr int kReuseSetupCalls = 10;
+constexpr int kStaleAfterIterations = 3;
+
 /// The shooting residual as Newton sees it; its parameter is the load factor.
 class ShootingSystem final : public bvp::ParameterizedSystem {
  public:
@@ -25,8 +31,18 @@ class ShootingSystem final : public bvp::ParameterizedSystem {
     f = r;
     return true;
   }
-  // Forward-difference Jacobian by the solver (6 extra shots), with increments
-  // sqrt(max(eps, relative_noise)): sqrt(eps) for RK4, sqrt(rtol) for CVODE.
+  // With RK4 the exact Jacobian of the discrete shot (vc_jacobian.cpp, about one shot's cost);
+  // with CVODE forward differences by the solver (6 extra shots), with increments
+  // sqrt(max(eps, relative_noise)) = sqrt(rtol).
+  bool has_jacobian() const override { return W_.model->options().exact_jacobian && has_exact_jacobian(W_); }
+  bool jacobian(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>&,
+                Eigen::Ref<Eigen::MatrixXd> J) override {
+    Vec6 r;
+    Mat6 Jx;
+    if (!shoot_jacobian(W_, Vec6(x), r, Jx)) return false;
+    J = Jx;
+    return true;
+  }
   double relative_noise() const override { return W_.shot_integrator->relative_noise(); }
   void residual_scale(Eigen::Ref<Eigen::VectorXd> s) const override {
     s.head<3>().setConstant(1.0 / W_.loads.force_scale());
@@ -45,6 +61,11 @@ class SingleShooting final : public detail::ModelProblem {
   bvp::ParameterizedSystem* system() override { return &system_; }
   bvp::NewtonSolver& newton() override { return newton_; }
   void adjust(bvp::NewtonOptions& options) const override { options.max_newton_step = kMaxNewtonStep; }
+  void adjust_warm(bvp::NewtonOptions& options) const override {
+    if (!W_.model->options().reuse_jacobian) return;
+    options.reuse_jacobian = last_iterations_ <= kStaleAfterIterations;
+    options.max_setup_calls = kReuseSetupCalls;
+  }
   void cold_guess(Eigen::VectorXd& x) override { x = guess(W_.model->options().initial_guess); }
   bool alternative_guess(Eigen::VectorXd& x) override {
     // The equilibrium guess overestimates the lever of tip forces on strongly bent robots,
@@ -79,6 +100,7 @@ class SingleShooting final : public detail::ModelProblem {
     return ok;
   }
   void extract(const Eigen::VectorXd&, bool evaluated, Solution& sol) override {
+    last_iterations_ = sol.summary.iterations;
     sol.tensions = W_.loads.full_tensions();
     if (!evaluated) {
       if (sol.summary.converged()) {
@@ -173,6 +195,7 @@ class SingleShooting final : public detail::ModelProblem {
   bvp::NewtonSolver newton_;
   std::vector<Frame> frames_;
   std::vector<BackboneSample> samples_;
+  int last_iterations_ = 0;  ///< Newton iterations of the last solve (Jacobian reuse).
 };
 
 }  // namespace

@@ -30,6 +30,11 @@ struct NewtonOptions {
   /// Newton iterations between Jacobian evaluations; 1 = exact Newton (KINSOL's default of 10
   /// trades robustness for Jacobian cost, a bad deal when Jacobians are cheap FD or analytic).
   int max_setup_calls = 1;
+  /// Start from the Jacobian of this solver's previous solve, if it had one of the same system
+  /// (KINSOL's KINSetNoInitSetup): for a sequence of nearby solves such as a warm-started
+  /// trajectory. KINSOL evaluates a fresh Jacobian after max_setup_calls iterations, when the
+  /// residual stops decreasing fast enough with the old one, or when a line search fails with it.
+  bool reuse_jacobian = false;
   /// Backtracking line search (KIN_LINESEARCH); false = full Newton steps (KIN_NONE).
   bool line_search = true;
   /// Linear solver inside Newton.

@@ -76,6 +76,15 @@ struct VcOptions {
   VcFormulation formulation = VcFormulation::Automatic;  ///< Single or multiple shooting.
   /// Automatic formulation: multiple shooting when the load parameter exceeds this.
   double multiple_shooting_threshold = 10.0;
+  /// Single shooting with RK4: Newton's Jacobian is the exact derivative of the discrete shot
+  /// (dual numbers through every RK4 stage, disk load and kink) instead of forward differences
+  /// by the solver (6 extra shots; CVODE always takes these). The same Newton iterations to
+  /// within rounding; at present about 1.5x the cost of the differences
+  /// (docs/design-notes/vc.md), hence off by default.
+  bool exact_jacobian = false;
+  /// Warm-started single-shooting solves start from the previous solve's Jacobian (modified
+  /// Newton, a fresh Jacobian only when the residual stops falling fast enough).
+  bool reuse_jacobian = true;
 };
 
 class VcModel;
