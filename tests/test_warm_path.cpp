@@ -44,7 +44,7 @@ TEST(WarmPath, LargeLoadChangeFollowsTheInputPathToTheColdAnswer) {
   }
 }
 
-// A small change stays a direct warm solve: no input path, few iterations.
+// A small change stays a direct warm solve: no input path, few iterations and Jacobians.
 TEST(WarmPath, SmallChangeStaysADirectSolve) {
   const Scene scene = scene_file("issue12_a.json");
   Scene nearby = scene;
@@ -59,7 +59,10 @@ TEST(WarmPath, SmallChangeStaysADirectSolve) {
     ASSERT_TRUE(warm.converged()) << warm.summary.message;
     EXPECT_EQ(warm.summary.message.find("input path"), std::string::npos) << warm.summary.message;
     EXPECT_EQ(warm.summary.continuation_steps, 0);
-    EXPECT_LE(warm.summary.iterations, 6);
+    // Few iterations (VC reuses the previous Jacobian on warm starts: modified Newton, cheaper
+    // iterations, a few more of them).
+    EXPECT_LE(warm.summary.iterations, 10);
+    EXPECT_LE(warm.summary.jacobian_evaluations, 4);
   }
 }
 
