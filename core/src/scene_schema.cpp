@@ -182,6 +182,13 @@ const Schema<Effects>& effects_schema() {
                     "removed at disks a tendon passes through (paper Eq. 58); `\"kept\"`: the full force of "
                     "Eq. 32-33",
                     "CCsub, PRB, VCref (VC and CC have no discrete disk forces)"}),
+      boolean_field("kink_forces", &E::kink_forces,
+                    {"", nullptr,
+                     "`true`: a tensioned tendon passing a disk where the strains jump (segment ends "
+                     "under a tip wrench, disk weights) pulls with its kink force T (t+ - t-); `false`: "
+                     "the paper code's formulation, which omits it (global balance then fails where "
+                     "torsion or shear jumps)",
+                     "VC"}),
       choice_field("tendon_path", &E::tendon_path, kTendonPath,
                    {"", nullptr,
                     "`\"fully_constrained\"`: tendons parallel to the backbone (Eq. 14-18); "
