@@ -236,6 +236,12 @@ const Schema<SolverOptions>& solver_schema() {
                      "the conjugate-point test, CCsub and PRB by the reduced stiffness; VCref and CC: "
                      "undetermined",
                      "VC, CCsub, PRB"}),
+      boolean_field("differential_kinematics", &S::differential_kinematics,
+                    {"", nullptr,
+                     "compute the tip Jacobian (6 x m, with respect to the actuation values) and the tip "
+                     "compliance (6 x 6, with respect to the tip wrench) of every converged answer "
+                     "(`tip_jacobian`, `tip_compliance` in the JSON output)",
+                     "every model (CC: Jacobian only)"}),
   });
   return s;
 }

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 
+#include "common/differential_kinematics.hpp"
 #include "common/load_continuation.hpp"
 #include "common/model_problem.hpp"
 #include "common/newton_summary.hpp"
@@ -121,6 +122,14 @@ double solve_on_loading_path(const StaticModel& model, const ModelInput& input, 
   return detail::follow_loading_path(P, sys, x, nopt, options, sum, sol.path_events, cold.first_step, why).parameter;
 }
 
+// Solution::tip_jacobian and tip_compliance of a converged answer at unknowns x.
+void add_differential_kinematics(const StaticModel& model, const detail::Rebind& rebind, const ModelInput& input,
+                                 const Eigen::VectorXd& x, Solution& sol) {
+  physics::LoadCase load;
+  load.bind(model.robot(), model.routing(), input);
+  detail::differential_kinematics(rebind, input, load.force_scale(), load.moment_scale(), x, sol);
+}
+
 }  // namespace
 
 Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelInput& input,
@@ -168,6 +177,10 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
     P.extract(x, evaluated, sol);
     if (sum.converged() && options.stability) sol.stability = P.stability(x);
   }
+  if (sol.converged() && options.differential_kinematics)
+    add_differential_kinematics(
+        model, [&](const ModelInput& in) -> detail::ModelProblem& { return model.bind(workspace, in, options); },
+        input, sol.unknowns, sol);
   if (sol.tensions.empty() && input.actuation.kind == Actuation::Kind::Tensions) sol.tensions = input.actuation.values;
   if (!sum.converged() && reached < 1.0) name_infeasibility(P, model.routing(), sol.unknowns, reached, sol);
   physics::check_geometry(model.robot(), model.routing(), sol);

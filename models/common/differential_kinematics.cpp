@@ -1,0 +1,123 @@
+// Differential kinematics by the implicit function theorem (differential_kinematics.hpp).
+#include "common/differential_kinematics.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include <Eigen/LU>
+
+#include "tdcr/core/lie.hpp"
+
+namespace tdcr::detail {
+
+namespace {
+
+// Input parameter j: actuation value j < m, then tip force x, y, z and tip moment x, y, z.
+ModelInput perturbed(const ModelInput& input, int j, double dv) {
+  ModelInput out = input;
+  const int m = static_cast<int>(input.actuation.values.size());
+  if (j < m)
+    out.actuation.values[static_cast<std::size_t>(j)] += dv;
+  else if (j < m + 3)
+    out.loads.tip_force[j - m] += dv;
+  else
+    out.loads.tip_moment[j - m - 3] += dv;
+  return out;
+}
+
+// Central-difference increment of parameter j: h_rel times its magnitude or its scale
+// (tensions and forces: the force scale; displacements: 1 mm; moments: the moment scale).
+double increment(const ModelInput& input, int j, double h_rel, double force_scale, double moment_scale) {
+  const int m = static_cast<int>(input.actuation.values.size());
+  if (j >= m) return h_rel * (j < m + 3 ? force_scale : moment_scale);
+  const double v = std::abs(input.actuation.values[static_cast<std::size_t>(j)]);
+  const bool tensions = input.actuation.kind == Actuation::Kind::Tensions;
+  return h_rel * std::max(v, tensions ? force_scale : 1e-3);
+}
+
+// Pose difference a - b: position difference and the rotation vector of R_a R_b^T (base frame).
+Eigen::Matrix<double, 6, 1> pose_difference(const Frame& a, const Frame& b) {
+  Eigen::Matrix<double, 6, 1> d;
+  d << a.p - b.p, lie::log_so3(a.R * b.R.transpose());
+  return d;
+}
+
+// dF/dx at x (f = F(x)): the system's analytic Jacobian, else forward differences.
+bool system_jacobian(bvp::ResidualSystem& sys, const Eigen::VectorXd& x, const Eigen::VectorXd& f,
+                     Eigen::MatrixXd& J) {
+  if (sys.has_jacobian() && bvp::analytic_jacobian_dense(sys, x, f, J)) return true;
+  const bvp::SparsityPattern* pattern = sys.sparsity();
+  if (!pattern) return bvp::finite_difference_jacobian(sys, x, f, J);
+  std::vector<double> values(static_cast<std::size_t>(pattern->nnz()));
+  if (!bvp::finite_difference_sparse_jacobian(sys, x, f, *pattern, values.data())) return false;
+  J.setZero();
+  for (int c = 0; c < pattern->cols; ++c)
+    for (int k = pattern->col_ptr[c]; k < pattern->col_ptr[c + 1]; ++k) J(pattern->row_idx[k], c) = values[k];
+  return true;
+}
+
+// The problem bound to `input` at load factor 1; null if it is not `expected` (a model that
+// changes formulation with the input, VC near its multiple-shooting threshold).
+ModelProblem* bound(const Rebind& rebind, const ModelInput& input, const ModelProblem* expected) {
+  ModelProblem& P = rebind(input);
+  if (expected && &P != expected) return nullptr;
+  if (P.system()) P.system()->set_parameter(1.0);
+  return &P;
+}
+
+}  // namespace
+
+void differential_kinematics(const Rebind& rebind, const ModelInput& input, double force_scale,
+                             double moment_scale, const Eigen::VectorXd& x, Solution& solution) {
+  ModelProblem* P = bound(rebind, input, nullptr);
+  bvp::ParameterizedSystem* sys = P->system();
+  const int m = static_cast<int>(input.actuation.values.size());
+  const int parameters = m + (sys ? 6 : 0);  // a closed-form model (CC) has no statics of loads
+  const double eps = std::numeric_limits<double>::epsilon();
+  const double h_rel = std::cbrt(std::max(eps, sys ? sys->relative_noise() : eps));
+
+  bool ok = true;
+  Eigen::PartialPivLU<Eigen::MatrixXd> lu;
+  Eigen::VectorXd f, f_plus, f_minus;
+  if (sys) {
+    const int n = sys->size();
+    f.resize(n);
+    f_plus.resize(n);
+    f_minus.resize(n);
+    Eigen::MatrixXd J(n, n);
+    ok = n == x.size() && sys->residual(x, f) && system_jacobian(*sys, x, f, J);
+    if (ok) lu.compute(J);
+  }
+  Eigen::MatrixXd D(6, parameters);
+  for (int j = 0; ok && j < parameters; ++j) {
+    const double h = increment(input, j, h_rel, force_scale, moment_scale);
+    const ModelInput plus = perturbed(input, j, h), minus = perturbed(input, j, -h);
+    Eigen::VectorXd x_plus = x, x_minus = x;
+    if (sys) {
+      // dx/dv_j = -F_x^{-1} dF/dv_j, the latter by central differences at the converged x.
+      ModelProblem* Pp = bound(rebind, plus, P);
+      ok = Pp && Pp->system()->residual(x, f_plus);
+      ModelProblem* Pm = ok ? bound(rebind, minus, P) : nullptr;
+      ok = ok && Pm && Pm->system()->residual(x, f_minus);
+      if (!ok) break;
+      const Eigen::VectorXd dx = -lu.solve((f_plus - f_minus) / (2.0 * h));
+      x_plus += h * dx;
+      x_minus -= h * dx;
+    }
+    // The tip along the tangent (dx/dv_j, 1) of the solution manifold, both sides.
+    Frame tip_plus, tip_minus;
+    ModelProblem* Pp = bound(rebind, plus, P);
+    ok = Pp && Pp->tip_pose(x_plus, tip_plus);
+    ModelProblem* Pm = ok ? bound(rebind, minus, P) : nullptr;
+    ok = ok && Pm && Pm->tip_pose(x_minus, tip_minus);
+    if (ok) D.col(j) = pose_difference(tip_plus, tip_minus) / (2.0 * h);
+  }
+  bound(rebind, input, nullptr);
+  if (!ok || !D.allFinite()) return;
+  solution.tip_jacobian = D.leftCols(m);
+  if (sys) solution.tip_compliance = D.rightCols(6);
+}
+
+}  // namespace tdcr::detail
