@@ -152,6 +152,7 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
 
   bvp::ParameterizedSystem* sys = P.system();
   double reached = 1.0;  // load factor of the answer (< 1: loading from rest stopped there)
+  Eigen::VectorXd x;     // the system's unknowns (none for a closed form)
   if (!sys) {
     // Closed form: the problem computes the answer and its summary.
     sum.linear_solver = "none";
@@ -160,7 +161,6 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
     sum.unknowns = sys->size();
     bvp::NewtonOptions nopt = bvp::NewtonOptions::from(options);
     P.adjust(nopt);
-    Eigen::VectorXd x;
     sys->set_parameter(1.0);
     const bool warm = warm_start && P.warm_guess(*warm_start, x);
     if (sys->size() == 0) {
@@ -180,7 +180,7 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
   if (sol.converged() && options.differential_kinematics)
     add_differential_kinematics(
         model, [&](const ModelInput& in) -> detail::ModelProblem& { return model.bind(workspace, in, options); },
-        input, sol.unknowns, sol);
+        input, x, sol);
   if (sol.tensions.empty() && input.actuation.kind == Actuation::Kind::Tensions) sol.tensions = input.actuation.values;
   if (!sum.converged() && reached < 1.0) name_infeasibility(P, model.routing(), sol.unknowns, reached, sol);
   physics::check_geometry(model.robot(), model.routing(), sol);
