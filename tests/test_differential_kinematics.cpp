@@ -14,6 +14,7 @@
 #include "tdcr/core/paper_robot.hpp"
 #include "tdcr/core/scene_io.hpp"
 #include "tdcr/models/static_model.hpp"
+#include "tdcr/models/vc.hpp"
 
 using namespace tdcr;
 
@@ -71,47 +72,64 @@ std::string case_name(const testing::TestParamInfo<Case>& info) {
   return to_string(info.param.kind) + (info.param.loaded ? "_Loaded" : "_Unloaded");
 }
 
-class DifferentialKinematics : public testing::TestWithParam<Case> {};
-
 // The paper robot (n = 5) under unequal tensions on all four tendons, with a tip wrench out of
-// the bending plane in the loaded case.
-TEST_P(DifferentialKinematics, MatchesFiniteDifferencesOfFullSolves) {
-  const Case c = GetParam();
-  Scene s = paper::scene(5, 1, to_string(c.kind));
+// the bending plane if `loaded`.
+Scene test_scene(ModelKind kind, bool loaded) {
+  Scene s = paper::scene(5, 1, to_string(kind));
   s.actuation.values = {2.0, 0.5, 1.0, 0.3};
-  if (c.loaded) {
+  if (loaded) {
     s.loads.tip_force = Vec3(0.1, -0.05, -0.1);
     s.loads.tip_moment = Vec3(0.002, 0.001, -0.003);
   }
   s.solver.function_tolerance = 1e-13;
-  const auto model = make_model(c.kind, s);
-  auto ws = model->make_workspace();
+  return s;
+}
+
+// The Jacobian and compliance of `model` on `s` against central differences of full solves.
+void expect_matches_full_solves(const StaticModel& model, const Scene& s, const std::string& name) {
+  auto ws = model.make_workspace();
   SolverOptions with_dk = s.solver;
   with_dk.differential_kinematics = true;
   const ModelInput input = s.input();
-  const Solution base = solve(*model, *ws, input, with_dk);
+  const Solution base = solve(model, *ws, input, with_dk);
   ASSERT_TRUE(base.converged()) << base.summary.message;
   ASSERT_EQ(base.tip_jacobian.rows(), 6);
   ASSERT_EQ(base.tip_jacobian.cols(), 4);
   ASSERT_EQ(base.tip_compliance.rows(), 6);
   ASSERT_EQ(base.tip_compliance.cols(), 6);
   // Without the option nothing is computed.
-  EXPECT_EQ(solve(*model, *ws, input, s.solver).tip_jacobian.size(), 0);
+  EXPECT_EQ(solve(model, *ws, input, s.solver).tip_jacobian.size(), 0);
 
-  // Steps of the full-solve differences: 1e-4 of the tension scale, 1e-4 N, 1e-4 N * 0.1 m.
+  // Steps of the full-solve differences: 1e-4 N, 1e-4 N * 0.1 m (PRB's differences agreed to
+  // the printed digits for steps of 1e-6 to 1e-3 N: their error is far below the tolerance).
   const std::vector<double> tension_steps(4, 1e-4), wrench_steps = {1e-4, 1e-4, 1e-4, 1e-5, 1e-5, 1e-5};
-  const Mat6X J_fd = full_solve_differences(*model, input, s.solver, base, 0, 4, tension_steps);
-  const Mat6X C_fd = full_solve_differences(*model, input, s.solver, base, 4, 6, wrench_steps);
+  const Mat6X J_fd = full_solve_differences(model, input, s.solver, base, 0, 4, tension_steps);
+  const Mat6X C_fd = full_solve_differences(model, input, s.solver, base, 4, 6, wrench_steps);
   const double eJ = relative_error(base.tip_jacobian, J_fd);
   const double eC = relative_error(base.tip_compliance, C_fd);
-  std::printf("%s: Jacobian %.2e, compliance %.2e relative to full-solve differences\n",
-              case_name({c, 0}).c_str(), eJ, eC);
+  std::printf("%s: Jacobian %.2e, compliance %.2e relative to full-solve differences\n", name.c_str(), eJ, eC);
   EXPECT_LT(eJ, 1e-6);
   EXPECT_LT(eC, 1e-6);
   // Physics: a tip force along +x moves the tip along +x, a tension on tendon 1 (at +y) bends
   // the robot towards +y.
   EXPECT_GT(base.tip_compliance(0, 0), 0);
   EXPECT_GT(base.tip_jacobian(1, 0), 0);
+}
+
+class DifferentialKinematics : public testing::TestWithParam<Case> {};
+
+TEST_P(DifferentialKinematics, MatchesFiniteDifferencesOfFullSolves) {
+  const Case c = GetParam();
+  const Scene s = test_scene(c.kind, c.loaded);
+  expect_matches_full_solves(*make_model(c.kind, s), s, case_name({c, 0}));
+}
+
+// VC's multiple shooting (the formulation of large loads; 90 unknowns at n = 5): the same.
+TEST(DifferentialKinematicsVc, MultipleShootingMatchesFiniteDifferencesOfFullSolves) {
+  const Scene s = test_scene(ModelKind::VC, true);
+  VcOptions options;
+  options.formulation = VcFormulation::MultipleShooting;
+  expect_matches_full_solves(VcModel(s.robot, s.effects, options), s, "vc multiple shooting");
 }
 
 INSTANTIATE_TEST_SUITE_P(StaticModels, DifferentialKinematics,
