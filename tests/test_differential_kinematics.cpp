@@ -139,6 +139,35 @@ INSTANTIATE_TEST_SUITE_P(StaticModels, DifferentialKinematics,
                                          Case{ModelKind::VCref, false}, Case{ModelKind::VCref, true}),
                          case_name);
 
+// CCsub and PRB leave unloaded distal subsegments out of their unknowns: with only segment 1's
+// tendons pulled, a tip wrench adds unknowns and is linearised in the larger system. CCsub: against
+// full-solve differences (the compliance and the columns of the pulled tendons). PRB: a straight
+// subsegment's bending plane is a polar angle without derivative, so nothing is reported (the
+// linearisation there gave a compliance 40 % off).
+TEST(DifferentialKinematicsLumped, UnloadedDistalSegmentIsLinearisedInTheLargerSystem) {
+  for (ModelKind kind : {ModelKind::CCsub, ModelKind::PRB}) {
+    Scene s = test_scene(kind, false);
+    s.actuation.values = {2.0, 0.5, 0.0, 0.0};
+    const auto model = make_model(kind, s);
+    auto ws = model->make_workspace();
+    SolverOptions with_dk = s.solver;
+    with_dk.differential_kinematics = true;
+    const Solution base = solve(*model, *ws, s.input(), with_dk);
+    ASSERT_TRUE(base.converged()) << base.summary.message;
+    if (kind == ModelKind::PRB) {
+      EXPECT_EQ(base.tip_jacobian.size(), 0);
+      EXPECT_EQ(base.tip_compliance.size(), 0);
+      continue;
+    }
+    ASSERT_EQ(base.tip_compliance.cols(), 6) << to_string(kind);
+    const Mat6X J_fd = full_solve_differences(*model, s.input(), s.solver, base, 0, 2, {1e-4, 1e-4});
+    const Mat6X C_fd =
+        full_solve_differences(*model, s.input(), s.solver, base, 4, 6, {1e-4, 1e-4, 1e-4, 1e-5, 1e-5, 1e-5});
+    EXPECT_LT(relative_error(base.tip_jacobian.leftCols(2), J_fd), 1e-6) << to_string(kind);
+    EXPECT_LT(relative_error(base.tip_compliance, C_fd), 1e-6) << to_string(kind);
+  }
+}
+
 // CC from tensions on a one-segment robot (Kirchhoff rod) is an arc of curvature
 // kappa = -sum_k T_k y_k / EI about the base x axis: tip (0, (cos kL - 1) / k, sin kL / k), tip
 // rotation rot_x(kappa L). Its Jacobian is d tip / d kappa times d kappa / d T_k = -y_k / EI.

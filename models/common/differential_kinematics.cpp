@@ -74,44 +74,76 @@ ModelProblem* bound(const Rebind& rebind, const ModelInput& input, const ModelPr
   return &P;
 }
 
+// For a perturbation that adds unknowns (CCsub and PRB leave unloaded distal subsegments out of
+// their system): the answer in the larger system bound to `plus` and `minus` (their warm guess
+// from the Solution: exact, those subsegments are straight) and that system's F_x at v as the
+// mean of F_x at v + h and v - h (O(h^2)).
+bool lifted_linearisation(const Rebind& rebind, const ModelInput& plus, const ModelInput& minus,
+                          const ModelProblem* P, const Solution& solution, double h_rel, Eigen::VectorXd& x,
+                          Eigen::PartialPivLU<Eigen::MatrixXd>& lu) {
+  ModelProblem* Pp = bound(rebind, plus, P);
+  if (!Pp || !Pp->warm_guess(solution, x) || !Pp->differentiable(x)) return false;
+  const int n = Pp->system()->size();
+  if (x.size() != n) return false;
+  Eigen::VectorXd f(n);
+  Eigen::MatrixXd J_plus(n, n), J_minus(n, n);
+  if (!Pp->system()->residual(x, f) || !system_jacobian(*Pp->system(), x, f, h_rel, J_plus)) return false;
+  ModelProblem* Pm = bound(rebind, minus, P);
+  if (!Pm || Pm->system()->size() != n || !Pm->system()->residual(x, f) ||
+      !system_jacobian(*Pm->system(), x, f, h_rel, J_minus))
+    return false;
+  lu.compute(0.5 * (J_plus + J_minus));
+  return true;
+}
+
 }  // namespace
 
 void differential_kinematics(const Rebind& rebind, const ModelInput& input, double force_scale,
-                             double moment_scale, const Eigen::VectorXd& x, Solution& solution) {
+                             double moment_scale, double tolerance, const Eigen::VectorXd& x, Solution& solution) {
   ModelProblem* P = bound(rebind, input, nullptr);
   bvp::ParameterizedSystem* sys = P->system();
   const int m = static_cast<int>(input.actuation.values.size());
   const int parameters = m + (sys ? 6 : 0);  // a closed-form model (CC) has no statics of loads
   const double eps = std::numeric_limits<double>::epsilon();
   const double h_rel = std::cbrt(std::max(eps, sys ? sys->relative_noise() : eps));
+  const int n = sys ? sys->size() : 0;
 
   bool ok = true;
-  Eigen::PartialPivLU<Eigen::MatrixXd> lu;
-  Eigen::VectorXd f, f_plus, f_minus;
+  Eigen::PartialPivLU<Eigen::MatrixXd> lu, lu_lifted;
   if (sys) {
-    const int n = sys->size();
-    f.resize(n);
-    f_plus.resize(n);
-    f_minus.resize(n);
+    Eigen::VectorXd f(n);
     Eigen::MatrixXd J(n, n);
-    ok = n == x.size() && sys->residual(x, f) && system_jacobian(*sys, x, f, h_rel, J);
+    ok = n == x.size() && P->differentiable(x) && sys->residual(x, f) && system_jacobian(*sys, x, f, h_rel, J);
     if (ok) lu.compute(J);
   }
   Eigen::MatrixXd D(6, parameters);
+  Eigen::VectorXd xj, f_plus, f_minus, scale;
   for (int j = 0; ok && j < parameters; ++j) {
     const double h = increment(input, j, h_rel, force_scale, moment_scale);
     const ModelInput plus = perturbed(input, j, h), minus = perturbed(input, j, -h);
+    xj = x;  // the answer in the unknowns of the perturbed systems
     Eigen::VectorXd x_plus = x, x_minus = x;
     if (sys) {
-      // dx/dv_j = -F_x^{-1} dF/dv_j, the latter by central differences at the converged x.
       ModelProblem* Pp = bound(rebind, plus, P);
-      ok = Pp && Pp->system()->residual(x, f_plus);
+      const bool lifted = Pp && Pp->system()->size() != n;
+      ok = Pp && (!lifted || lifted_linearisation(rebind, plus, minus, P, solution, h_rel, xj, lu_lifted));
+      // dx/dv_j = -F_x^{-1} dF/dv_j, the latter by central differences at the answer.
+      const int nj = static_cast<int>(xj.size());
+      f_plus.resize(nj);
+      f_minus.resize(nj);
+      scale.resize(nj);
+      ok = ok && (Pp = bound(rebind, plus, P)) && Pp->system()->size() == nj && Pp->system()->residual(xj, f_plus);
       ModelProblem* Pm = ok ? bound(rebind, minus, P) : nullptr;
-      ok = ok && Pm && Pm->system()->residual(x, f_minus);
+      ok = ok && Pm && Pm->system()->size() == nj && Pm->system()->residual(xj, f_minus);
       if (!ok) break;
-      const Eigen::VectorXd dx = -lu.solve((f_plus - f_minus) / (2.0 * h));
-      x_plus += h * dx;
-      x_minus -= h * dx;
+      if (lifted) {  // the lifted answer must solve the larger system at v
+        Pm->system()->residual_scale(scale);
+        ok = (0.5 * (f_plus + f_minus)).cwiseProduct(scale).cwiseAbs().maxCoeff() <= 10.0 * tolerance;
+        if (!ok) break;
+      }
+      const Eigen::VectorXd dx = -(lifted ? lu_lifted : lu).solve((f_plus - f_minus) / (2.0 * h));
+      x_plus = xj + h * dx;
+      x_minus = xj - h * dx;
     }
     // The tip along the tangent (dx/dv_j, 1) of the solution manifold, both sides.
     Frame tip_plus, tip_minus;

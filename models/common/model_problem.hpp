@@ -97,6 +97,12 @@ class ModelProblem {
     tip = f.p;
     return true;
   }
+  /// False if the unknowns x are singular coordinates of the shape, so that the answer's
+  /// derivative cannot be taken through them (differential_kinematics.hpp leaves it out).
+  virtual bool differentiable(const Eigen::VectorXd& x) const {
+    (void)x;
+    return true;
+  }
   /// The integrator's name for the summary ("rk4", "cvode", "none").
   virtual std::string integrator_name() const { return "none"; }
 };

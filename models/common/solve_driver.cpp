@@ -124,10 +124,10 @@ double solve_on_loading_path(const StaticModel& model, const ModelInput& input, 
 
 // Solution::tip_jacobian and tip_compliance of a converged answer at unknowns x.
 void add_differential_kinematics(const StaticModel& model, const detail::Rebind& rebind, const ModelInput& input,
-                                 const Eigen::VectorXd& x, Solution& sol) {
+                                 double tolerance, const Eigen::VectorXd& x, Solution& sol) {
   physics::LoadCase load;
   load.bind(model.robot(), model.routing(), input);
-  detail::differential_kinematics(rebind, input, load.force_scale(), load.moment_scale(), x, sol);
+  detail::differential_kinematics(rebind, input, load.force_scale(), load.moment_scale(), tolerance, x, sol);
 }
 
 }  // namespace
@@ -180,7 +180,7 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
   if (sol.converged() && options.differential_kinematics)
     add_differential_kinematics(
         model, [&](const ModelInput& in) -> detail::ModelProblem& { return model.bind(workspace, in, options); },
-        input, x, sol);
+        input, options.function_tolerance, x, sol);
   if (sol.tensions.empty() && input.actuation.kind == Actuation::Kind::Tensions) sol.tensions = input.actuation.values;
   if (!sum.converged() && reached < 1.0) name_infeasibility(P, model.routing(), sol.unknowns, reached, sol);
   physics::check_geometry(model.robot(), model.routing(), sol);
