@@ -78,6 +78,8 @@ ModelProblem* bound(const Rebind& rebind, const ModelInput& input, const ModelPr
 // their system): the answer in the larger system bound to `plus` and `minus` (their warm guess
 // from the Solution: exact, those subsegments are straight) and that system's F_x at v as the
 // mean of F_x at v + h and v - h (O(h^2)).
+// `lu` is reused if it already holds the F_x of a system of this size (the lumped models' only
+// larger system: every subsegment loaded).
 bool lifted_linearisation(const Rebind& rebind, const ModelInput& plus, const ModelInput& minus,
                           const ModelProblem* P, const Solution& solution, double h_rel, Eigen::VectorXd& x,
                           Eigen::PartialPivLU<Eigen::MatrixXd>& lu) {
@@ -85,6 +87,7 @@ bool lifted_linearisation(const Rebind& rebind, const ModelInput& plus, const Mo
   if (!Pp || !Pp->warm_guess(solution, x) || !Pp->differentiable(x)) return false;
   const int n = Pp->system()->size();
   if (x.size() != n) return false;
+  if (lu.rows() == n) return true;
   Eigen::VectorXd f(n);
   Eigen::MatrixXd J_plus(n, n), J_minus(n, n);
   if (!Pp->system()->residual(x, f) || !system_jacobian(*Pp->system(), x, f, h_rel, J_plus)) return false;
