@@ -74,28 +74,34 @@ ModelProblem* bound(const Rebind& rebind, const ModelInput& input, const ModelPr
   return &P;
 }
 
+// Values at v + a h and v + b h extrapolated linearly to v: the mean for central differences
+// (a = 1, b = -1), 2 g(h) - g(2h) for one-sided ones (a = 1, b = 2).
+template <class T>
+T at_v(const T& at_a, const T& at_b, double a, double b) {
+  return (b * at_a - a * at_b) / (b - a);
+}
+
 // For a perturbation that adds unknowns (CCsub and PRB leave unloaded distal subsegments out of
-// their system): the answer in the larger system bound to `plus` and `minus` (their warm guess
-// from the Solution: exact, those subsegments are straight) and that system's F_x at v as the
-// mean of F_x at v + h and v - h (O(h^2)).
+// their system): the answer in the larger system bound to `va` and `vb` (their warm guess from the
+// Solution: exact, those subsegments are straight) and that system's F_x at v, extrapolated.
 // `lu` is reused if it already holds the F_x of a system of this size (the lumped models' only
 // larger system: every subsegment loaded).
-bool lifted_linearisation(const Rebind& rebind, const ModelInput& plus, const ModelInput& minus,
+bool lifted_linearisation(const Rebind& rebind, const ModelInput& va, const ModelInput& vb, double a, double b,
                           const ModelProblem* P, const Solution& solution, double h_rel, Eigen::VectorXd& x,
                           Eigen::PartialPivLU<Eigen::MatrixXd>& lu) {
-  ModelProblem* Pp = bound(rebind, plus, P);
-  if (!Pp || !Pp->warm_guess(solution, x) || !Pp->differentiable(x)) return false;
-  const int n = Pp->system()->size();
+  ModelProblem* Pa = bound(rebind, va, P);
+  if (!Pa || !Pa->warm_guess(solution, x) || !Pa->differentiable(x)) return false;
+  const int n = Pa->system()->size();
   if (x.size() != n) return false;
   if (lu.rows() == n) return true;
   Eigen::VectorXd f(n);
-  Eigen::MatrixXd J_plus(n, n), J_minus(n, n);
-  if (!Pp->system()->residual(x, f) || !system_jacobian(*Pp->system(), x, f, h_rel, J_plus)) return false;
-  ModelProblem* Pm = bound(rebind, minus, P);
-  if (!Pm || Pm->system()->size() != n || !Pm->system()->residual(x, f) ||
-      !system_jacobian(*Pm->system(), x, f, h_rel, J_minus))
+  Eigen::MatrixXd J_a(n, n), J_b(n, n);
+  if (!Pa->system()->residual(x, f) || !system_jacobian(*Pa->system(), x, f, h_rel, J_a)) return false;
+  ModelProblem* Pb = bound(rebind, vb, P);
+  if (!Pb || Pb->system()->size() != n || !Pb->system()->residual(x, f) ||
+      !system_jacobian(*Pb->system(), x, f, h_rel, J_b))
     return false;
-  lu.compute(0.5 * (J_plus + J_minus));
+  lu.compute(at_v<Eigen::MatrixXd>(J_a, J_b, a, b));
   return true;
 }
 
@@ -110,51 +116,67 @@ void differential_kinematics(const Rebind& rebind, const ModelInput& input, doub
   const double eps = std::numeric_limits<double>::epsilon();
   const double h_rel = std::cbrt(std::max(eps, sys ? sys->relative_noise() : eps));
   const int n = sys ? sys->size() : 0;
+  if (solution.disk_frames.empty()) return;
+  const Frame tip = solution.tip();
 
   bool ok = true;
   Eigen::PartialPivLU<Eigen::MatrixXd> lu, lu_lifted;
+  Eigen::VectorXd f(n);  // F(x; v)
   if (sys) {
-    Eigen::VectorXd f(n);
     Eigen::MatrixXd J(n, n);
     ok = n == x.size() && P->differentiable(x) && sys->residual(x, f) && system_jacobian(*sys, x, f, h_rel, J);
     if (ok) lu.compute(J);
   }
   Eigen::MatrixXd D(6, parameters);
-  Eigen::VectorXd xj, f_plus, f_minus, scale;
+  Eigen::VectorXd xj, f_a, f_b, scale;
   for (int j = 0; ok && j < parameters; ++j) {
     const double h = increment(input, j, h_rel, force_scale, moment_scale);
-    const ModelInput plus = perturbed(input, j, h), minus = perturbed(input, j, -h);
+    // Central differences (v + h, v - h), but one-sided (v + h, v + 2h) at a zero tension: a
+    // tendon cannot push, and the models drop tendons without tension.
+    const bool one_sided = j < m && input.actuation.kind == Actuation::Kind::Tensions &&
+                           input.actuation.values[static_cast<std::size_t>(j)] == 0.0;
+    const double a = 1.0, b = one_sided ? 2.0 : -1.0;
+    const ModelInput va = perturbed(input, j, a * h), vb = perturbed(input, j, b * h);
     xj = x;  // the answer in the unknowns of the perturbed systems
-    Eigen::VectorXd x_plus = x, x_minus = x;
+    Eigen::VectorXd x_a = x, x_b = x;
     if (sys) {
-      ModelProblem* Pp = bound(rebind, plus, P);
-      const bool lifted = Pp && Pp->system()->size() != n;
-      ok = Pp && (!lifted || lifted_linearisation(rebind, plus, minus, P, solution, h_rel, xj, lu_lifted));
-      // dx/dv_j = -F_x^{-1} dF/dv_j, the latter by central differences at the answer.
+      ModelProblem* Pa = bound(rebind, va, P);
+      const bool lifted = Pa && Pa->system()->size() != n;
+      ok = Pa && (!lifted || lifted_linearisation(rebind, va, vb, a, b, P, solution, h_rel, xj, lu_lifted));
+      // dx/dv_j = -F_x^{-1} dF/dv_j at the answer.
       const int nj = static_cast<int>(xj.size());
-      f_plus.resize(nj);
-      f_minus.resize(nj);
+      f_a.resize(nj);
+      f_b.resize(nj);
       scale.resize(nj);
-      ok = ok && (Pp = bound(rebind, plus, P)) && Pp->system()->size() == nj && Pp->system()->residual(xj, f_plus);
-      ModelProblem* Pm = ok ? bound(rebind, minus, P) : nullptr;
-      ok = ok && Pm && Pm->system()->size() == nj && Pm->system()->residual(xj, f_minus);
+      ok = ok && (Pa = bound(rebind, va, P)) && Pa->system()->size() == nj && Pa->system()->residual(xj, f_a);
+      ModelProblem* Pb = ok ? bound(rebind, vb, P) : nullptr;
+      ok = ok && Pb && Pb->system()->size() == nj && Pb->system()->residual(xj, f_b);
       if (!ok) break;
-      if (lifted) {  // the lifted answer must solve the larger system at v
-        Pm->system()->residual_scale(scale);
-        ok = (0.5 * (f_plus + f_minus)).cwiseProduct(scale).cwiseAbs().maxCoeff() <= 10.0 * tolerance;
+      // F(x; v) of the system the perturbations are bound to (lifted: extrapolated, exact as the
+      // lumped residuals are linear in the loads, and it must solve the larger system at v).
+      const Eigen::VectorXd f0 = lifted ? at_v<Eigen::VectorXd>(f_a, f_b, a, b) : f;
+      if (lifted) {
+        Pb->system()->residual_scale(scale);
+        ok = f0.cwiseProduct(scale).cwiseAbs().maxCoeff() <= 10.0 * tolerance;
         if (!ok) break;
       }
-      const Eigen::VectorXd dx = -(lifted ? lu_lifted : lu).solve((f_plus - f_minus) / (2.0 * h));
-      x_plus = xj + h * dx;
-      x_minus = xj - h * dx;
+      const Eigen::VectorXd F_v =
+          one_sided ? Eigen::VectorXd((4.0 * f_a - f_b - 3.0 * f0) / (2.0 * h)) : Eigen::VectorXd((f_a - f_b) / (2.0 * h));
+      const Eigen::VectorXd dx = -(lifted ? lu_lifted : lu).solve(F_v);
+      x_a = xj + a * h * dx;
+      x_b = xj + b * h * dx;
     }
-    // The tip along the tangent (dx/dv_j, 1) of the solution manifold, both sides.
-    Frame tip_plus, tip_minus;
-    ModelProblem* Pp = bound(rebind, plus, P);
-    ok = Pp && Pp->tip_pose(x_plus, tip_plus);
-    ModelProblem* Pm = ok ? bound(rebind, minus, P) : nullptr;
-    ok = ok && Pm && Pm->tip_pose(x_minus, tip_minus);
-    if (ok) D.col(j) = pose_difference(tip_plus, tip_minus) / (2.0 * h);
+    // The tip along the tangent (dx/dv_j, 1) of the solution manifold.
+    Frame tip_a, tip_b;
+    ModelProblem* Pa = bound(rebind, va, P);
+    ok = Pa && Pa->tip_pose(x_a, tip_a);
+    ModelProblem* Pb = ok ? bound(rebind, vb, P) : nullptr;
+    ok = ok && Pb && Pb->tip_pose(x_b, tip_b);
+    if (!ok) break;
+    if (one_sided)  // (4 g(h) - g(2h) - 3 g(0)) / 2h
+      D.col(j) = (4.0 * pose_difference(tip_a, tip) - pose_difference(tip_b, tip)) / (2.0 * h);
+    else
+      D.col(j) = pose_difference(tip_a, tip_b) / (2.0 * h);
   }
   bound(rebind, input, nullptr);
   if (!ok || !D.allFinite()) return;
