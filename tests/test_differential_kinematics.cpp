@@ -61,6 +61,14 @@ Mat6X full_solve_differences(const StaticModel& model, const ModelInput& input, 
   return D;
 }
 
+// A solve of `s` by `model` with differential kinematics.
+Solution solve_with_dk(const StaticModel& model, const Scene& s) {
+  auto ws = model.make_workspace();
+  SolverOptions with_dk = s.solver;
+  with_dk.differential_kinematics = true;
+  return solve(model, *ws, s.input(), with_dk);
+}
+
 // Largest error of A against reference B, position rows and rotation rows each relative to
 // the largest entry of B's block (they have different units).
 double relative_error(const Mat6X& A, const Mat6X& B) {
@@ -158,10 +166,7 @@ TEST(DifferentialKinematicsLumped, UnloadedDistalSegmentIsLinearisedInTheLargerS
     Scene s = test_scene(kind, false);
     s.actuation.values = {2.0, 0.5, 0.0, 0.0};
     const auto model = make_model(kind, s);
-    auto ws = model->make_workspace();
-    SolverOptions with_dk = s.solver;
-    with_dk.differential_kinematics = true;
-    const Solution base = solve(*model, *ws, s.input(), with_dk);
+    const Solution base = solve_with_dk(*model, s);
     ASSERT_TRUE(base.converged()) << base.summary.message;
     if (kind == ModelKind::PRB) {
       EXPECT_EQ(base.tip_jacobian.size(), 0);
@@ -183,10 +188,7 @@ TEST(DifferentialKinematicsVc, ZeroTensionIsOneSided) {
   Scene s = test_scene(ModelKind::VC, true);
   s.actuation.values = {2.0, 0.5, 0.0, 0.0};
   const auto model = make_model(ModelKind::VC, s);
-  auto ws = model->make_workspace();
-  SolverOptions with_dk = s.solver;
-  with_dk.differential_kinematics = true;
-  const Solution base = solve(*model, *ws, s.input(), with_dk);
+  const Solution base = solve_with_dk(*model, s);
   ASSERT_TRUE(base.converged()) << base.summary.message;
   ASSERT_EQ(base.tip_jacobian.cols(), 4);
   const Mat6X J_fd = full_solve_differences(*model, s.input(), s.solver, base, 0, 4, std::vector<double>(4, 1e-4));
@@ -230,10 +232,7 @@ TEST(DifferentialKinematicsCc, DisplacementInputMatchesFiniteDifferences) {
   s.actuation.kind = Actuation::Kind::Displacements;
   s.actuation.values = {0.002, -0.002, 0.001, -0.0005};
   const auto model = make_model(ModelKind::CC, s);
-  auto ws = model->make_workspace();
-  SolverOptions with_dk = s.solver;
-  with_dk.differential_kinematics = true;
-  const Solution base = solve(*model, *ws, s.input(), with_dk);
+  const Solution base = solve_with_dk(*model, s);
   ASSERT_TRUE(base.converged()) << base.summary.message;
   ASSERT_EQ(base.tip_jacobian.cols(), 4);
   const Mat6X fd = full_solve_differences(*model, s.input(), s.solver, base, 0, 4, std::vector<double>(4, 1e-6));
