@@ -45,7 +45,7 @@ std::string usage() {
     models += "  " + name + m.description + "\n";
   }
   return "usage: tdcr solve SCENE.json [--model NAME] [--accuracy FRACTION] [--json] [--repeat N]\n"
-         "                             [--integrator rk4|cvode] [--continuation]\n"
+         "                             [--integrator rk4|cvode] [--continuation] [--jacobian]\n"
          "       tdcr --help | --version\n"
          "\n"
          "Solve the static shape of a tendon-driven continuum robot described by a scene file\n"
@@ -62,6 +62,8 @@ std::string usage() {
          "                        median and minimum solve time\n"
          "  --integrator NAME     rk4 or cvode; overrides the scene's solver.integrator\n"
          "  --continuation        if a direct solve fails, ramp actuation and loads (continuation)\n"
+         "  --jacobian            also compute the tip Jacobian (d tip pose / d actuation) and the\n"
+         "                        tip compliance (d tip pose / d tip wrench); --json prints them\n"
          "\n"
          "models:\n" + models +
          "  auto    the cheapest model expected to meet --accuracy\n"
@@ -81,6 +83,7 @@ struct SolveArgs {
   std::optional<std::string> integrator;
   bool json = false;
   bool continuation = false;
+  bool jacobian = false;
   int repeat = 1;
   double accuracy = 0.01;
 };
@@ -137,6 +140,9 @@ SolveArgs parse_solve_args(const std::vector<std::string>& args) {
     } else if (name == "--continuation") {
       no_value();
       out.continuation = true;
+    } else if (name == "--jacobian") {
+      no_value();
+      out.jacobian = true;
     } else if (name.size() > 1 && name[0] == '-') {
       throw UsageError("unknown option '" + args[i] + "'");
     } else if (have_scene) {
@@ -167,6 +173,7 @@ void apply_overrides(const SolveArgs& args, tdcr::Scene& scene) {
       throw tdcr::InputError("--integrator", *args.integrator, "must be rk4 or cvode");
   }
   if (args.continuation) scene.solver.continuation = true;
+  if (args.jacobian) scene.solver.differential_kinematics = true;
 }
 
 /// "auto" in any case is "auto"; other names are checked against the registry by validate_scene.

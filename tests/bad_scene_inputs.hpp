@@ -114,6 +114,7 @@ inline std::vector<BadInput> bad_inputs() {
       {"GravityNull", with("/loads", {{"gravity", {0, nullptr, -9.81}}}), "loads.gravity[1]", "null"},
       {"ShearExtensionString", with("/effects", {{"shear_extension", "yes"}}), "effects.shear_extension",
        "\"yes\""},
+      {"KinkForcesNumber", with("/effects", {{"kink_forces", 0}}), "effects.kink_forces", "0"},
       {"DiskNormalForceUnknown", with("/effects", {{"disk_normal_force", "ignored"}}),
        "effects.disk_normal_force", "\"ignored\""},
       {"TendonPathUnknown", with("/effects", {{"tendon_path", "free"}}), "effects.tendon_path", "\"free\""},

@@ -3,6 +3,7 @@
 // the parser's field table; the solution JSON contract.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -110,6 +111,7 @@ TEST(SceneIo, MinimalSceneTakesDefaults) {
   EXPECT_EQ(s.loads.tip_force, tdcr::Vec3::Zero());
   EXPECT_EQ(s.effects.shear_extension, d.effects.shear_extension);
   EXPECT_EQ(s.effects.disk_normal_force, d.effects.disk_normal_force);
+  EXPECT_TRUE(s.effects.kink_forces);
   EXPECT_EQ(s.solver.max_iterations, d.solver.max_iterations);
   EXPECT_EQ(s.solver.rk4_steps, d.solver.rk4_steps);
   EXPECT_EQ(s.robot.segments[0].disk_mass, 0.0);
@@ -131,6 +133,7 @@ TEST(SceneIo, ParsesFullKeySet) {
     "actuation": {"displacements": [0.001, -0.0005, -0.0005], "displacement_convention": "per_segment"},
     "loads": {"tip_force": [0.1, -0.2, 0.3], "tip_moment": [0.01, 0.02, -0.03], "gravity": [0, 0, -9.81]},
     "effects": {"shear_extension": false, "disk_normal_force": "kept", "tendon_path": "partially_constrained",
+                "kink_forces": false,
                 "prb": {"gamma": [0.1, 0.3, 0.4, 0.2], "k_theta": [3, 2.5, 2.75]}},
     "model": "ccsub",
     "solver": {"integrator": "cvode", "rk4_steps": 16, "cvode_rtol": 1e-6, "cvode_atol": 1e-9,
@@ -163,6 +166,7 @@ TEST(SceneIo, ParsesFullKeySet) {
   EXPECT_FALSE(s.effects.shear_extension);
   EXPECT_EQ(s.effects.disk_normal_force, tdcr::DiskNormalForce::Kept);
   EXPECT_EQ(s.effects.tendon_path, tdcr::TendonPath::PartiallyConstrained);
+  EXPECT_FALSE(s.effects.kink_forces);
   EXPECT_EQ(s.effects.prb.gamma[3], 0.2);
   EXPECT_EQ(s.effects.prb.k_theta[2], 2.75);
   EXPECT_EQ(s.model, "ccsub");
@@ -203,6 +207,7 @@ TEST(SceneIo, RoundTripsPaperScene) {
   s.robot.segments[1].disk_mass = 1e-3 / 3.0;  // not a short decimal: checks exact round trip
   s.effects.shear_extension = false;
   s.effects.disk_normal_force = tdcr::DiskNormalForce::Kept;
+  s.effects.kink_forces = false;
   s.effects.prb.k_theta[1] = 2.5;
   s.solver.integrator = tdcr::IntegratorKind::Cvode;
   s.solver.linear_solver = tdcr::LinearSolverKind::Dense;
@@ -212,6 +217,7 @@ TEST(SceneIo, RoundTripsPaperScene) {
   expect_same_scene(s, back);
   EXPECT_EQ(back.robot.segments[1].disk_mass, 1e-3 / 3.0);
   EXPECT_EQ(back.effects.prb.gamma[0], s.effects.prb.gamma[0]);
+  EXPECT_FALSE(back.effects.kink_forces);
   EXPECT_EQ(back.solver.max_iterations, 77);
 }
 
@@ -274,6 +280,53 @@ TEST(SceneIo, ModelNameIsTheModelsLayersToCheck) {
   EXPECT_EQ(s.model, "cosserat");
   EXPECT_THROW(tdcr::validate_scene(s), InputError);
   EXPECT_NO_THROW(tdcr::validate_scene(tdcr::parse_scene(with("/model", "auto"))));
+}
+
+// `effects.kink_forces: false` in a scene file gives the paper code's VC formulation: the
+// reference rows with a tip force (paper code, tests/data/reference_vc.csv; the rows where kink
+// forces act, n >= 5) are reproduced through the scene path (text -> parse -> tdcr::solve) to
+// 1e-6 m (measured: 2.8e-8 m worst of 45 rows), while the default (kink forces on) moves some of
+// these tips by more than 1e-4 m (measured: 1.6e-4 m).
+TEST(SceneIo, KinkForcesFalseReproducesPaperCodeVc) {
+  std::ifstream in(std::string(TDCR_TEST_DATA_DIR) + "/reference_vc.csv");
+  ASSERT_TRUE(in.good());
+  std::string line;
+  std::getline(in, line);  // provenance comment
+  std::getline(in, line);  // header
+  int rows = 0;
+  double worst_paper = 0, worst_default = 0;
+  while (std::getline(in, line)) {
+    std::stringstream ss(line);
+    std::string source, cell;
+    std::getline(ss, source, ',');
+    std::vector<double> v;
+    while (std::getline(ss, cell, ',')) v.push_back(std::stod(cell));
+    ASSERT_EQ(v.size(), 22u);
+    const tdcr::Vec3 force(v[6], v[7], v[8]);
+    const int n = static_cast<int>(v[1]);
+    if (force.norm() == 0 || n < 5) continue;
+    tdcr::Scene s = tdcr::paper::scene(n, 1, "vc");
+    s.actuation.values = {v[2], v[3], v[4], v[5]};
+    s.loads.tip_force = force;
+    s.solver.rk4_steps = std::max(4, 160 / n);
+    nlohmann::json j = nlohmann::json::parse(tdcr::scene_to_json(s));
+    j["effects"]["kink_forces"] = false;
+    const tdcr::Scene paper = tdcr::parse_scene(j.dump());
+    ASSERT_FALSE(paper.effects.kink_forces);
+    const tdcr::Vec3 p_ref(v[10], v[11], v[12]);
+    const tdcr::Solution a = tdcr::solve(paper);
+    const tdcr::Solution b = tdcr::solve(s);
+    ASSERT_TRUE(a.converged() && b.converged()) << line;
+    const double ea = (a.tip().p - p_ref).norm();
+    EXPECT_LT(ea, 1e-6) << source << " case " << v[0] << " n " << n;
+    worst_paper = std::max(worst_paper, ea);
+    worst_default = std::max(worst_default, (b.tip().p - p_ref).norm());
+    ++rows;
+  }
+  EXPECT_GE(rows, 20);
+  EXPECT_GT(worst_default, 1e-4);
+  std::printf("rows %d: worst tip error %.3g m (kink_forces false), %.3g m (default)\n", rows, worst_paper,
+              worst_default);
 }
 
 /// docs/scene-file.md with every generated block (between `<!-- scene-keys: OBJECT -->` and

@@ -182,6 +182,13 @@ const Schema<Effects>& effects_schema() {
                     "removed at disks a tendon passes through (paper Eq. 58); `\"kept\"`: the full force of "
                     "Eq. 32-33",
                     "CCsub, PRB, VCref (VC and CC have no discrete disk forces)"}),
+      boolean_field("kink_forces", &E::kink_forces,
+                    {"", nullptr,
+                     "`true`: a tensioned tendon passing a disk where the strains jump (segment ends "
+                     "under a tip wrench, disk weights) pulls with its kink force T (t+ - t-); `false`: "
+                     "the paper code's formulation, which omits it (global balance then fails where "
+                     "torsion or shear jumps)",
+                     "VC"}),
       choice_field("tendon_path", &E::tendon_path, kTendonPath,
                    {"", nullptr,
                     "`\"fully_constrained\"`: tendons parallel to the backbone (Eq. 14-18); "
@@ -229,6 +236,12 @@ const Schema<SolverOptions>& solver_schema() {
                      "the conjugate-point test, CCsub and PRB by the reduced stiffness; VCref and CC: "
                      "undetermined",
                      "VC, CCsub, PRB"}),
+      boolean_field("differential_kinematics", &S::differential_kinematics,
+                    {"", nullptr,
+                     "compute the tip Jacobian (6 x m, with respect to the actuation values) and the tip "
+                     "compliance (6 x 6, with respect to the tip wrench) of every converged answer "
+                     "(`tip_jacobian`, `tip_compliance` in the JSON output)",
+                     "every model (CC: Jacobian only)"}),
   });
   return s;
 }

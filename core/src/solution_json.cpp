@@ -52,6 +52,17 @@ ojson backbone_json(const std::vector<BackboneSample>& samples) {
   return a;
 }
 
+/// A matrix as a list of rows.
+ojson matrix_json(const Eigen::MatrixXd& M) {
+  ojson rows = ojson::array();
+  for (Eigen::Index i = 0; i < M.rows(); ++i) {
+    ojson row = ojson::array();
+    for (Eigen::Index k = 0; k < M.cols(); ++k) row.push_back(number(M(i, k)));
+    rows.push_back(row);
+  }
+  return rows;
+}
+
 /// 16 lower-case hex digits: JSON numbers cannot carry 64 bits exactly.
 std::string hex64(std::uint64_t v) {
   char buf[17];
@@ -102,6 +113,8 @@ std::string solution_to_json(const Solution& solution, const SolutionJsonOptions
   for (const GeometryWarning& w : solution.geometry_warnings)
     warnings.push_back(ojson{{"what", w.what}, {"tendon", w.tendon}, {"disk", w.disk}, {"value", number(w.value)}});
   j["geometry_warnings"] = warnings;
+  if (solution.tip_jacobian.size() > 0) j["tip_jacobian"] = matrix_json(solution.tip_jacobian);
+  if (solution.tip_compliance.size() > 0) j["tip_compliance"] = matrix_json(solution.tip_compliance);
   j["summary"] = summary_json(s);
   if (!solution.model_selection.empty()) j["model_selection"] = solution.model_selection;
   return detail::pretty(j);

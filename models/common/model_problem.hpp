@@ -79,17 +79,31 @@ class ModelProblem {
     (void)why;
     return false;
   }
-  /// Path following: the tip position (m, base frame) at unknowns x at the system's current
-  /// parameter, for the tip jump of a snap. Default: one final_residual() and extract() into a
-  /// scratch Solution (its last disk frame), i.e. a full output pass; called only at events.
-  virtual bool tip_position(const Eigen::VectorXd& x, Vec3& tip) {
+  /// The tip frame (base frame) at unknowns x at the system's current parameter and the bound
+  /// input: for the tip jump of a snap (path following) and differential kinematics. Default:
+  /// one final_residual() and extract() into a scratch Solution (its last disk frame), i.e. a
+  /// full output pass; never called on a hot path.
+  virtual bool tip_pose(const Eigen::VectorXd& x, Frame& tip) {
     Eigen::VectorXd f(x.size());
     Solution scratch;
-    const bool evaluated = final_residual(x, f);
+    const bool evaluated = system() ? final_residual(x, f) : true;
     extract(x, evaluated, scratch);
     if (!evaluated || scratch.disk_frames.empty()) return false;
-    tip = scratch.disk_frames.back().p;
-    return tip.allFinite();
+    tip = scratch.disk_frames.back();
+    return tip.p.allFinite() && tip.R.allFinite();
+  }
+  /// The tip position of tip_pose().
+  bool tip_position(const Eigen::VectorXd& x, Vec3& tip) {
+    Frame f;
+    if (!tip_pose(x, f)) return false;
+    tip = f.p;
+    return true;
+  }
+  /// False if the unknowns x are singular coordinates of the shape, so that the answer's
+  /// derivative cannot be taken through them (differential_kinematics.hpp leaves it out).
+  virtual bool differentiable(const Eigen::VectorXd& x) const {
+    (void)x;
+    return true;
   }
   /// An upper bound of the backbone curvature (1/m) of the last extract(), if the model knows
   /// one without examining the frames (CC: its arcs); negative: unknown. Lets the geometry check

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 
+#include "common/differential_kinematics.hpp"
 #include "common/load_continuation.hpp"
 #include "common/model_problem.hpp"
 #include "common/newton_summary.hpp"
@@ -168,6 +169,14 @@ double solve_on_loading_path(const StaticModel& model, const ModelInput& input, 
   return detail::follow_loading_path(P, sys, x, nopt, options, sum, sol.path_events, cold.first_step, why).parameter;
 }
 
+// Solution::tip_jacobian and tip_compliance of a converged answer at unknowns x.
+void add_differential_kinematics(const StaticModel& model, const detail::Rebind& rebind, const ModelInput& input,
+                                 double tolerance, const Eigen::VectorXd& x, Solution& sol) {
+  physics::LoadCase load;
+  load.bind(model.robot(), model.routing(), input);
+  detail::differential_kinematics(rebind, input, load.force_scale(), load.moment_scale(), tolerance, x, sol);
+}
+
 }  // namespace
 
 Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelInput& input,
@@ -190,6 +199,7 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
 
   bvp::ParameterizedSystem* sys = P.system();
   double reached = 1.0;  // load factor of the answer (< 1: loading from rest stopped there)
+  Eigen::VectorXd x;     // the system's unknowns (none for a closed form)
   if (!sys) {
     // Closed form: the problem computes the answer and its summary.
     sum.linear_solver = "none";
@@ -198,7 +208,6 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
     sum.unknowns = sys->size();
     bvp::NewtonOptions nopt = bvp::NewtonOptions::from(options);
     P.adjust(nopt);
-    Eigen::VectorXd x;
     sys->set_parameter(1.0);
     const bool warm = warm_start && P.warm_guess(*warm_start, x);
     if (warm) P.adjust_warm(nopt);
@@ -219,6 +228,10 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
     P.extract(x, evaluated, sol);
     if (sum.converged() && options.stability) sol.stability = P.stability(x);
   }
+  if (sol.converged() && options.differential_kinematics)
+    add_differential_kinematics(
+        model, [&](const ModelInput& in) -> detail::ModelProblem& { return model.bind(workspace, in, options); },
+        input, options.function_tolerance, x, sol);
   if (sol.tensions.empty() && input.actuation.kind == Actuation::Kind::Tensions) sol.tensions = input.actuation.values;
   sol.loads = input.loads;
   if (!sum.converged() && reached < 1.0) name_infeasibility(P, model.routing(), sol.unknowns, reached, sol);

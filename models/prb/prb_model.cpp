@@ -102,6 +102,13 @@ class PrbProblem final : public detail::LumpedProblem {
     s[3] = kPhiScale;
   }
   void on_warm(const Eigen::VectorXd& x) override { set_phi_ref(x); }
+  // A straight subsegment's bending plane phi is a polar angle at zero bending: no derivative.
+  bool differentiable(const Eigen::VectorXd& y) const override {
+    const int stride = banded() ? kU + 12 : kU;  // banded: x_j then the 12 wrench unknowns
+    for (int j = 0; j < active(); ++j)
+      if (y.segment(stride * j, 3).cwiseAbs().sum() < 1e-9) return false;
+    return true;
+  }
 
   void constitutive(int j, const double* xj, const detail::SubsegmentPose& g, const Vec3& F, const Vec3& Mj,
                     const Vec3& Wj, double* r) const override {

@@ -69,6 +69,9 @@ struct Effects {
                                 ///< tension input: axial strain); else inextensible,
                                 ///< unshearable Kirchhoff rod. CCsub and PRB are inextensible.
   DiskNormalForce disk_normal_force = DiskNormalForce::Removed;  ///< Eq. 58 (VCref, CCsub, PRB).
+  /// VC: the point force T_k R (t_k+ - t_k-) of a tensioned tendon passing a disk where the
+  /// strains jump (VcOptions::kink_forces). False: the paper code's formulation, which omits it.
+  bool kink_forces = true;
   TendonPath tendon_path = TendonPath::FullyConstrained;         ///< CC only.
   PrbParameters prb;                                             ///< PRB only.
 

@@ -129,6 +129,14 @@ struct Solution {
   Stability stability;                    ///< Stability of the answer (if computed).
   std::vector<PathEvent> path_events;     ///< Folds, bifurcations, snaps met on the way.
   std::vector<GeometryWarning> geometry_warnings;  ///< Shapes a real robot cannot take.
+  /// d(tip pose) / d(Actuation::values), 6 x m (SolverOptions::differential_kinematics; empty
+  /// otherwise or if it could not be computed). Rows 0-2: tip position (m per unit of the value,
+  /// base frame); rows 3-5: rotation vector w of the tip rotation increment in the base frame,
+  /// R(v + dv) = exp([w]) R(v) (rad per unit). Columns in global tendon order.
+  Eigen::MatrixXd tip_jacobian;
+  /// d(tip pose) / d(tip wrench), 6 x 6: columns tip force x, y, z (N), tip moment x, y, z (N m),
+  /// base frame; rows as tip_jacobian. Empty for CC (no statics of external loads).
+  Eigen::MatrixXd tip_compliance;
 
   /// @brief Shorthand for summary.converged().
   bool converged() const { return summary.converged(); }

@@ -57,6 +57,10 @@ struct SolverOptions {
   /// stiffness (one extra Jacobian); VCref and CC report "undetermined". Off by default until the
   /// check reuses the solve's own Jacobian (today it costs up to one Newton iteration per solve).
   bool stability = false;
+  /// Differential kinematics of every converged answer (Solution::tip_jacobian,
+  /// Solution::tip_compliance) by the implicit function theorem on the converged system: no
+  /// extra full solves (docs/models.md, "Differential kinematics").
+  bool differential_kinematics = false;
 
   /// @brief Throws InputError (field `solver.<name>`) on a tolerance that is not a positive
   /// finite number, or an iteration, RK4 step or continuation step count below 1.

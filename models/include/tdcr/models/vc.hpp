@@ -71,7 +71,7 @@ struct VcOptions {
   /// point loads make the strains (hence the tendon direction t_k) jump. Without it (the paper
   /// code's formulation, which applies termination forces only) the robot's global force and
   /// moment balance fails whenever torsion or shear jumps at a segment end; tendon-only loads
-  /// are unaffected (t_k = e_z on both sides).
+  /// are unaffected (t_k = e_z on both sides). Off if this or Effects::kink_forces is false.
   bool kink_forces = true;
   VcFormulation formulation = VcFormulation::Automatic;  ///< Single or multiple shooting.
   /// Automatic formulation: multiple shooting when the load parameter exceeds this.
