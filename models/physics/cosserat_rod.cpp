@@ -39,7 +39,16 @@ Section Section::from(const Scene& scene) {
 
 TendonLoad TendonLoad::make(const Vec3& r, double T) { return TendonLoad{r, lie::hat(r), T}; }
 
-Strains rod_rhs(const Section& section, const TendonLoad* tendons, int count, const double* y, double* dyds) {
+// flatten: GCC otherwise keeps the small Eigen products (R^T n, R hat(u), crosses) as calls in
+// this large function, a quarter of VCref's time at few disks.
+#if defined(__GNUC__) && !defined(__clang__)
+#define TDCR_FLATTEN __attribute__((flatten))
+#else
+#define TDCR_FLATTEN
+#endif
+
+TDCR_FLATTEN Strains rod_rhs(const Section& section, const TendonLoad* tendons, int count, const double* y,
+                             double* dyds) {
   detail::StrainsT<double> e;
   if (section.shear_extension)
     e = section.gravity ? detail::rod_rhs<true, true>(section, tendons, count, y, dyds)
