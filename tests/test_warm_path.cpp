@@ -1,10 +1,12 @@
 // A warm start follows the input path from the previous answer (docs/models.md, "The answer to
 // a loaded scene"): where the loads change a lot, or the direct warm solve fails, the solver
 // walks the input from the previous Solution's tensions and loads to the new ones.
+#include <cstdio>
 #include <string>
 
 #include <gtest/gtest.h>
 
+#include "tdcr/core/paper_robot.hpp"
 #include "tdcr/core/scene_io.hpp"
 #include "tdcr/models/static_model.hpp"
 
@@ -37,6 +39,7 @@ TEST(WarmPath, LargeLoadChangeFollowsTheInputPathToTheColdAnswer) {
     const Solution warm = solve(*m, *ws, scene.input(), scene.solver, &start);
     ASSERT_TRUE(warm.converged()) << warm.summary.message;
     EXPECT_NE(warm.summary.message.find("input path"), std::string::npos) << warm.summary.message;
+    std::printf("%s: %.0f ms: %s\n", m->name().c_str(), 1e3 * warm.summary.solve_time_s, warm.summary.message.c_str());
     EXPECT_GT(warm.summary.continuation_steps, 1);
     EXPECT_EQ(warm.loads.tip_force, scene.loads.tip_force);
     EXPECT_LT((warm.tip().p - cold.tip().p).norm(), 1e-6) << warm.tip().p.transpose() << " vs "
@@ -99,4 +102,31 @@ TEST(WarmPath, WarmStartsKeepTheBranchOfThePreviousAnswer) {
   EXPECT_TRUE(cold_low.path_events.empty());
   EXPECT_GT((prev.tip().p - cold_low.tip().p).norm(), 0.01)
       << "warm " << prev.tip().p.transpose() << " cold " << cold_low.tip().p.transpose();
+}
+
+// A warm start into an actuation the tendon geometry cannot take (E x 0.1, n = 10, tendon 1
+// pulled to 1.25 times the tension T* = EI / r^2 where its curvature x offset reaches 1): the
+// direct warm solve and the input path both stop, and the loading path from rest names the
+// tendon. Never converged; the message says how far the input path got.
+TEST(WarmPath, WarmStartIntoAnInfeasibleActuationIsNamed) {
+  Scene scene;
+  scene.robot = paper::robot(10, 0.1);
+  const double EI = scene.robot.backbone.effective_stiffness().EI;
+  const double limit = EI / (0.008 * 0.008);
+  scene.actuation.values = {0.5 * limit, 0.0, 0.0, 0.0};
+  Scene past = scene;
+  past.actuation.values[0] = 1.25 * limit;
+  for (ModelKind kind : {ModelKind::VC, ModelKind::CCsub}) {
+    auto m = make_model(kind, scene.robot, scene.effects);
+    SCOPED_TRACE(m->name());
+    auto ws = m->make_workspace();
+    const Solution start = solve(*m, *ws, scene.input(), scene.solver);
+    ASSERT_TRUE(start.converged()) << start.summary.message;
+    const Solution warm = solve(*m, *ws, past.input(), past.solver, &start);
+    EXPECT_FALSE(warm.converged());
+    EXPECT_EQ(warm.summary.termination, TerminationType::Infeasible) << warm.summary.message;
+    EXPECT_NE(warm.summary.message.find("T1"), std::string::npos) << warm.summary.message;
+    EXPECT_NE(warm.summary.message.find("input path"), std::string::npos) << warm.summary.message;
+    std::printf("%s: %.0f ms: %s\n", m->name().c_str(), 1e3 * warm.summary.solve_time_s, warm.summary.message.c_str());
+  }
 }

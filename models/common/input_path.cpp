@@ -1,5 +1,6 @@
 // A warm start's path from the previous answer's input to the new one (load_continuation.hpp).
 #include <cstdio>
+#include <string>
 
 #include "common/load_continuation.hpp"
 #include "common/model_problem.hpp"
@@ -34,6 +35,7 @@ bool follow_input_path(const Rebind& rebind, const ModelInput& from, const Model
   double t = 0.0, step = 0.25;
   int steps = 0;
   bool ok = true;
+  std::string failure;
   while (t < 1.0 && ok) {
     const double next = std::min(1.0, t + step);
     interpolate(from, to, next, mid);
@@ -42,6 +44,7 @@ bool follow_input_path(const Rebind& rebind, const ModelInput& from, const Model
     sys.set_parameter(1.0);
     if (!P.warm_guess(last, y)) {
       ok = false;
+      failure = "no warm guess from the last equilibrium";
       break;
     }
     const bvp::NewtonResult res = P.newton().solve(sys, y, newton_options);
@@ -52,6 +55,7 @@ bool follow_input_path(const Rebind& rebind, const ModelInput& from, const Model
     if (!res.converged()) {
       step *= 0.5;
       ok = step >= kMinStep;
+      failure = res.message;
       continue;
     }
     // The step's equilibrium becomes the next warm start (outputs of the model's own layout).
@@ -61,12 +65,16 @@ bool follow_input_path(const Rebind& rebind, const ModelInput& from, const Model
     P.extract(y, evaluated, last);
     t = next;
     ++steps;
-    step = std::min(2.0 * step, 1.0 - t > 0.0 ? 1.0 - t : 1.0);
+    step *= 2.0;  // the next step is clipped at the end of the path
   }
   ModelProblem& P = rebind(to);
   P.system()->set_parameter(1.0);
-  if (!ok || !P.warm_guess(last, x)) return false;
-  char buf[120];
+  char buf[160];
+  if (!ok || !P.warm_guess(last, x)) {
+    std::snprintf(buf, sizeof buf, "stopped at %.1f %% of the input path after %d steps: ", 100.0 * t, steps);
+    sum.message = buf + failure;
+    return false;
+  }
   std::snprintf(buf, sizeof buf, "warm start: followed the input path from the previous answer in %d steps", steps);
   sum.message = buf;
   return true;

@@ -48,8 +48,8 @@ using Rebind = std::function<ModelProblem&(const ModelInput&)>;
 ///
 /// @param x In: the warm guess at `to` (the previous Solution's unknowns); out: the solution at
 ///        `to` on success (else unchanged).
-/// @return True if every step converged; sum gets the work counters, and on success the
-///         message.
+/// @return True if every step converged; sum gets the work counters and the message (on
+///         failure: the fraction of the path reached and the last Newton message).
 bool follow_input_path(const Rebind& rebind, const ModelInput& from, const ModelInput& to, const Solution& previous,
                        const bvp::NewtonOptions& newton_options, Eigen::VectorXd& x, SolverSummary& sum);
 

@@ -106,26 +106,27 @@ std::string path_reason(const StaticModel& model, const ModelInput& input, const
 
 // --- Warm starts: the path from the previous answer (docs/models.md). ---
 
-// The input of a previous Solution (its tensions and loads) if a path can start there: tension
-// input with the same tendon count.
-bool previous_input(const Solution& previous, const ModelInput& input, ModelInput& from) {
-  if (input.actuation.kind != Actuation::Kind::Tensions ||
-      previous.tensions.size() != input.actuation.values.size())
-    return false;
-  from = input;
-  from.actuation.values = previous.tensions;
-  from.loads = previous.loads;
-  return true;
+// Whether an input path can start at a previous Solution's input (its tensions and loads):
+// tension input with the same tendon count.
+bool has_previous_input(const Solution& previous, const ModelInput& input) {
+  return input.actuation.kind == Actuation::Kind::Tensions && previous.tensions.size() == input.actuation.values.size();
 }
 
-// A warm start whose external loads change this much (L^2 |dF| / EI, the load parameter of the
+// The input of a previous Solution, for the input path (built only when the path is walked).
+ModelInput previous_input(const Solution& previous, const ModelInput& input) {
+  ModelInput from = input;
+  from.actuation.values = previous.tensions;
+  from.loads = previous.loads;
+  return from;
+}
+
+// A warm start whose tip force changes this much (L^2 |dF| / EI, the load parameter of the
 // change) follows the input path instead of a direct solve, which could jump to another branch.
-bool large_change(const StaticModel& model, const ModelInput& from, const ModelInput& to) {
-  const double EI = model.robot().backbone.effective_stiffness().EI;
-  double L = 0.0;
-  for (const Segment& s : model.robot().segments) L += s.length;
-  const double dF = (to.loads.tip_force - from.loads.tip_force).norm();
-  return L * L * dF / EI > kDirectLoadParameter;
+bool large_change(const StaticModel& model, const Loads& from, const Loads& to) {
+  const Robot& robot = model.robot();
+  const double L = robot.total_length();
+  return L * L * (to.tip_force - from.tip_force).norm() / robot.backbone.effective_stiffness().EI >
+         kDirectLoadParameter;
 }
 
 // Cold or warm solve of a system: the direct solve where it lands on the loading branch, else
@@ -143,10 +144,9 @@ double solve_on_loading_path(const StaticModel& model, const ModelInput& input, 
   if (!reason.empty() && options.continuation)
     return detail::follow_loading_path(P, sys, x, nopt, options, sum, sol.path_events, cold.first_step, reason)
         .parameter;
-  ModelInput from;
-  const bool input_path = warm && options.continuation && previous_input(*warm_start, input, from);
+  const bool input_path = warm && options.continuation && has_previous_input(*warm_start, input);
   if (!warm) P.cold_guess(x);
-  const bool skip_direct = input_path && large_change(model, from, input);
+  const bool skip_direct = input_path && large_change(model, warm_start->loads, input.loads);
   if (!skip_direct) {
     direct_solve(P, sys, nopt, warm, x, sum);
     if (sum.converged() || !options.continuation) return 1.0;
@@ -155,7 +155,7 @@ double solve_on_loading_path(const StaticModel& model, const ModelInput& input, 
                                 : (warm ? "warm-started direct solve failed: " : "direct solve failed: ") + sum.message;
   if (input_path) {
     const Eigen::VectorXd guess = x;
-    if (detail::follow_input_path(rebind, from, input, *warm_start, nopt, x, sum)) {
+    if (detail::follow_input_path(rebind, previous_input(*warm_start, input), input, *warm_start, nopt, x, sum)) {
       const std::string path = sum.message;
       direct_solve(P, sys, nopt, true, x, sum);  // at the path's end: converged in 0-1 iterations
       if (sum.converged()) {
