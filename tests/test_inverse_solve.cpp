@@ -2,6 +2,7 @@
 // tensions by every model, the tensions are of minimum norm (antagonistic pulls released), a
 // pose target is met where the tendons allow it, an unreachable target fails with its distance,
 // bad input names the field.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -115,8 +116,13 @@ Scene cross_robot(int segments, ModelKind kind) {
 class InverseMinimumNorm : public testing::TestWithParam<ModelKind> {};
 
 // Generating tensions pull every tendon; the answer pulls at most one tendon of each opposing
-// pair, and its norm is no larger.
+// pair, and its norm is smaller. In CC, CCsub and VC the shape depends on the tendon moments
+// alone, so the released tendon is exactly slack. In PRB (joint-lumped tendon chords) and VCref
+// (discrete disk forces) pulling a pair bends the robot slightly (the tip of this robot at
+// T = (1, 0.2, 0, 0) N moves 1.2e-6 m when pair 0 pulls 0.5 N more): the exact target may need a
+// trace of the antagonist, bounded here by 1e-3 of its partner.
 TEST_P(InverseMinimumNorm, ReleasesAntagonisticPairs) {
+  const bool moments_only = GetParam() == ModelKind::CC || GetParam() == ModelKind::CCsub || GetParam() == ModelKind::VC;
   const Scene s = cross_robot(1, GetParam());
   const auto model = make_model(GetParam(), s);
   std::mt19937 rng(90);
@@ -129,11 +135,12 @@ TEST_P(InverseMinimumNorm, ReleasesAntagonisticPairs) {
     target.position = f.tip().p;
     const InverseResult r = reach(*model, s, target, T);
     ASSERT_EQ(r.tensions.size(), 4u);
-    for (int pair = 0; pair < 2; ++pair)
-      EXPECT_FALSE(r.tensions[pair] > 1e-9 && r.tensions[pair + 2] > 1e-9)
+    for (std::size_t pair = 0; pair < 2; ++pair) {
+      const double low = std::min(r.tensions[pair], r.tensions[pair + 2]);
+      const double high = std::max(r.tensions[pair], r.tensions[pair + 2]);
+      EXPECT_LE(low, moments_only ? 1e-9 : 1e-3 * high)
           << "pair " << pair << ": " << r.tensions[pair] << ", " << r.tensions[pair + 2];
-    // The net moments the generating tensions make are reproduced (to the accuracy of CC's
-    // straight-line argument: the shape is set by T_k r_k summed).
+    }
     EXPECT_LT(norm(r.tensions), norm(T));
   }
 }
