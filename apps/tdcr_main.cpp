@@ -1,5 +1,6 @@
 // tdcr: the command-line program. Solves a scene file with one of the models and prints the
-// result as text or as JSON (the contract of tdcr::solution_to_json).
+// result as text or as JSON (the contract of tdcr::solution_to_json); `tdcr inverse` finds the
+// tensions for a tip target (inverse_command.cpp).
 //
 // Exit status: 0 converged, 1 solved but not converged (the result is still printed, status
 // "failed"), 2 bad input or usage, 3 internal error.
@@ -18,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "inverse_command.hpp"
 #include "tdcr/core/error.hpp"
 #include "tdcr/core/scene_io.hpp"
 #include "tdcr/models/model_registry.hpp"
@@ -46,6 +48,7 @@ std::string usage() {
   }
   return "usage: tdcr solve SCENE.json [--model NAME] [--accuracy FRACTION] [--json] [--repeat N]\n"
          "                             [--integrator rk4|cvode] [--continuation] [--jacobian]\n"
+         + tdcr::cli::inverse_usage() +
          "       tdcr --help | --version\n"
          "\n"
          "Solve the static shape of a tendon-driven continuum robot described by a scene file\n"
@@ -64,6 +67,12 @@ std::string usage() {
          "  --continuation        if a direct solve fails, ramp actuation and loads (continuation)\n"
          "  --jacobian            also compute the tip Jacobian (d tip pose / d actuation) and the\n"
          "                        tip compliance (d tip pose / d tip wrench); --json prints them\n"
+         "\n"
+         "tdcr inverse: the non-negative tensions of least norm that put the tip at --target\n"
+         "  (x,y,z in m, or x,y,z,rx,ry,rz with the orientation as a rotation vector in rad, base\n"
+         "  frame), starting from the scene's tensions; prints the report line and the tensions,\n"
+         "  or with --json the solution and an \"inverse\" object (status, target, tensions,\n"
+         "  errors, iterations); exit status 1 if the target was not reached (closest pose printed)\n"
          "\n"
          "models:\n" + models +
          "  auto    the cheapest model expected to meet --accuracy\n"
@@ -277,6 +286,14 @@ int run(const std::vector<std::string>& args) {
       return 0;
     }
     return run_solve(rest);
+  }
+  if (cmd == "inverse") {
+    const std::vector<std::string> rest(args.begin() + 1, args.end());
+    if (std::find(rest.begin(), rest.end(), "--help") != rest.end()) {
+      std::printf("%s", usage().c_str());
+      return 0;
+    }
+    return tdcr::cli::run_inverse(rest);
   }
   if (!cmd.empty() && cmd[0] == '-') throw UsageError("unknown option '" + cmd + "'");
   throw UsageError("unknown command '" + cmd + "'");

@@ -365,4 +365,72 @@ TEST(Cli, NonConvergedSolveExitsOne) {
   EXPECT_NE(out["reason"], "converged");
 }
 
+// ---------------------------------------------------------------------------------------------
+// tdcr inverse
+
+/// The paper robot example with all tensions zero (the inverse starts from the scene's tensions).
+std::string slack_paper_robot(const TempDir& tmp) {
+  json j = json::parse(read_file(kExamples + "/paper_robot_vc.json"));
+  j["actuation"]["tensions"] = {0, 0, 0, 0};
+  return tmp.write("slack.json", j.dump());
+}
+
+/// The example's tip (tendon 1 at T_M) is reached from zero tensions, by T_M on tendon 1 alone:
+/// the least-norm tensions that make this bend.
+TEST(CliInverse, ReachesTheExampleTipWithItsTensions) {
+  const CliRun f = run_tdcr("solve " + example("paper_robot_vc.json") + " --json");
+  ASSERT_EQ(f.status, 0) << f.err;
+  const json tip = json::parse(f.out)["tip"]["position"];
+  char target[128];
+  std::snprintf(target, sizeof target, "%.17g,%.17g,%.17g", tip[0].get<double>(), tip[1].get<double>(),
+                tip[2].get<double>());
+  TempDir tmp;
+  const CliRun r = run_tdcr("inverse " + quote(slack_paper_robot(tmp)) + " --target " + target + " --json");
+  ASSERT_EQ(r.status, 0) << r.out << r.err;
+  const json j = json::parse(r.out);
+  expect_contract(j);
+  const json& inv = j["inverse"];
+  EXPECT_EQ(inv["status"], "converged");
+  EXPECT_LT(inv["position_error"].get<double>(), 1e-6);
+  EXPECT_TRUE(inv["target"]["rotation"].is_null());
+  ASSERT_EQ(inv["tensions"].size(), 4u);
+  EXPECT_NEAR(inv["tensions"][0].get<double>(), 5.5532974, 1e-6);
+  for (int k = 1; k < 4; ++k) EXPECT_LE(inv["tensions"][k].get<double>(), 1e-6);
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(j["tip"]["position"][i].get<double>(), tip[i].get<double>(), 1e-6);
+
+  const CliRun text = run_tdcr("inverse " + quote(slack_paper_robot(tmp)) + " --target " + target);
+  ASSERT_EQ(text.status, 0) << text.err;
+  EXPECT_TRUE(contains(text.out, "inverse:  converged")) << text.out;
+  EXPECT_TRUE(contains(text.out, "tensions (N):")) << text.out;
+}
+
+/// A target above the straight robot cannot be reached (tendons only shorten it): exit 1, the
+/// closest pose printed with its distance.
+TEST(CliInverse, UnreachableTargetExitsOne) {
+  TempDir tmp;
+  const CliRun r = run_tdcr("inverse " + quote(slack_paper_robot(tmp)) + " --target 0,0,0.3 --json");
+  ASSERT_EQ(r.status, 1) << r.out << r.err;
+  const json j = json::parse(r.out);
+  EXPECT_EQ(j["inverse"]["status"], "failed");
+  EXPECT_NEAR(j["inverse"]["position_error"].get<double>(), 0.2, 1e-9);
+  const CliRun text = run_tdcr("inverse " + quote(slack_paper_robot(tmp)) + " --target 0,0,0.3");
+  EXPECT_EQ(text.status, 1);
+  EXPECT_TRUE(contains(text.out, "unreachable")) << text.out;
+}
+
+TEST(CliInverse, BadTargetExitsTwoNamingIt) {
+  const std::string scene = example("paper_robot_vc.json");
+  for (const std::string bad : {"0,1", "0,0.1,x", "1,2,3,4", "0,0,0.1,"}) {
+    const CliRun r = run_tdcr("inverse " + scene + " --target " + quote(bad));
+    EXPECT_EQ(r.status, 2) << bad;
+    EXPECT_TRUE(contains(r.err, "--target") && contains(r.err, bad)) << r.err;
+  }
+  const CliRun nan = run_tdcr("inverse " + scene + " --target 0,nan,0.1");
+  EXPECT_EQ(nan.status, 2);
+  EXPECT_TRUE(contains(nan.err, "target.position[1]") && contains(nan.err, "nan")) << nan.err;
+  const CliRun missing = run_tdcr("inverse " + scene);
+  EXPECT_EQ(missing.status, 2);
+  EXPECT_TRUE(contains(missing.err, "--target")) << missing.err;
+}
+
 }  // namespace

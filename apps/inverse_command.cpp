@@ -1,0 +1,160 @@
+// tdcr inverse SCENE.json --target x,y,z[,rx,ry,rz] [--model NAME] [--json]: the minimum-norm
+// non-negative tensions that put the tip at a target (tdcr::inverse_solve).
+#include "inverse_command.hpp"
+
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <iterator>
+#include <memory>
+#include <optional>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "tdcr/core/error.hpp"
+#include "tdcr/core/scene_io.hpp"
+#include "tdcr/models/inverse_solve.hpp"
+#include "tdcr/models/model_selection.hpp"
+#include "tdcr/models/static_model.hpp"
+
+namespace tdcr::cli {
+
+namespace {
+
+struct InverseArgs {
+  std::string scene_path;
+  std::optional<std::string> model;
+  InverseTarget target;
+  bool have_target = false;
+  bool json = false;
+};
+
+/// "x,y,z" (m) or "x,y,z,rx,ry,rz" (m, rotation vector in rad), base frame. Non-finite numbers
+/// are passed on: InverseTarget::validate names the component.
+InverseTarget parse_target(const std::string& text) {
+  std::vector<double> v;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    char* end = nullptr;
+    const double x = std::strtod(item.c_str(), &end);
+    if (item.empty() || *end != '\0')
+      throw InputError("--target", text, "expected x,y,z (m) or x,y,z,rx,ry,rz (m, rad), numbers separated by commas");
+    v.push_back(x);
+  }
+  if ((v.size() != 3 && v.size() != 6) || text.back() == ',')
+    throw InputError("--target", text, "expected 3 numbers x,y,z (m) or 6 numbers x,y,z,rx,ry,rz (m, rad)");
+  InverseTarget t;
+  t.position = Vec3(v[0], v[1], v[2]);
+  if (v.size() == 6) t.rotation = Vec3(v[3], v[4], v[5]);
+  return t;
+}
+
+InverseArgs parse_args(const std::vector<std::string>& args) {
+  InverseArgs out;
+  bool have_scene = false;
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    std::string name = args[i];
+    std::optional<std::string> inline_value;
+    if (name.rfind("--", 0) == 0 && name.find('=') != std::string::npos) {
+      inline_value = name.substr(name.find('=') + 1);
+      name = name.substr(0, name.find('='));
+    }
+    auto value = [&]() -> std::string {
+      if (inline_value) return *inline_value;
+      if (i + 1 >= args.size()) throw InputError(name, "", "missing argument");
+      return args[++i];
+    };
+    if (name == "--target") {
+      out.target = parse_target(value());
+      out.have_target = true;
+    } else if (name == "--model") {
+      out.model = value();
+    } else if (name == "--json" && !inline_value) {
+      out.json = true;
+    } else if (name.size() > 1 && name[0] == '-') {
+      throw InputError("inverse", args[i], "unknown option (see tdcr --help)");
+    } else if (have_scene) {
+      throw InputError("inverse", args[i], "unexpected argument (one scene file per run)");
+    } else {
+      out.scene_path = args[i];
+      have_scene = true;
+    }
+  }
+  if (!have_scene) throw InputError("inverse", "", "missing scene file (see tdcr --help)");
+  if (!out.have_target) throw InputError("--target", "", "missing: give the target as x,y,z or x,y,z,rx,ry,rz");
+  return out;
+}
+
+Scene load(const std::string& path) {
+  if (path != "-") return load_scene(path);
+  const std::string text{std::istreambuf_iterator<char>(std::cin), std::istreambuf_iterator<char>()};
+  return parse_scene(text, "<stdin>");
+}
+
+nlohmann::ordered_json vec(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
+
+void print_json(const InverseResult& r, const InverseTarget& target) {
+  nlohmann::ordered_json j = nlohmann::ordered_json::parse(solution_to_json(r.solution));
+  nlohmann::ordered_json t = {{"position", vec(target.position)}, {"rotation", nullptr}};
+  if (target.rotation) t["rotation"] = vec(*target.rotation);
+  j["inverse"] = {{"status", r.converged() ? "converged" : "failed"},
+                  {"reason", to_string(r.status) + (r.message.empty() ? "" : ": " + r.message)},
+                  {"target", t},
+                  {"tensions", r.tensions},
+                  {"position_error", r.position_error},
+                  {"rotation_error", r.rotation_error},
+                  {"iterations", r.iterations},
+                  {"minimum_norm", r.minimum_norm}};
+  std::printf("%s\n", j.dump(2).c_str());
+}
+
+void print_text(const InverseResult& r) {
+  std::printf("model:    %s\n", r.solution.model.c_str());
+  std::printf("inverse:  %s\n", r.brief_report().c_str());
+  std::printf("tensions (N):        [");
+  for (std::size_t k = 0; k < r.tensions.size(); ++k) std::printf("%s%.10g", k ? ", " : "", r.tensions[k]);
+  std::printf("]\n");
+  if (!r.solution.disk_frames.empty()) {
+    const Vec3 p = r.solution.tip().p;
+    std::printf("tip position (m):    [%.10g, %.10g, %.10g]\n", p.x(), p.y(), p.z());
+  }
+}
+
+}  // namespace
+
+std::string inverse_usage() {
+  return "       tdcr inverse SCENE.json --target x,y,z[,rx,ry,rz] [--model NAME] [--json]\n";
+}
+
+int run_inverse(const std::vector<std::string>& argv) {
+  const InverseArgs args = parse_args(argv);
+  Scene scene = load(args.scene_path);
+  if (args.model) scene.model = *args.model;
+  // The iteration varies tensions: it starts from the scene's tensions, or from zero tensions
+  // when the scene gives displacements.
+  if (scene.actuation.kind != Actuation::Kind::Tensions) {
+    scene.actuation.kind = Actuation::Kind::Tensions;
+    scene.actuation.values.assign(static_cast<std::size_t>(scene.robot.tendon_count()), 0.0);
+  }
+  args.target.validate();
+  std::string lower = scene.model;
+  for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (lower == "auto") scene.model = "auto";
+  validate_scene(scene);
+  const ModelKind kind = scene.model == "auto" ? choose_model(scene).kind : parse_model_kind(scene.model);
+  const std::unique_ptr<StaticModel> model = make_model(kind, scene);
+  auto ws = model->make_workspace();
+  const InverseResult r = inverse_solve(*model, *ws, scene.input(), args.target, scene.solver);
+  if (args.json)
+    print_json(r, args.target);
+  else
+    print_text(r);
+  std::fflush(stdout);
+  return r.converged() ? 0 : 1;
+}
+
+}  // namespace tdcr::cli
