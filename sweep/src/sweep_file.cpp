@@ -144,7 +144,14 @@ void check_extremes(const SweepSpec& spec) {
           validate_scene(scene);
         }
       } catch (const InputError& e) {
-        throw InputError(axis.field, format_value(v), std::string("axis value outside the valid range: ") + e.what());
+        // The scene's reason, reported for the axis and its value.
+        std::string reason = e.what();
+        const std::string got = " (got " + e.value() + ")";
+        if (reason.rfind(e.field() + ": ", 0) == 0) reason.erase(0, e.field().size() + 2);
+        if (!e.value().empty() && reason.size() >= got.size() && reason.compare(reason.size() - got.size(), got.size(), got) == 0)
+          reason.resize(reason.size() - got.size());
+        if (e.field() != axis.field) reason = "the scene is invalid at this value: " + e.field() + ": " + reason;
+        throw InputError(axis.field, format_value(v), reason);
       }
     }
   }
