@@ -46,11 +46,11 @@ def main():
         zs.append(tip[2] * 1e3)
         err.append(math.dist(tip, ref) * 1e3)
         tension.append(total)
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4.6), sharey=True, constrained_layout=True)
+    fig, axes = plt.subplots(1, 2, figsize=(10, 3.6), sharey=True, constrained_layout=True)
     for ax, c, label, cmap in ((axes[0], err, f"|tip {a.model} - tip {a.reference}| (mm)", "viridis"),
                                 (axes[1], tension, "total tendon tension (N)", "plasma")):
         sc = ax.scatter(ys, zs, c=c, s=6, cmap=cmap)
-        fig.colorbar(sc, ax=ax, label=label)
+        fig.colorbar(sc, ax=ax, label=label, orientation="horizontal", shrink=0.8)
         ax.set_xlabel("tip y (mm)")
         ax.set_aspect("equal")
         ax.grid(alpha=0.3)
