@@ -27,13 +27,20 @@ namespace tdcr {
 struct SweepAxis {
   /// @brief What the field changes: the per-call input (no model rebuild) or the scene (robot,
   /// effects, solver: the models are rebuilt).
-  enum class Target { Tension, Displacement, TipForce, TipMoment, Gravity, Scene };
+  enum class Target {
+    Tension,       ///< actuation.tensions[index]
+    Displacement,  ///< actuation.displacements[index]
+    TipForce,      ///< loads.tip_force[index]
+    TipMoment,     ///< loads.tip_moment[index]
+    Gravity,       ///< loads.gravity[index]
+    Scene          ///< A robot., effects. or solver. field: the scene is parsed again.
+  };
   std::string field;           ///< Scene-file path, e.g. `actuation.tensions[0]`.
-  Target target = Target::Scene;
+  Target target = Target::Scene;  ///< What the field changes.
   int index = 0;               ///< Tendon or vector component for the input targets.
   std::vector<double> values;  ///< Grid values, or the choices of a random axis (may be empty).
   double from = 0.0;           ///< Random axis without values: uniform in [from, to].
-  double to = 0.0;
+  double to = 0.0;             ///< Upper end of a random range.
   /// @brief True if the axis changes the scene (robot, effects, solver) rather than the input.
   bool rebuilds_model() const { return target == Target::Scene; }
 };
@@ -46,8 +53,8 @@ struct SweepSpec {
   std::vector<SweepAxis> axes;    ///< At least one.
   std::vector<ModelKind> models;  ///< At least one, no repeats.
   bool random = false;            ///< Random sampling (else grid).
-  std::uint64_t random_samples = 0;
-  std::uint64_t seed = 0;
+  std::uint64_t random_samples = 0;  ///< Random sampling: number of samples.
+  std::uint64_t seed = 0;            ///< Random sampling: the seed.
   std::uint64_t hash = 0;  ///< FNV-1a of the canonical sweep (axes, models, base scene): resume check.
 
   /// @brief Number of samples (grid: product of the axis sizes).

@@ -28,23 +28,25 @@ constexpr std::uint64_t kSweepBlock = 32;
 
 /// @brief Part i of N of a sweep (whole blocks; shard i of N solves the i-th contiguous part).
 struct SweepShard {
-  int index = 0;
-  int count = 1;
+  int index = 0;  ///< i, 0-based.
+  int count = 1;  ///< N.
 };
 
 /// @brief Samples [begin, end) of a shard.
 struct SampleRange {
-  std::uint64_t begin = 0;
-  std::uint64_t end = 0;
+  std::uint64_t begin = 0;  ///< First sample.
+  std::uint64_t end = 0;    ///< One past the last sample.
 };
+/// @brief The samples of shard i of N: whole blocks, contiguous, in shard order.
 SampleRange shard_samples(const SweepSpec& spec, const SweepShard& shard);
 
 /// @brief Solves samples of one sweep in order (one per thread): the models, their workspaces
 /// and the previous converged solutions. Rebuilds the models when a scene axis changes.
 class SweepSolver {
  public:
+  /// @brief A solver of `spec`'s samples (the models are built at the first sample).
   explicit SweepSolver(const SweepSpec& spec);
-  ~SweepSolver();
+  ~SweepSolver();  ///< Frees the models and workspaces.
   /// @brief Solves samples [first, last) in order (cold at `first`) and appends the CSV rows of
   /// samples >= emit_from to `rows`. A sample that fails or whose input is refused is a row
   /// with its status and reason, never an exception.
