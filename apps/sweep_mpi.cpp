@@ -39,7 +39,9 @@ int run(int rank, int ranks, const std::vector<std::string>& args) {
   unsigned long long first = 0;
   if (rank == 0) first = tdcr::prepare_sweep_output(out, spec, {});
   MPI_Bcast(&first, 1, MPI_UNSIGNED_LONG_LONG, 0, MPI_COMM_WORLD);
-  const std::uint64_t b0 = first / tdcr::kSweepBlock, b1 = (range.end + tdcr::kSweepBlock - 1) / tdcr::kSweepBlock;
+  // Nothing left (a finished file): no block to solve.
+  const std::uint64_t b0 = first / tdcr::kSweepBlock;
+  const std::uint64_t b1 = first >= range.end ? b0 : (range.end + tdcr::kSweepBlock - 1) / tdcr::kSweepBlock;
   const auto owner = [&](std::uint64_t b) { return static_cast<int>((b - b0) % static_cast<std::uint64_t>(ranks)); };
   tdcr::SweepSolver solver(spec);
   const auto solve_block = [&](std::uint64_t b) {
@@ -54,8 +56,8 @@ int run(int rank, int ranks, const std::vector<std::string>& args) {
     }
     return 0;
   }
-  std::FILE* f = first < range.end ? std::fopen(out.c_str(), "ab") : nullptr;
-  if (first < range.end && !f) throw tdcr::InputError("-o", out, "cannot write the output file");
+  std::FILE* f = b0 < b1 ? std::fopen(out.c_str(), "ab") : nullptr;
+  if (b0 < b1 && !f) throw tdcr::InputError("-o", out, "cannot write the output file");
   for (std::uint64_t b = b0; b < b1; ++b) {
     std::string rows;
     if (owner(b) == 0) {
