@@ -18,7 +18,8 @@ endif()
 # Bad input on the command line: exit status 2 and the field named, before any solve.
 if(TARGET tdcr_cli)
   add_test(NAME sweep_cli_missing_sweep_file COMMAND tdcr_cli sweep ${PROJECT_BINARY_DIR}/no_such_sweep.json -o ${PROJECT_BINARY_DIR}/no_such_sweep.csv)
-  set_tests_properties(sweep_cli_missing_sweep_file PROPERTIES WILL_FAIL TRUE)
+  set_tests_properties(sweep_cli_missing_sweep_file PROPERTIES
+    PASS_REGULAR_EXPRESSION "error: sweep file: cannot read the file \\(does it exist\\?\\) \\(got [^)]*no_such_sweep.json\\)")
   add_test(NAME sweep_cli_bad_shard COMMAND tdcr_cli sweep ${PROJECT_SOURCE_DIR}/examples/sweeps/tension_force_grid.json -o x.csv --shard 2/2)
   set_tests_properties(sweep_cli_bad_shard PROPERTIES PASS_REGULAR_EXPRESSION "--shard: must be a whole number from 0 to 1 \\(got 2\\)")
 endif()

@@ -257,7 +257,7 @@ SweepSpec parse_sweep(const std::string& json_text, const std::string& source, c
 }
 
 SweepSpec load_sweep(const std::string& path) {
-  const std::string text = read_file(path, path);
+  const std::string text = read_file(path, "sweep file");
   const auto slash = path.find_last_of('/');
   return parse_sweep(text, path, slash == std::string::npos ? "." : path.substr(0, slash));
 }
