@@ -25,6 +25,7 @@
 #include "tdcr/models/model_registry.hpp"
 #include "tdcr/models/model_selection.hpp"
 #include "tdcr/models/static_model.hpp"
+#include "tdcr/sweep/sweep_run.hpp"
 
 #ifndef TDCR_VERSION
 #define TDCR_VERSION "0.1.0"
@@ -49,6 +50,8 @@ std::string usage() {
   return "usage: tdcr solve SCENE.json [--model NAME] [--accuracy FRACTION] [--json] [--repeat N]\n"
          "                             [--integrator rk4|cvode] [--continuation] [--jacobian]\n"
          + tdcr::cli::inverse_usage() +
+         "       tdcr sweep SWEEP.json -o OUT.csv [--threads N] [--shard i/N]   (tdcr sweep --help)\n"
+         "       tdcr sweep-merge OUT.csv SHARD.csv...\n"
          "       tdcr --help | --version\n"
          "\n"
          "Solve the static shape of a tendon-driven continuum robot described by a scene file\n"
@@ -295,6 +298,8 @@ int run(const std::vector<std::string>& args) {
     }
     return tdcr::cli::run_inverse(rest);
   }
+  if (cmd == "sweep") return tdcr::sweep_command({args.begin() + 1, args.end()});
+  if (cmd == "sweep-merge") return tdcr::sweep_merge_command({args.begin() + 1, args.end()});
   if (!cmd.empty() && cmd[0] == '-') throw UsageError("unknown option '" + cmd + "'");
   throw UsageError("unknown command '" + cmd + "'");
 }
