@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "plot_command.hpp"
 #include "tdcr/core/error.hpp"
 #include "tdcr/core/scene_io.hpp"
 #include "tdcr/models/model_registry.hpp"
@@ -46,6 +47,7 @@ std::string usage() {
   }
   return "usage: tdcr solve SCENE.json [--model NAME] [--accuracy FRACTION] [--json] [--repeat N]\n"
          "                             [--integrator rk4|cvode] [--continuation] [--jacobian]\n"
+         "       tdcr plot SCENE.json [--model NAME[,NAME...]] -o FILE.png|svg   (tdcr plot --help)\n"
          "       tdcr --help | --version\n"
          "\n"
          "Solve the static shape of a tendon-driven continuum robot described by a scene file\n"
@@ -278,6 +280,7 @@ int run(const std::vector<std::string>& args) {
     }
     return run_solve(rest);
   }
+  if (cmd == "plot") return tdcr_cli::run_plot(std::vector<std::string>(args.begin() + 1, args.end()));
   if (!cmd.empty() && cmd[0] == '-') throw UsageError("unknown option '" + cmd + "'");
   throw UsageError("unknown command '" + cmd + "'");
 }
