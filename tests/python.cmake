@@ -17,6 +17,6 @@ if(TARGET tdcr_python)
   # `tdcr plot` end to end: a PNG and an SVG of two models, checked by their magic / root tag.
   add_test(NAME cli_plot
            COMMAND ${CMAKE_COMMAND} -DCLI=$<TARGET_FILE:tdcr_cli> -DSCENE=${PROJECT_SOURCE_DIR}/examples/paper_robot_tip_force.json
-                   -DWORK=${PROJECT_BINARY_DIR}/plot_test -P ${CMAKE_CURRENT_SOURCE_DIR}/check_plot.cmake)
+                   -DWORK=${PROJECT_BINARY_DIR}/plot_test -P ${PROJECT_SOURCE_DIR}/python/tests/check_plot.cmake)
   set_tests_properties(cli_plot PROPERTIES TIMEOUT 120)
 endif()

@@ -3,8 +3,9 @@
 
     PYTHONPATH=build/python python3 examples/python/trajectory_warm_start.py examples/paper_robot_vc.json
 
-Sweeps the first tendon's tension from 0 to twice the scene's value with a small tip force and
-prints the tip and the Newton iterations of each warm solve against a cold one.
+Raises the first tendon's tension from half the scene's value to the full one under a 1 N tip
+force across the bending plane and prints the tip and the Newton iterations of each warm solve
+against a cold one (which loads the robot from rest).
 """
 import sys
 
@@ -17,14 +18,14 @@ def main(path, steps=11):
     scene = tdcr.Scene.from_file(path)
     model = tdcr.make_model("vc", scene)  # immutable: robot and effects
     ws = model.make_workspace()           # reused along the trajectory
-    top = 2.0 * max(scene.actuation.values)
+    top = max(scene.actuation.values)
     previous = None
     warm_total = cold_total = 0
     print("%8s  %28s  %5s %5s" % ("T1 (N)", "tip (mm)", "warm", "cold"))
-    for t in np.linspace(0.0, top, steps):
+    for t in np.linspace(0.5 * top, top, steps):
         u = scene.input()
         u.actuation.values = [t] + [0.0] * (len(u.actuation.values) - 1)
-        u.loads.tip_force = [0.0, 0.2, 0.0]
+        u.loads.tip_force = [1.0, 0.0, 0.0]
         sol = tdcr.solve_with(model, ws, u, scene.solver, warm_start=previous)
         cold = tdcr.solve_with(model, model.make_workspace(), u, scene.solver)
         if not (sol.converged and cold.converged):

@@ -26,7 +26,7 @@ PYBIND11_MODULE(_tdcr, m) {
     try {
       if (p) std::rethrow_exception(p);
     } catch (const tdcr::InputError& e) {
-      py::object err = input_error(py::str(e.what()));
+      py::object err = py::handle(input_error.ptr())(e.what());
       err.attr("field") = e.field();
       err.attr("value") = e.value();
       PyErr_SetObject(input_error.ptr(), err.ptr());

@@ -114,28 +114,28 @@ def figure(scene, solutions, title=None):
 
     L = robot.total_length()
     base = np.eye(4)
-    for sol, g in geoms:
+    for k, (sol, g) in enumerate(geoms):
         if g is None:
             continue
         color = _COLORS.get(sol.model, None)
         ls = "-" if sol.converged else "--"
         for ring in g["rings"]:
-            draw3d(ring, color, 0.8, ls, 0.6)
-            draw2d(ring, color, 0.8, ls, 0.6)
+            draw3d(ring, color, 0.6, ls, 0.4)
+            draw2d(ring, color, 0.6, ls, 0.4)
         for q in g["tendons"]:
             draw3d(q, color, 0.6, ":", 0.8)
             draw2d(q, color, 0.6, ":", 0.8)
-        ax3.plot(*g["backbone"].T, color=color, lw=2.5, ls=ls, label=_label(sol))
-        draw2d(g["backbone"], color, 2.5, ls, 1.0)
+        lw = 1.5 + 3.0 * (len(geoms) - 1 - k) / max(1, len(geoms) - 1)  # first widest: overlays stay visible
+        ax3.plot(*g["backbone"].T, color=color, lw=lw, ls=ls, label=_label(sol))
+        draw2d(g["backbone"], color, lw, ls, 1.0)
         _draw_frame(draw3d, draw2d, g["tip"], 0.12 * L)
     _draw_frame(draw3d, draw2d, base, 0.12 * L)
 
     force = np.asarray(loads.tip_force)
     fnorm = float(np.linalg.norm(force))
-    if fnorm > 0:
-        for sol, g in geoms:
-            if g is None:
-                continue
+    drawn = [g for _, g in geoms if g is not None]
+    if fnorm > 0 and drawn:
+        for g in drawn[-1:]:  # at the last model's tip
             start = g["tip"][:3, 3] * 1e3
             arrow = np.array([start, start + 0.25 * L * 1e3 * force / fnorm])
             draw3d(arrow, "m", 2.0, "-", 1.0)

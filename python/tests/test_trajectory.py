@@ -1,5 +1,6 @@
 """A trajectory with one model and one workspace: warm starts take fewer Newton iterations and
-give the cold answers."""
+give the cold answers. Under a 1 N tip force across the bending plane a cold solve loads the
+robot from rest (16-41 iterations), a warm one continues from the previous answer (2-4)."""
 import threading
 
 import numpy as np
@@ -13,13 +14,13 @@ def test_warm_started_trajectory(paper_scene, kind):
     model = tdcr.make_model(kind, paper_scene)
     ws = model.make_workspace()
     options = paper_scene.solver
-    tensions = np.linspace(0.5, 4.0, 8)
+    tensions = np.arange(3.0, 3.5, 0.05)
     warm_iters = cold_iters = 0
     previous = None
     for t in tensions:
         u = paper_scene.input()
         u.actuation.values = [t, 0.0, 0.5 * t, 0.0]
-        u.loads.tip_force = [0.0, 0.1, 0.0]
+        u.loads.tip_force = [1.0, 0.0, 0.0]
         warm = model.solve(ws, u, options, warm_start=previous)
         cold = tdcr.solve_with(model, model.make_workspace(), u, options)
         assert warm.converged and cold.converged
@@ -28,7 +29,7 @@ def test_warm_started_trajectory(paper_scene, kind):
             warm_iters += warm.iterations
             cold_iters += cold.iterations
         previous = warm
-    assert warm_iters < cold_iters, (warm_iters, cold_iters)
+    assert 2 * warm_iters < cold_iters, (warm_iters, cold_iters)
 
 
 def test_solves_release_the_gil(paper_scene):

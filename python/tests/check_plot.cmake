@@ -1,4 +1,4 @@
-# Driven by ctest (tests/python.cmake): `tdcr plot` writes a PNG and an SVG; check both files.
+# Driven by ctest (tests/python.cmake, test cli_plot): `tdcr plot` writes a PNG and an SVG; check both files.
 file(REMOVE_RECURSE ${WORK})
 file(MAKE_DIRECTORY ${WORK})
 foreach(ext png svg)
