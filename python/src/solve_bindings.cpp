@@ -115,7 +115,7 @@ void bind_solution(py::module_& m) {
       .def_readonly("stability", &S::stability)
       .def_readonly("path_events", &S::path_events)
       .def_readonly("geometry_warnings", &S::geometry_warnings)
-      .def_readonly("loads", &S::loads)
+      .def_property_readonly("loads", [](const S& s) { return tdcr::Loads(s.loads); }, "the input's loads (a copy)")
       .def_property_readonly("converged", &S::converged)
       .def_property_readonly("termination", [](const S& s) { return tdcr::to_string(s.summary.termination); })
       .def_property_readonly("message", [](const S& s) { return s.summary.message; })
@@ -192,8 +192,9 @@ void bind_models(py::module_& m) {
   py::class_<tdcr::StaticModel>(m, "StaticModel", "An immutable model of a robot with its effects")
       .def_property_readonly("kind", &tdcr::StaticModel::name)
       .def_property_readonly("name", &tdcr::StaticModel::name)
-      .def_property_readonly("robot", &tdcr::StaticModel::robot)
-      .def_property_readonly("effects", &tdcr::StaticModel::effects)
+      // Copies: the model is immutable.
+      .def_property_readonly("robot", [](const tdcr::StaticModel& mo) { return tdcr::Robot(mo.robot()); })
+      .def_property_readonly("effects", [](const tdcr::StaticModel& mo) { return tdcr::Effects(mo.effects()); })
       .def_property_readonly("fingerprint", &tdcr::StaticModel::fingerprint)
       .def_property_readonly("disk_s", [](const tdcr::StaticModel& mo) { return vector_array(mo.routing().disk_s); },
                              "arc length of every disk, base disk first (m)")

@@ -144,6 +144,9 @@ def figure(scene, solutions, title=None):
                 ax.annotate("", xy=arrow[1, [i, j]], xytext=arrow[0, [i, j]],
                             arrowprops=dict(arrowstyle="->", color="m", lw=2))
         ax3.plot([], [], color="m", lw=2, label="tip force %.3g N" % fnorm)
+    mnorm = float(np.linalg.norm(np.asarray(loads.tip_moment)))
+    if mnorm > 0:  # listed, not drawn: an arrow of a moment reads as a force
+        ax3.plot([], [], ls="none", label="tip moment %.3g N m" % mnorm)
 
     # Equal aspect in mm: a cube around everything drawn.
     allpts = np.vstack([pts] + [g["rings"][k] for _, g in geoms if g is not None for k in range(len(g["rings"]))])

@@ -110,3 +110,12 @@ def test_model_input_and_workspace_checks(paper_scene):
     cc_sol = cc.solve(cc.make_workspace(), paper_scene.input())
     with pytest.raises(tdcr.InputError):  # a warm start of another model
         vc.solve(ws, paper_scene.input(), paper_scene.solver, warm_start=cc_sol)
+
+
+def test_models_and_solutions_are_not_changed_through_their_views(paper_scene):
+    m = tdcr.make_model("vc", paper_scene)
+    m.robot.segments[0].length = 1.0
+    assert m.robot.segments[0].length == 0.05
+    sol = tdcr.solve(paper_scene)
+    sol.loads.tip_force[0] = 5.0
+    assert sol.loads.tip_force[0] == 0.0
