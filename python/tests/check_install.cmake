@@ -10,7 +10,7 @@ function(run)
 endfunction()
 run(${CMAKE_COMMAND} --install ${BIN} --prefix ${WORK}/prefix)
 run(${CMAKE_COMMAND} -E env PYTHONPATH=${WORK}/prefix/${PYDIR}
-    ${PYTHON} -c "import tdcr; print(tdcr.__file__); print(tdcr.solve('${SCENE}').tip_position)")
+    ${PYTHON} -c "import tdcr\nprint(tdcr.__file__)\nprint(tdcr.solve('${SCENE}').tip_position)")  # no ';': a CMake list separator
 if(NOT out MATCHES "${WORK}/prefix/")
   message(FATAL_ERROR "tdcr was not imported from the prefix:\n${out}")
 endif()

@@ -117,5 +117,8 @@ def test_models_and_solutions_are_not_changed_through_their_views(paper_scene):
     m.robot.segments[0].length = 1.0
     assert m.robot.segments[0].length == 0.05
     sol = tdcr.solve(paper_scene)
-    sol.loads.tip_force[0] = 5.0
+    loads = sol.loads
+    loads.tip_force = [5.0, 0.0, 0.0]
     assert sol.loads.tip_force[0] == 0.0
+    with pytest.raises(ValueError):  # vectors are assigned whole, never changed silently in place
+        sol.loads.tip_force[0] = 5.0
