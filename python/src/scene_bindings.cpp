@@ -7,6 +7,7 @@
 #include <vector>
 
 #include <pybind11/eigen.h>
+#include <pybind11/numpy.h>
 #include <pybind11/stl.h>
 #include <pybind11/stl_bind.h>
 
@@ -151,7 +152,16 @@ void bind_input(py::module_& m) {
             return a;
           }),
           "values"_a = std::vector<double>{}, "kind"_a = "tensions", "convention"_a = "at_base")
-      .def_readwrite("values", &tdcr::Actuation::values, "one value per tendon (assign a whole list)");
+      .def_property(
+          "values",
+          [](const tdcr::Actuation& a) {
+            // A read-only copy: `a.values[0] = x` raises instead of changing a temporary.
+            py::array_t<double> v(static_cast<py::ssize_t>(a.values.size()), a.values.data());
+            py::detail::array_proxy(v.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
+            return v;
+          },
+          [](tdcr::Actuation& a, const std::vector<double>& v) { a.values = v; },
+          "one value per tendon, N or m (assign a whole list)");
   enum_property(act, "kind", &tdcr::Actuation::kind, kActuationKind, "actuation", "'tensions' or 'displacements'");
   enum_property(act, "convention", &tdcr::Actuation::convention, kConvention, "actuation.displacement_convention",
                 "'at_base' or 'per_segment'");

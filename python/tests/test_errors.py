@@ -122,3 +122,7 @@ def test_models_and_solutions_are_not_changed_through_their_views(paper_scene):
     assert sol.loads.tip_force[0] == 0.0
     with pytest.raises(ValueError):  # vectors are assigned whole, never changed silently in place
         sol.loads.tip_force[0] = 5.0
+    with pytest.raises(ValueError):
+        paper_scene.actuation.values[0] = 1.0
+    paper_scene.actuation.values = [1.0, 0.0, 0.0, 0.0]
+    assert paper_scene.actuation.values[0] == 1.0
