@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "inverse_command.hpp"
+#include "plot_command.hpp"
 #include "tdcr/core/error.hpp"
 #include "tdcr/core/scene_io.hpp"
 #include "tdcr/models/model_registry.hpp"
@@ -52,6 +53,7 @@ std::string usage() {
          + tdcr::cli::inverse_usage() +
          "       tdcr sweep SWEEP.json -o OUT.csv [--threads N] [--shard i/N]   (tdcr sweep --help)\n"
          "       tdcr sweep-merge OUT.csv SHARD.csv...\n"
+         "       tdcr plot SCENE.json [--model NAME[,NAME...]] -o FILE.png|svg   (tdcr plot --help)\n"
          "       tdcr --help | --version\n"
          "\n"
          "Solve the static shape of a tendon-driven continuum robot described by a scene file\n"
@@ -300,6 +302,7 @@ int run(const std::vector<std::string>& args) {
   }
   if (cmd == "sweep") return tdcr::sweep_command({args.begin() + 1, args.end()});
   if (cmd == "sweep-merge") return tdcr::sweep_merge_command({args.begin() + 1, args.end()});
+  if (cmd == "plot") return tdcr_cli::run_plot(std::vector<std::string>(args.begin() + 1, args.end()));
   if (!cmd.empty() && cmd[0] == '-') throw UsageError("unknown option '" + cmd + "'");
   throw UsageError("unknown command '" + cmd + "'");
 }

@@ -1,0 +1,38 @@
+// The extension module tdcr._tdcr: the exception type and the module entry point.
+#include <string>
+
+#include <pybind11/pybind11.h>
+
+#include "bindings.hpp"
+#include "tdcr/core/error.hpp"
+
+namespace py = pybind11;
+
+namespace tdcr_python {
+
+py::object json_loads(const std::string& text) { return py::module_::import("json").attr("loads")(text); }
+
+}  // namespace tdcr_python
+
+PYBIND11_MODULE(_tdcr, m) {
+  m.doc() = "tdcr: kineto-static models of tendon-driven continuum robots (C++ core)";
+
+  // tdcr::InputError as a ValueError subclass carrying the offending field and value.
+  static py::exception<tdcr::InputError> input_error(m, "InputError", PyExc_ValueError);
+  input_error.doc() =
+      "Invalid input: a scene, robot, option or file that cannot be used. `field` is the JSON-style "
+      "path of the offending entry (e.g. 'robot.segments[1].length'), `value` its value as text.";
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const tdcr::InputError& e) {
+      py::object err = py::handle(input_error.ptr())(e.what());
+      err.attr("field") = e.field();
+      err.attr("value") = e.value();
+      PyErr_SetObject(input_error.ptr(), err.ptr());
+    }
+  });
+
+  tdcr_python::bind_scene(m);
+  tdcr_python::bind_solve(m);
+}

@@ -1,0 +1,257 @@
+// Bindings of the scene description: robot, actuation, loads, effects, solver options, scenes and
+// scene files. Enumerations are their scene-file strings ("rk4", "removed", ...), so a scene built
+// field by field reads like its JSON file.
+#include <array>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <pybind11/eigen.h>
+#include <pybind11/numpy.h>
+#include <pybind11/stl.h>
+#include <pybind11/stl_bind.h>
+
+#include "bindings.hpp"
+#include "tdcr/core/error.hpp"
+#include "tdcr/core/scene.hpp"
+#include "tdcr/core/scene_io.hpp"
+#include "tdcr/models/static_model.hpp"
+
+namespace py = pybind11;
+using namespace py::literals;
+
+namespace tdcr_python {
+namespace {
+
+template <typename E>
+using Names = std::vector<std::pair<const char*, E>>;
+
+const Names<tdcr::Actuation::Kind> kActuationKind = {{"tensions", tdcr::Actuation::Kind::Tensions},
+                                                     {"displacements", tdcr::Actuation::Kind::Displacements}};
+const Names<tdcr::Actuation::DisplacementConvention> kConvention = {
+    {"at_base", tdcr::Actuation::DisplacementConvention::AtBase},
+    {"per_segment", tdcr::Actuation::DisplacementConvention::PerSegment}};
+const Names<tdcr::DiskNormalForce> kDiskNormalForce = {{"removed", tdcr::DiskNormalForce::Removed},
+                                                       {"kept", tdcr::DiskNormalForce::Kept}};
+const Names<tdcr::TendonPath> kTendonPath = {{"fully_constrained", tdcr::TendonPath::FullyConstrained},
+                                             {"partially_constrained", tdcr::TendonPath::PartiallyConstrained}};
+const Names<tdcr::IntegratorKind> kIntegrator = {{"rk4", tdcr::IntegratorKind::FixedStepRK4},
+                                                 {"cvode", tdcr::IntegratorKind::Cvode}};
+const Names<tdcr::LinearSolverKind> kLinearSolver = {{"auto", tdcr::LinearSolverKind::Automatic},
+                                                     {"dense", tdcr::LinearSolverKind::Dense},
+                                                     {"klu", tdcr::LinearSolverKind::SparseKLU}};
+
+template <typename E>
+std::string name_of(const Names<E>& names, E e) {
+  for (const auto& [n, v] : names)
+    if (v == e) return n;
+  return "?";
+}
+
+/// The enumerator named `text`; InputError naming `field` and listing the choices otherwise.
+template <typename E>
+E parse_name(const Names<E>& names, const std::string& text, const std::string& field) {
+  std::string choices;
+  for (const auto& [n, v] : names) {
+    if (text == n) return v;
+    choices += (choices.empty() ? "\"" : ", \"") + std::string(n) + "\"";
+  }
+  throw tdcr::InputError(field, "\"" + text + "\"", "must be one of " + choices);
+}
+
+/// A getter/setter pair exposing the enumerator member `member` of T as its scene-file string.
+template <typename T, typename E>
+void enum_property(py::class_<T>& c, const char* name, E T::*member, const Names<E>& names,
+                   const std::string& field, const char* doc) {
+  c.def_property(
+      name, [member, &names](const T& t) { return name_of(names, t.*member); },
+      [member, &names, field](T& t, const std::string& v) { t.*member = parse_name(names, v, field); }, doc);
+}
+
+/// A fixed-size array member as a list property (the setter checks the length).
+template <std::size_t N>
+void array_property(py::class_<tdcr::PrbParameters>& c, const char* name, double (tdcr::PrbParameters::*member)[N],
+                    const std::string& field) {
+  c.def_property(
+      name,
+      [member](const tdcr::PrbParameters& p) { return std::vector<double>(p.*member, p.*member + N); },
+      [member, field](tdcr::PrbParameters& p, const std::vector<double>& v) {
+        if (v.size() != N)
+          throw tdcr::InputError(field, std::to_string(v.size()) + " values", "needs " + std::to_string(N) + " values");
+        for (std::size_t i = 0; i < N; ++i) (p.*member)[i] = v[i];
+      });
+}
+
+std::string json_dumps(const py::object& obj) { return py::str(py::module_::import("json").attr("dumps")(obj)); }
+
+void bind_robot(py::module_& m) {
+  py::class_<tdcr::BackboneStiffness>(m, "BackboneStiffness", "Direct cross-section stiffnesses")
+      .def(py::init<>())
+      .def(py::init([](double EI, double GJ, double EA, double GA) { return tdcr::BackboneStiffness{EI, GJ, EA, GA}; }),
+           "EI"_a, "GJ"_a, "EA"_a, "GA"_a)
+      .def_readwrite("EI", &tdcr::BackboneStiffness::EI, "bending stiffness (N m^2)")
+      .def_readwrite("GJ", &tdcr::BackboneStiffness::GJ, "torsional stiffness (N m^2)")
+      .def_readwrite("EA", &tdcr::BackboneStiffness::EA, "axial stiffness (N)")
+      .def_readwrite("GA", &tdcr::BackboneStiffness::GA, "shear stiffness (N)");
+
+  py::class_<tdcr::Backbone>(m, "Backbone", "Backbone material and cross section (SI units)")
+      .def(py::init<>())
+      .def_readwrite("youngs_modulus", &tdcr::Backbone::youngs_modulus, "E (Pa)")
+      .def_readwrite("poisson_ratio", &tdcr::Backbone::poisson_ratio, "nu")
+      .def_readwrite("shear_modulus", &tdcr::Backbone::shear_modulus, "G (Pa) or None")
+      .def_readwrite("outer_radius", &tdcr::Backbone::outer_radius, "r_o (m)")
+      .def_readwrite("inner_radius", &tdcr::Backbone::inner_radius, "r_i (m)")
+      .def_readwrite("stiffness", &tdcr::Backbone::stiffness, "BackboneStiffness or None (assign a whole object)")
+      .def_readwrite("density", &tdcr::Backbone::density, "kg/m^3 (gravity only)")
+      .def_readwrite("mass_per_length", &tdcr::Backbone::mass_per_length, "kg/m or None")
+      .def("effective_stiffness", &tdcr::Backbone::effective_stiffness)
+      .def("linear_mass", &tdcr::Backbone::linear_mass);
+
+  py::class_<tdcr::TendonSpec>(m, "TendonSpec", "A tendon hole at (x, y) in the disk frame (m)")
+      .def(py::init([](double x, double y) { return tdcr::TendonSpec{x, y}; }), "x"_a = 0.0, "y"_a = 0.0)
+      .def_readwrite("x", &tdcr::TendonSpec::x)
+      .def_readwrite("y", &tdcr::TendonSpec::y)
+      .def("__repr__", [](const tdcr::TendonSpec& t) {
+        return "TendonSpec(x=" + tdcr::format_value(t.x) + ", y=" + tdcr::format_value(t.y) + ")";
+      });
+  py::bind_vector<std::vector<tdcr::TendonSpec>>(m, "TendonList");
+  py::implicitly_convertible<py::list, std::vector<tdcr::TendonSpec>>();
+
+  py::class_<tdcr::Segment>(m, "Segment", "A segment: length (m), disks, the tendons ending at its last disk")
+      .def(py::init([](double length, int disks, std::vector<tdcr::TendonSpec> tendons, double disk_mass) {
+             return tdcr::Segment{length, disks, std::move(tendons), disk_mass};
+           }),
+           "length"_a = 0.05, "disks"_a = 10, "tendons"_a = std::vector<tdcr::TendonSpec>{}, "disk_mass"_a = 0.0)
+      .def_readwrite("length", &tdcr::Segment::length)
+      .def_readwrite("disks", &tdcr::Segment::disks)
+      .def_readwrite("tendons", &tdcr::Segment::tendons)
+      .def_readwrite("disk_mass", &tdcr::Segment::disk_mass);
+  py::bind_vector<std::vector<tdcr::Segment>>(m, "SegmentList");
+  py::implicitly_convertible<py::list, std::vector<tdcr::Segment>>();
+
+  py::class_<tdcr::Robot>(m, "Robot", "A backbone and its segments, base to tip")
+      .def(py::init([](const tdcr::Backbone& backbone, std::vector<tdcr::Segment> segments) {
+             return tdcr::Robot{backbone, std::move(segments)};
+           }),
+           "backbone"_a = tdcr::Backbone(), "segments"_a = std::vector<tdcr::Segment>{})
+      .def_readwrite("backbone", &tdcr::Robot::backbone)
+      .def_readwrite("segments", &tdcr::Robot::segments)
+      .def("validate", &tdcr::Robot::validate, "raise InputError on an unusable value")
+      .def("total_length", &tdcr::Robot::total_length)
+      .def("total_disks", &tdcr::Robot::total_disks)
+      .def("tendon_count", &tdcr::Robot::tendon_count);
+}
+
+void bind_input(py::module_& m) {
+  py::class_<tdcr::Actuation> act(m, "Actuation", "Tendon tensions (N) or displacements (m), one per tendon");
+  act.def(py::init([](std::vector<double> values, const std::string& kind, const std::string& convention) {
+            tdcr::Actuation a;
+            a.values = std::move(values);
+            a.kind = parse_name(kActuationKind, kind, "actuation");
+            a.convention = parse_name(kConvention, convention, "actuation.displacement_convention");
+            return a;
+          }),
+          "values"_a = std::vector<double>{}, "kind"_a = "tensions", "convention"_a = "at_base")
+      .def_property(
+          "values",
+          [](const tdcr::Actuation& a) {
+            // A read-only copy: `a.values[0] = x` raises instead of changing a temporary.
+            py::array_t<double> v(static_cast<py::ssize_t>(a.values.size()), a.values.data());
+            py::detail::array_proxy(v.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
+            return v;
+          },
+          [](tdcr::Actuation& a, const std::vector<double>& v) { a.values = v; },
+          "one value per tendon, N or m (assign a whole list)");
+  enum_property(act, "kind", &tdcr::Actuation::kind, kActuationKind, "actuation", "'tensions' or 'displacements'");
+  enum_property(act, "convention", &tdcr::Actuation::convention, kConvention, "actuation.displacement_convention",
+                "'at_base' or 'per_segment'");
+
+  py::class_<tdcr::Loads>(m, "Loads", "Tip force (N), tip moment (N m), gravity (m/s^2), base frame")
+      .def(py::init([](const tdcr::Vec3& f, const tdcr::Vec3& mo, const tdcr::Vec3& g) { return tdcr::Loads{f, mo, g}; }),
+           "tip_force"_a = tdcr::Vec3::Zero(), "tip_moment"_a = tdcr::Vec3::Zero(), "gravity"_a = tdcr::Vec3::Zero())
+      .def_readwrite("tip_force", &tdcr::Loads::tip_force)
+      .def_readwrite("tip_moment", &tdcr::Loads::tip_moment)
+      .def_readwrite("gravity", &tdcr::Loads::gravity);
+
+  py::class_<tdcr::ModelInput>(m, "ModelInput", "The per-call input of a model: actuation and loads")
+      .def(py::init([](const tdcr::Actuation& a, const tdcr::Loads& l) { return tdcr::ModelInput{a, l}; }),
+           "actuation"_a = tdcr::Actuation(), "loads"_a = tdcr::Loads())
+      .def_readwrite("actuation", &tdcr::ModelInput::actuation)
+      .def_readwrite("loads", &tdcr::ModelInput::loads)
+      .def("validate", &tdcr::ModelInput::validate, "robot"_a);
+}
+
+void bind_effects(py::module_& m) {
+  py::class_<tdcr::PrbParameters> prb(m, "PrbParameters", "PRB link length and spring factors (paper Table 1)");
+  prb.def(py::init<>());
+  array_property<4>(prb, "gamma", &tdcr::PrbParameters::gamma, "effects.prb.gamma");
+  array_property<3>(prb, "k_theta", &tdcr::PrbParameters::k_theta, "effects.prb.k_theta");
+
+  py::class_<tdcr::Effects> eff(m, "Effects", "What a model simulates (defaults: the paper's code)");
+  eff.def(py::init<>())
+      .def_readwrite("shear_extension", &tdcr::Effects::shear_extension)
+      .def_readwrite("kink_forces", &tdcr::Effects::kink_forces)
+      .def_readwrite("prb", &tdcr::Effects::prb)
+      .def("validate", &tdcr::Effects::validate);
+  enum_property(eff, "disk_normal_force", &tdcr::Effects::disk_normal_force, kDiskNormalForce,
+                "effects.disk_normal_force", "'removed' (Eq. 58) or 'kept'");
+  enum_property(eff, "tendon_path", &tdcr::Effects::tendon_path, kTendonPath, "effects.tendon_path",
+                "'fully_constrained' or 'partially_constrained' (CC)");
+
+  py::class_<tdcr::SolverOptions> opt(m, "SolverOptions", "Numerical settings of a solve");
+  opt.def(py::init<>())
+      .def_readwrite("function_tolerance", &tdcr::SolverOptions::function_tolerance)
+      .def_readwrite("step_tolerance", &tdcr::SolverOptions::step_tolerance)
+      .def_readwrite("max_iterations", &tdcr::SolverOptions::max_iterations)
+      .def_readwrite("rk4_steps", &tdcr::SolverOptions::rk4_steps)
+      .def_readwrite("rk4_max_step", &tdcr::SolverOptions::rk4_max_step)
+      .def_readwrite("cvode_rtol", &tdcr::SolverOptions::cvode_rtol)
+      .def_readwrite("cvode_atol", &tdcr::SolverOptions::cvode_atol)
+      .def_readwrite("continuation", &tdcr::SolverOptions::continuation)
+      .def_readwrite("max_continuation_steps", &tdcr::SolverOptions::max_continuation_steps)
+      .def_readwrite("stability", &tdcr::SolverOptions::stability)
+      .def_readwrite("differential_kinematics", &tdcr::SolverOptions::differential_kinematics)
+      .def("validate", &tdcr::SolverOptions::validate);
+  enum_property(opt, "integrator", &tdcr::SolverOptions::integrator, kIntegrator, "solver.integrator",
+                "'rk4' or 'cvode'");
+  enum_property(opt, "linear_solver", &tdcr::SolverOptions::linear_solver, kLinearSolver, "solver.linear_solver",
+                "'auto', 'dense' or 'klu'");
+}
+
+void bind_scene_class(py::module_& m) {
+  py::class_<tdcr::Scene>(m, "Scene", "Robot, actuation, loads, effects, model name and solver options")
+      .def(py::init<>())
+      .def_readwrite("robot", &tdcr::Scene::robot)
+      .def_readwrite("actuation", &tdcr::Scene::actuation)
+      .def_readwrite("loads", &tdcr::Scene::loads)
+      .def_readwrite("effects", &tdcr::Scene::effects)
+      .def_readwrite("model", &tdcr::Scene::model)
+      .def_readwrite("solver", &tdcr::Scene::solver)
+      .def("input", &tdcr::Scene::input, "the ModelInput (actuation and loads)")
+      .def("validate", &tdcr::validate_scene, "raise InputError naming the field and value of any unusable entry")
+      .def("to_json", &tdcr::scene_to_json, "the scene file text")
+      .def("to_dict", [](const tdcr::Scene& s) { return json_loads(tdcr::scene_to_json(s)); })
+      .def("copy", [](const tdcr::Scene& s) { return s; })
+      .def("__copy__", [](const tdcr::Scene& s) { return s; })
+      .def("__deepcopy__", [](const tdcr::Scene& s, py::dict) { return s; })
+      .def_static("from_file", &tdcr::load_scene, "path"_a, "read a scene file (InputError on bad input)")
+      .def_static("from_json", &tdcr::parse_scene, "text"_a, "source"_a = "<string>")
+      .def_static(
+          "from_dict", [](const py::object& d) { return tdcr::parse_scene(json_dumps(d), "<dict>"); }, "data"_a,
+          "parse a dict with the scene file's keys (the same checks and messages as a file)");
+
+  m.def("load_scene", &tdcr::load_scene, "path"_a);
+  m.def("parse_scene", &tdcr::parse_scene, "text"_a, "source"_a = "<string>");
+  m.def("scene_to_json", &tdcr::scene_to_json, "scene"_a);
+}
+
+}  // namespace
+
+void bind_scene(py::module_& m) {
+  bind_robot(m);
+  bind_input(m);
+  bind_effects(m);
+  bind_scene_class(m);
+}
+
+}  // namespace tdcr_python

@@ -1,0 +1,75 @@
+"""tdcr: kineto-static models of tendon-driven continuum robots (CC, CCsub, PRB, VC, VCref).
+
+The classes and functions map 1:1 to the C++ library (docs/python.md):
+
+    import tdcr
+    scene = tdcr.Scene.from_file("examples/paper_robot_vc.json")
+    sol = tdcr.solve(scene)                      # one-shot, scene.model or model="vcref"/"auto"
+    m = tdcr.make_model("vc", scene)             # immutable model
+    ws = m.make_workspace()                      # reusable memory
+    sol2 = tdcr.solve_with(m, ws, scene.input(), scene.solver, warm_start=sol)
+
+Units are SI (m, N, N m); arrays are numpy. Bad input raises tdcr.InputError (a ValueError with
+`.field` and `.value`).
+"""
+
+from ._tdcr import (  # noqa: F401
+    Actuation,
+    Backbone,
+    BackboneStiffness,
+    Effects,
+    GeometryWarning,
+    InputError,
+    Loads,
+    ModelChoice,
+    ModelInput,
+    ModelWorkspace,
+    PathEvent,
+    PrbParameters,
+    Robot,
+    Scene,
+    Segment,
+    Solution,
+    SolverOptions,
+    SolverSummary,
+    Stability,
+    StaticModel,
+    TendonSpec,
+    choose_model,
+    expected_model_error,
+    load_scene,
+    make_model,
+    model_names,
+    parse_scene,
+    scene_to_json,
+    solution_to_json,
+    solve_with,
+    validate_scene,
+)
+from ._tdcr import solve_scene as _solve_scene
+
+__all__ = [name for name in dir() if not name.startswith("_")] + ["solve", "scene_from"]
+
+
+def scene_from(source):
+    """A Scene from a Scene (copied), a dict with the scene file's keys, or a path to a scene file."""
+    if isinstance(source, Scene):
+        return source.copy()
+    if isinstance(source, dict):
+        return Scene.from_dict(source)
+    return Scene.from_file(str(source))
+
+
+def solve(scene, model=None, warm_start=None, accuracy=0.01):
+    """Solve a scene once (a fresh model and workspace), as `tdcr solve SCENE --model MODEL`.
+
+    scene: a Scene, a dict or a path. model: a model name ("cc", "ccsub", "prb", "vc", "vcref") or
+    "auto" (the cheapest model expected to meet `accuracy`, a fraction of the robot length);
+    None keeps scene.model. warm_start: a converged Solution of the same model and robot.
+    Raises InputError on bad input; a solve that does not converge returns a Solution whose
+    `converged` is False.
+    """
+    s = scene_from(scene)
+    if model is not None:
+        s.model = model.lower() if model.lower() == "auto" else model
+    return _solve_scene(s, accuracy, warm_start)
