@@ -100,8 +100,13 @@ void VcrefShooting::rebase(int k, double* x) {
 // block b reads nodes b-1 (interval end, pose), b (pose, wrench) and the pose of b+1 in its
 // equilibrium rows when a tensioned tendon passes disk b.
 std::pair<int, int> VcrefShooting::dependent_rows(int block, int k, int j) const {
-  if (d_.friction) return ShootingProblem::dependent_rows(block, k, j);
   const int N = d_.N;
+  if (d_.friction && k > 0 && component(k, j) < 6) {
+    // Friction: a disk's tendon tensions follow the poses of every disk up to the next one.
+    if (block == 0) return {0, 6};
+    if (k == block || k == block - 1) return {0, 12};
+    return k <= block + 1 ? std::make_pair(6, 12) : std::make_pair(0, 0);
+  }
   if (block == 0) return k == N - 1 ? std::make_pair(0, 6) : std::make_pair(0, 0);
   if (k == block || k == block - 1) return {0, 12};
   if (k == block + 1 && j < 6 && passes_[block]) return {6, 12};
