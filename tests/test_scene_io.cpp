@@ -209,6 +209,10 @@ TEST(SceneIo, RoundTripsPaperScene) {
   s.effects.disk_normal_force = tdcr::DiskNormalForce::Kept;
   s.effects.kink_forces = false;
   s.effects.prb.k_theta[1] = 2.5;
+  s.effects.tendon_friction.coefficient = 0.1;
+  s.effects.tendon_friction.coefficients.assign(s.robot.tendon_count(), 0.05);
+  s.effects.tendon_friction.coefficients[1] = 0.3 / 7.0;
+  s.effects.tendon_friction.motion = tdcr::TendonFriction::Motion::Releasing;
   s.solver.integrator = tdcr::IntegratorKind::Cvode;
   s.solver.linear_solver = tdcr::LinearSolverKind::Dense;
   s.solver.continuation = true;
@@ -218,6 +222,9 @@ TEST(SceneIo, RoundTripsPaperScene) {
   EXPECT_EQ(back.robot.segments[1].disk_mass, 1e-3 / 3.0);
   EXPECT_EQ(back.effects.prb.gamma[0], s.effects.prb.gamma[0]);
   EXPECT_FALSE(back.effects.kink_forces);
+  EXPECT_EQ(back.effects.tendon_friction.coefficient, 0.1);
+  EXPECT_EQ(back.effects.tendon_friction.coefficients, s.effects.tendon_friction.coefficients);
+  EXPECT_EQ(back.effects.tendon_friction.motion, tdcr::TendonFriction::Motion::Releasing);
   EXPECT_EQ(back.solver.max_iterations, 77);
 }
 

@@ -24,6 +24,29 @@ void Effects::validate() const {
     if (!(std::isfinite(prb.k_theta[i]) && prb.k_theta[i] > 0.0))
       throw InputError("effects.prb.k_theta[" + std::to_string(i) + "]", format_value(prb.k_theta[i]),
                        "must be positive");
+  const TendonFriction& tf = tendon_friction;
+  if (!(std::isfinite(tf.coefficient) && tf.coefficient >= 0.0))
+    throw InputError("effects.tendon_friction.coefficient", format_value(tf.coefficient),
+                     "must be a finite number >= 0");
+  for (std::size_t k = 0; k < tf.coefficients.size(); ++k)
+    if (!(std::isfinite(tf.coefficients[k]) && tf.coefficients[k] >= 0.0))
+      throw InputError("effects.tendon_friction.coefficients[" + std::to_string(k) + "]",
+                       format_value(tf.coefficients[k]), "must be a finite number >= 0");
+}
+
+void Effects::validate(const Robot& robot) const {
+  validate();
+  const std::size_t n = tendon_friction.coefficients.size();
+  if (n != 0 && static_cast<int>(n) != robot.tendon_count())
+    throw InputError("effects.tendon_friction.coefficients", std::to_string(n) + " values",
+                     "must list one coefficient per tendon (" + std::to_string(robot.tendon_count()) + " tendons)");
+}
+
+bool TendonFriction::on() const {
+  if (coefficients.empty()) return coefficient > 0.0;
+  for (double mu : coefficients)
+    if (mu > 0.0) return true;
+  return false;
 }
 
 void ModelInput::validate(const Robot& robot) const {
@@ -49,7 +72,7 @@ void ModelInput::validate(const Robot& robot) const {
 void Scene::validate() const {
   robot.validate();
   input().validate(robot);
-  effects.validate();
+  effects.validate(robot);
   solver.validate();
 }
 
@@ -65,6 +88,7 @@ SceneEffects active_effects(const Robot& robot, const Effects& effects, const Mo
   e.gravity = e.backbone_weight || e.disk_weight;
   e.shear_extension = effects.shear_extension;
   e.disk_normal_force_removed = effects.disk_normal_force == DiskNormalForce::Removed;
+  e.tendon_friction = effects.tendon_friction.on();
   return e;
 }
 

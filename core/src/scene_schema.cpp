@@ -16,6 +16,8 @@ const Names<DiskNormalForce> kDiskNormalForce = {{"removed", DiskNormalForce::Re
                                                  {"kept", DiskNormalForce::Kept}};
 const Names<TendonPath> kTendonPath = {{"fully_constrained", TendonPath::FullyConstrained},
                                        {"partially_constrained", TendonPath::PartiallyConstrained}};
+const Names<TendonFriction::Motion> kMotion = {{"pulling", TendonFriction::Motion::Pulling},
+                                              {"releasing", TendonFriction::Motion::Releasing}};
 const Names<IntegratorKind> kIntegrators = {{"rk4", IntegratorKind::FixedStepRK4}, {"cvode", IntegratorKind::Cvode}};
 const Names<LinearSolverKind> kLinearSolvers = {
     {"auto", LinearSolverKind::Automatic}, {"dense", LinearSolverKind::Dense}, {"klu", LinearSolverKind::SparseKLU}};
@@ -167,6 +169,28 @@ const Schema<PrbParameters>& prb_schema() {
   return s;
 }
 
+constexpr const char* kFriction = "CCsub, PRB, VCref (CC and VC refuse mu > 0)";
+
+const Schema<TendonFriction>& friction_schema() {
+  using F = TendonFriction;
+  static const Schema<F> s({
+      number_field("coefficient", &F::coefficient,
+                   {"", "`0` (off)", "friction coefficient mu of every tendon; finite, >= 0", kFriction}),
+      Field<F>{{"coefficients", "array of numbers",
+                {"", "none", "one mu per tendon (global order), each finite and >= 0; overrides `coefficient`",
+                 kFriction}},
+               [](const json& j, const std::string& p, F& f) { f.coefficients = read_numbers(j, p); },
+               [](const F& f) { return numbers_json(f.coefficients); },
+               [](const F& f) { return !f.coefficients.empty(); }},
+      choice_field("motion", &F::motion, kMotion,
+                   {"", "`\"pulling\"`",
+                    "`\"pulling\"`: tendons slide towards the actuator, tension drops away from the base by "
+                    "exp(-mu theta); `\"releasing\"`: it rises by exp(+mu theta)",
+                    kFriction}),
+  });
+  return s;
+}
+
 const Schema<Effects>& effects_schema() {
   using E = Effects;
   static const Schema<E> s({
@@ -195,6 +219,12 @@ const Schema<Effects>& effects_schema() {
                     "`\"partially_constrained\"`: straight chords between disks (Eq. 20-23)",
                     "CC (displacement input and reported displacements)"}),
       object_field("prb", &E::prb, prb_schema(), {"", "Table 1", "the two keys below", "PRB"}),
+      object_field("tendon_friction", &E::tendon_friction, friction_schema(),
+                   {"", "off", "capstan friction at the disk holes; the keys below (docs/models.md)", kFriction})
+          .when([](const E& e) {
+            const TendonFriction& f = e.tendon_friction;
+            return f.coefficient != 0.0 || !f.coefficients.empty() || f.motion != TendonFriction::Motion::Pulling;
+          }),
   });
   return s;
 }

@@ -95,6 +95,7 @@ std::string solution_to_json(const Solution& solution, const SolutionJsonOptions
   }
   j["tendon_displacements"] = numbers_json(solution.tendon_displacements);
   j["tensions"] = numbers_json(solution.tensions);
+  if (!solution.tendon_end_tensions.empty()) j["tendon_end_tensions"] = numbers_json(solution.tendon_end_tensions);
   if (options.include_backbone) j["backbone"] = backbone_json(solution.backbone);
   j["timing"] = {{"repeat", options.repeat},
                  {"median_us", number(options.median_us)},

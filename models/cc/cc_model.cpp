@@ -34,6 +34,9 @@ double CcArc::bending_plane() const {
 }
 
 CcModel::CcModel(const Robot& robot, const Effects& effects) : StaticModel(robot, effects) {
+  // Kinematic: the arcs follow from the tendon moments at the base, no tension along a path.
+  if (effects.tendon_friction.on())
+    throw InputError("effects.tendon_friction", "on", "the CC model has no tendon friction; use ccsub, prb or vcref");
   for (const Segment& seg : this->robot().segments) {
     Eigen::MatrixXd A(seg.tendons.size(), 2);
     for (std::size_t i = 0; i < seg.tendons.size(); ++i)

@@ -28,6 +28,11 @@ LumpedBody::LumpedBody(const Robot& robot, const TendonRouting& routing, const E
       N(statics.subsegments()),
       formulation(formulation),
       banded_from(banded_from) {
+  // Friction couples each disk's tendon forces to the shape of every disk proximal to it: no band.
+  if (formulation == LumpedFormulation::Banded && statics.friction())
+    throw InputError("effects.tendon_friction", "on",
+                     "the banded formulation needs disk loads that depend on the neighbouring disks only; "
+                     "use the recursive (or automatic) formulation with tendon friction");
   const BackboneStiffness k = robot.backbone.effective_stiffness();
   EI = k.EI;
   GJ = k.GJ;
@@ -41,7 +46,7 @@ bool LumpedBody::banded(int J) const {
     case LumpedFormulation::Banded: return true;
     case LumpedFormulation::Automatic: break;
   }
-  return J >= banded_from;
+  return J >= banded_from && !statics.friction();
 }
 
 void LumpedBody::compute_frames(const double* x, int J, Frame* frames, SubsegmentPose* poses, Vec3* centroids) const {
@@ -125,6 +130,7 @@ bool LumpedProblem::warm_guess(const Solution& previous, Eigen::VectorXd& y) {
 
 void LumpedProblem::evaluate(const double* x) {
   body_.compute_frames(x, active(), frames_.data(), poses_.data(), backbone_weight_on() ? centroids_.data() : nullptr);
+  if (body_.statics.friction()) body_.statics.update_friction(loads_, frames_.data());
   body_.statics.distal_wrenches(loads_, frames_.data(), centroids_.data(), F_.data(), M_.data());
 }
 
@@ -153,6 +159,11 @@ void LumpedProblem::extract(const Eigen::VectorXd& y, bool evaluated, Solution& 
   solution.disk_frames.resize(body_.N + 1);
   body_.compute_frames(full.data(), active(), solution.disk_frames.data());
   solution.tendon_displacements = tendon::chord_displacements(solution.disk_frames, body_.statics.routing(), convention_);
+  if (body_.statics.friction()) {
+    const TendonRouting& routing = body_.statics.routing();
+    body_.statics.update_friction(loads_, solution.disk_frames.data());
+    solution.tendon_end_tensions = tendon::end_tensions(routing, loads_.chord.data(), static_cast<int>(routing.tendons.size()));
+  }
   solution.unknowns = std::move(full);
 }
 

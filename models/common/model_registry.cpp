@@ -83,7 +83,7 @@ std::uint64_t fnv1a(const std::string& s, std::uint64_t h = 1469598103934665603u
 StaticModel::StaticModel(const Robot& robot, const Effects& effects)
     : robot_(robot), effects_(effects), token_(std::make_shared<const int>(0)) {
   robot_.validate();
-  effects_.validate();
+  effects_.validate(robot_);
   routing_ = TendonRouting::from(robot_);
   Scene description;
   description.robot = robot_;

@@ -41,11 +41,14 @@ bool is_reference(const ModelInfo& m) {
 }
 
 // The models that can take an input of this kind (and loads), cheapest first for the scene.
-std::vector<const ModelInfo*> candidates(bool displacements, bool loaded) {
+// Tendon friction acts at the holes of the disks: only the models with tendon forces at disks.
+std::vector<const ModelInfo*> candidates(bool displacements, bool loaded, bool friction) {
   std::vector<const ModelInfo*> v;
   for (const ModelInfo& m : model_registry()) {
     const ModelCapabilities& c = m.capabilities;
-    if ((displacements ? c.displacement_input : c.tension_input) && (!loaded || c.external_loads)) v.push_back(&m);
+    if ((displacements ? c.displacement_input : c.tension_input) && (!loaded || c.external_loads) &&
+        (!friction || c.tendon_forces_at_disks))
+      v.push_back(&m);
   }
   auto rank = [loaded](const ModelInfo* m) { return loaded && m->loaded_cost_rank >= 0 ? m->loaded_cost_rank : m->cost_rank; };
   std::stable_sort(v.begin(), v.end(), [&](const ModelInfo* a, const ModelInfo* b) { return rank(a) < rank(b); });
@@ -71,10 +74,10 @@ ModelChoice choose_model(const Scene& scene, double tolerance) {
                                std::to_string(n) + " disks per segment (fewest)";
   ModelChoice c;
   const bool displacements = scene.actuation.kind == Actuation::Kind::Displacements;
-  const std::vector<const ModelInfo*> order = candidates(displacements, loaded);
+  const std::vector<const ModelInfo*> order = candidates(displacements, loaded, e.tendon_friction);
   if (order.empty())
     throw InputError("model", "auto",
-                     displacements ? "no model takes tendon displacements together with external loads; give tensions"
+                     displacements ? "no model takes tendon displacements together with external loads or tendon friction; give tensions"
                                    : "no model takes this scene");
   if (displacements) {
     // Kinematic: the cheapest model that takes displacements (there is no accuracy table for them).

@@ -16,6 +16,8 @@ SubsegmentStatics::SubsegmentStatics(const Robot& robot, const TendonRouting& ro
     : robot_(&robot), routing_(&routing) {
   n_ = routing.disk_count() - 1;
   remove_normal_ = effects.disk_normal_force == DiskNormalForce::Removed;
+  friction_on_ = effects.tendon_friction.on();
+  friction_ = effects.tendon_friction;
   length_.assign(n_ + 1, 0.0);
   for (int j = 1; j <= n_; ++j) length_[j] = routing.disk_s[j] - routing.disk_s[j - 1];
 }
@@ -23,6 +25,7 @@ SubsegmentStatics::SubsegmentStatics(const Robot& robot, const TendonRouting& ro
 void SubsegmentStatics::bind(const ModelInput& input, SubsegmentLoads& out) const {
   out.loads.bind(*robot_, *routing_, input);
   out.tensions = out.loads.full_tensions();
+  if (friction_on_) out.chord.assign(out.tensions.size() * routing_->disk_count(), 0.0);
   // Last disk that carries any load: beyond it the robot is straight.
   if (out.loads.has_tip_wrench() || out.loads.has_gravity()) {
     out.active = n_;
@@ -33,10 +36,16 @@ void SubsegmentStatics::bind(const ModelInput& input, SubsegmentLoads& out) cons
   }
 }
 
+void SubsegmentStatics::update_friction(SubsegmentLoads& b, const Frame* frames) const {
+  tendon::friction_tensions(frames, *routing_, b.tensions.data(), friction_, b.chord.data());
+}
+
 void SubsegmentStatics::disk_load(const SubsegmentLoads& b, int j, const Frame* frames, Vec3& f, Vec3& m) const {
   const physics::LoadCase& L = b.loads;
   // Eq. 30-33 (+ Eq. 58): the tendon forces at disk j, moment about O_j.
-  const tendon::DiskWrench w = tendon::disk_wrench(j, frames, *routing_, b.tensions.data(), remove_normal_);
+  const tendon::DiskWrench w = friction_on_
+                                   ? tendon::disk_wrench_friction(j, frames, *routing_, b.chord.data(), remove_normal_)
+                                   : tendon::disk_wrench(j, frames, *routing_, b.tensions.data(), remove_normal_);
   f = w.force;
   m = w.moment;
   if (L.has_disk_weight()) f += L.disk_weight(j);

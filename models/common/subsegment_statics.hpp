@@ -18,6 +18,9 @@ struct SubsegmentLoads {
   physics::LoadCase loads;
   /// Tensions at the current load factor, by global index (what tendon::disk_wrench reads).
   std::vector<double> tensions;
+  /// With tendon friction: the chord tensions of tendon::friction_tensions in the last evaluated
+  /// shape (what tendon::disk_wrench_friction reads); empty without friction.
+  std::vector<double> chord;
   /// J: subsegments 1..J can carry load; J+1..N are exactly straight and untwisted.
   int active = 0;
 
@@ -53,6 +56,12 @@ class SubsegmentStatics {
   /// @brief Weight of the backbone of subsegment j (N, base frame) at the current load factor.
   Vec3 backbone_weight(const SubsegmentLoads& b, int j) const { return length_[j] * b.loads.backbone_weight(); }
 
+  /// @brief True if the tensions follow the shape (Effects::tendon_friction on).
+  bool friction() const { return friction_on_; }
+  /// @brief With friction: b.chord from the base tensions in the shape `frames` (disk frames 0..N);
+  /// call before disk_load / distal_wrenches. Allocation-free after bind.
+  void update_friction(SubsegmentLoads& b, const Frame* frames) const;
+
   /// @brief The load on disk j alone at the current load factor: its tendon forces (Eq. 30-33,
   /// 58), its weight and, at the tip disk, the tip wrench; moment m about O_j.
   void disk_load(const SubsegmentLoads& b, int j, const Frame* frames, Vec3& f, Vec3& m) const;
@@ -74,6 +83,8 @@ class SubsegmentStatics {
   std::vector<double> length_;  // index 1..N
   int n_ = 0;
   bool remove_normal_ = true;
+  bool friction_on_ = false;
+  TendonFriction friction_;
 };
 
 }  // namespace tdcr::detail

@@ -1,31 +1,87 @@
 #include "tdcr/models/tendon_physics.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 #include "physics/tendon_path.hpp"
 
 namespace tdcr::tendon {
 
-DiskWrench disk_wrench(int j, const Frame* frames, const TendonRouting& routing, const double* tensions,
-                       bool remove_normal) {
+namespace {
+
+// Eq. 30-33 (+ Eq. 58) with `tension(t, c)` the tension of tendon t's chord c (from disk c-1 to c).
+template <class Tension>
+DiskWrench wrench(int j, const Frame* frames, const TendonRouting& routing, Tension tension, bool remove_normal) {
   DiskWrench w;
   const Frame& fj = frames[j];
   const Vec3 z = fj.R.col(2);
   const double* s = routing.disk_s.data();
   for (const RoutedTendon& t : routing.tendons) {
     if (j > t.end_disk) continue;
-    const double T = tensions[t.index];
+    const double T = tension(t, j);
     if (T == 0.0) continue;
     const Vec3 P = physics::hole_position(fj, t, s[j]);
     // Eq. 30 / first term of Eq. 32: pull towards the hole in the previous disk.
     Vec3 F = T * (physics::hole_position(frames[j - 1], t, s[j - 1]) - P).normalized();
     if (j < t.end_disk) {
       // Eq. 32: pass-through, also pulled towards the next disk.
-      F += T * (physics::hole_position(frames[j + 1], t, s[j + 1]) - P).normalized();
+      F += tension(t, j + 1) * (physics::hole_position(frames[j + 1], t, s[j + 1]) - P).normalized();
       if (remove_normal) F -= F.dot(z) * z;  // Eq. 58: frictionless disk.
     }
     w.force += F;
     w.moment += (P - fj.p).cross(F);  // Eq. 31 / 33
   }
   return w;
+}
+
+}  // namespace
+
+DiskWrench disk_wrench(int j, const Frame* frames, const TendonRouting& routing, const double* tensions,
+                       bool remove_normal) {
+  return wrench(j, frames, routing, [tensions](const RoutedTendon& t, int) { return tensions[t.index]; },
+                remove_normal);
+}
+
+DiskWrench disk_wrench_friction(int j, const Frame* frames, const TendonRouting& routing, const double* chord,
+                                bool remove_normal) {
+  const int D = routing.disk_count();
+  return wrench(j, frames, routing, [chord, D](const RoutedTendon& t, int c) { return chord[t.index * D + c]; },
+                remove_normal);
+}
+
+void friction_tensions(const Frame* frames, const TendonRouting& routing, const double* base_tensions,
+                       const TendonFriction& friction, double* chord, int up_to) {
+  const int D = routing.disk_count();
+  const double sign = friction.sign();
+  const double* s = routing.disk_s.data();
+  for (const RoutedTendon& t : routing.tendons) {
+    double* c = chord + t.index * D;
+    double T = base_tensions[t.index];
+    const int last = std::min(t.end_disk, up_to);
+    if (T == 0.0) {
+      for (int j = 1; j <= last; ++j) c[j] = 0.0;
+      continue;
+    }
+    const double k = sign * friction.of(t.index);
+    Vec3 in = frames[0].R.col(2);  // from the actuator along the base disk's axis
+    Vec3 P = physics::hole_position(frames[0], t, s[0]);
+    for (int j = 1; j <= last; ++j) {
+      const Vec3 Q = physics::hole_position(frames[j], t, s[j]);
+      const Vec3 out = (Q - P).normalized();
+      // Turning angle at the hole in disk j-1 (atan2: accurate for small angles too).
+      T *= std::exp(k * std::atan2(in.cross(out).norm(), in.dot(out)));
+      c[j] = T;
+      in = out;
+      P = Q;
+    }
+  }
+}
+
+std::vector<double> end_tensions(const TendonRouting& routing, const double* chord, int tendon_count) {
+  std::vector<double> e(tendon_count, 0.0);
+  const int D = routing.disk_count();
+  for (const RoutedTendon& t : routing.tendons) e[t.index] = chord[t.index * D + t.end_disk];
+  return e;
 }
 
 double chord_length(const Frame* frames, const TendonRouting& routing, int k, int first) {

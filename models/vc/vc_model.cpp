@@ -20,6 +20,9 @@ long VcWorkspace::rhs_evaluations() const {
 VcModel::VcModel(const Robot& robot, const Effects& effects, VcOptions options)
     : StaticModel(robot, effects), options_(options) {
   options_.kink_forces = options_.kink_forces && effects.kink_forces;  // either turns them off
+  if (effects.tendon_friction.on())
+    throw InputError("effects.tendon_friction", "on",
+                     "the VC model does not simulate tendon friction yet; use vcref, ccsub or prb");
   if (!(options_.multiple_shooting_threshold >= 0.0))
     throw InputError("multiple_shooting_threshold", format_value(options_.multiple_shooting_threshold),
                      "must be a number >= 0");

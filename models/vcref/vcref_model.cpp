@@ -98,6 +98,9 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
   std::string integrator_name() const override { return integrator_->name(); }
   // The reduced stiffness in the disk poses (vcref_stability.cpp).
   Stability stability(const Eigen::VectorXd& x) override {
+    if (d_.friction)
+      return Stability{StabilityStatus::Undetermined, NAN,
+                       "tendon friction: the disk-pose stiffness test assumes tensions independent of the shape"};
     if (problem_.loads().load_factor() != 1.0) system_.set_parameter(1.0);
     if (!shooting_.evaluate(x)) return Stability{StabilityStatus::Undetermined, NAN, "the shots at the answer failed"};
     return disk_pose_stability(problem_, *integrator_, shooting_.nodes());
@@ -131,6 +134,12 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
     for (int j = 1; j < N; ++j) sol.disk_frames[j] = cosserat::frame_of(nodes.start(j));
     sol.disk_frames[N] = cosserat::frame_of(nodes.end(N - 1));
     sol.tendon_displacements = tendon::chord_displacements(sol.disk_frames, routing, convention_);
+    if (d_.friction) {
+      std::vector<double> chord(problem_.tensions().size() * routing.disk_count(), 0.0);
+      tendon::friction_tensions(sol.disk_frames.data(), problem_.active(), problem_.tensions().data(), d_.tendon_friction,
+                                chord.data());
+      sol.tendon_end_tensions = tendon::end_tensions(routing, chord.data(), static_cast<int>(routing.tendons.size()));
+    }
     sol.disk_frames[N].R = lie::nearest_rotation(sol.disk_frames[N].R);
     sol.backbone.resize(N + 1);
     sol.backbone[0] = BackboneSample{0.0, Frame{}, x.segment<3>(0), x.segment<3>(3)};
@@ -243,6 +252,8 @@ VcrefModel::VcrefModel(const Robot& robot, const Effects& effects, const VcrefOp
     for (int j = 1; j < t.end_disk; ++j) d->pass_through[j] = 1;
   d->section = cosserat::Section::from(this->robot(), effects, Vec3::Zero());
   d->remove_normal = effects.disk_normal_force == DiskNormalForce::Removed;
+  d->friction = effects.tendon_friction.on();
+  d->tendon_friction = effects.tendon_friction;
   d->arc_guess = options_.initial_guess == VcrefOptions::InitialGuess::ConstantCurvature;
   d->length = this->robot().total_length();
   d->l_min = d->length;

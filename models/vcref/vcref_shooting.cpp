@@ -52,6 +52,7 @@ void VcrefShooting::bind(const ModelInput& input, const SolverOptions& options) 
   fd_rel_ = kFdStep;
   if (options.integrator == IntegratorKind::Cvode)  // adaptive steps: noise ~ rtol
     fd_rel_ = std::max(kFdStep, std::sqrt(options.cvode_rtol));
+  if (d_.friction) chord_.assign(load_.full_tensions().size() * routing.disk_count(), 0.0);
   set_load_factor(1.0);
 }
 
@@ -100,6 +101,12 @@ void VcrefShooting::rebase(int k, double* x) {
 // equilibrium rows when a tensioned tendon passes disk b.
 std::pair<int, int> VcrefShooting::dependent_rows(int block, int k, int j) const {
   const int N = d_.N;
+  if (d_.friction && k > 0 && component(k, j) < 6) {
+    // Friction: a disk's tendon tensions follow the poses of every disk up to the next one.
+    if (block == 0) return {0, 6};
+    if (k == block || k == block - 1) return {0, 12};
+    return k <= block + 1 ? std::make_pair(6, 12) : std::make_pair(0, 0);
+  }
   if (block == 0) return k == N - 1 ? std::make_pair(0, 6) : std::make_pair(0, 0);
   if (k == block || k == block - 1) return {0, 12};
   if (k == block + 1 && j < 6 && passes_[block]) return {6, 12};
@@ -110,18 +117,28 @@ std::pair<int, int> VcrefShooting::dependent_rows(int block, int k, int j) const
 // j+1 if some tendon passes) must be set when a tendon acts on disk j.
 void VcrefShooting::subtract_disk_load(int j, Vec3& F, Vec3& M) const {
   if (tendon_at_[j]) {
-    const tendon::DiskWrench w = tendon::disk_wrench(j, frames_.data(), active_, tension_.data(), d_.remove_normal);
+    const tendon::DiskWrench w =
+        d_.friction ? tendon::disk_wrench_friction(j, frames_.data(), active_, chord_.data(), d_.remove_normal)
+                    : tendon::disk_wrench(j, frames_.data(), active_, tension_.data(), d_.remove_normal);
     F -= w.force;
     M -= w.moment;
   }
   if (load_.has_disk_weight()) F -= load_.disk_weight(j);
 }
 
+void VcrefShooting::friction_frames(int j, const bvp::ShootingNodes& nodes) const {
+  const int N = d_.N, last = std::min(j + 1, N);
+  for (int k = 0; k <= last; ++k) frames_[k] = cosserat::frame_of(k < N ? nodes.start(k) : nodes.end(N - 1));
+  tendon::friction_tensions(frames_.data(), active_, tension_.data(), d_.tendon_friction, chord_.data(), last);
+}
+
 void VcrefShooting::boundary(const bvp::ShootingNodes& nodes, double* r) const {
   const int N = d_.N;
   const double* e = nodes.end(N - 1);
   Vec3 F = cosserat::force(e), M = cosserat::moment(e);
-  if (tendon_at_[N]) {
+  if (d_.friction && tendon_at_[N]) {
+    friction_frames(N, nodes);
+  } else if (tendon_at_[N]) {
     frames_[N - 1] = cosserat::frame_of(nodes.start(N - 1));
     frames_[N] = cosserat::frame_of(e);
   }
@@ -139,7 +156,9 @@ void VcrefShooting::junction(int j, const bvp::ShootingNodes& nodes, double* r) 
   const double* e = nodes.end(j - 1);
   const double* y = nodes.start(j);
   Vec3 F = cosserat::force(e), M = cosserat::moment(e);
-  if (tendon_at_[j]) {
+  if (d_.friction && tendon_at_[j]) {
+    friction_frames(j, nodes);
+  } else if (tendon_at_[j]) {
     frames_[j - 1] = cosserat::frame_of(nodes.start(j - 1));
     frames_[j] = cosserat::frame_of(y);
     if (passes_[j]) frames_[j + 1] = cosserat::frame_of(j + 1 < N ? nodes.start(j + 1) : nodes.end(N - 1));

@@ -21,6 +21,8 @@ struct VcrefModel::Data {
   std::vector<char> pass_through;   // some routed tendon passes (does not end at) disk j
   cosserat::Section section;        // stiffness and rod variant; weight per call
   bool remove_normal = true;        // Eq. 58
+  bool friction = false;            // Effects::tendon_friction on: disk loads read all proximal poses
+  TendonFriction tendon_friction;
   bool arc_guess = true;            // VcrefOptions::initial_guess
   double length = 0.0;              // robot length L
   double l_min = 0.0;               // shortest interval
@@ -60,7 +62,8 @@ class VcrefShooting final : public bvp::ShootingProblem {
   int intervals() const override { return d_.N; }
   double node(int k) const override { return d_.routing->disk_s[k]; }
   const bvp::OdeSystem& ode(int) const override { return rod_; }
-  int coupling() const override { return 1; }
+  // Friction: the tension at disk j follows the poses of disks 0..j+1, so every block reads every node.
+  int coupling() const override { return d_.friction ? d_.N : 1; }
   int unknown_dimension(int k) const override { return k == 0 ? 6 : 12; }
   void start_state(int k, const double* x, double* y) const override;
   void rebase(int k, double* x) override;
@@ -74,6 +77,8 @@ class VcrefShooting final : public bvp::ShootingProblem {
 
  private:
   void subtract_disk_load(int j, Vec3& F, Vec3& M) const;
+  // With friction: frames_ 0..j+1 (at most N) from the nodes and chord_ from them.
+  void friction_frames(int j, const bvp::ShootingNodes& nodes) const;
 
   const VcrefModel::Data& d_;
   physics::LoadCase load_;
@@ -84,6 +89,7 @@ class VcrefShooting final : public bvp::ShootingProblem {
   cosserat::FreeRod rod_;
   std::vector<Mat3> rbar_;          // chart references (0 unused)
   mutable std::vector<Frame> frames_;  // disk frames of one block evaluation
+  mutable std::vector<double> chord_;  // friction: chord tensions (tendon::friction_tensions)
   mutable int chart_node_ = -1;        // last chart evaluation: node, w, Rbar exp(w)
   mutable Vec3 chart_w_ = Vec3::Zero();
   mutable Mat3 chart_R_ = Mat3::Identity();

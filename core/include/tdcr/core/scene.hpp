@@ -62,6 +62,33 @@ struct PrbParameters {
   double k_theta[3] = {3.25, 2.84, 2.95};
 };
 
+/// @brief Capstan friction between the tendons and the disk holes (or the lumen), with the
+/// direction of tendon motion that sets its sign (hysteresis). Off (coefficient 0) by default.
+///
+/// The tension input is the tension at the actuator (base). Walking from the base along the
+/// tendon, its tension changes by exp(-/+ mu theta) where the tendon turns by the angle theta
+/// (discrete models: at each hole; VC: dT/ds = -/+ mu |f_k|). Pulling: the tendon slides
+/// towards the actuator and friction opposes, so the tension drops away from the base (-);
+/// releasing: it rises (+). Quasi-static, one known direction of motion per solve, no
+/// stick-slip transition inside a solve (docs/models.md).
+struct TendonFriction {
+  /// @brief Direction in which the tendons slide during the step that this solve models.
+  enum class Motion {
+    Pulling,   ///< Tendons pulled (tension rising): tension decreases away from the base.
+    Releasing  ///< Tendons released (tension falling): tension increases away from the base.
+  };
+  double coefficient = 0.0;          ///< Friction coefficient mu (>= 0) of every tendon.
+  std::vector<double> coefficients;  ///< Optional, one per tendon (global order), overriding `coefficient`.
+  Motion motion = Motion::Pulling;   ///< Direction of tendon motion.
+
+  /// @brief mu of tendon k (global index).
+  double of(int k) const { return coefficients.empty() ? coefficient : coefficients[k]; }
+  /// @brief True if some tendon has a nonzero coefficient.
+  bool on() const;
+  /// @brief +1 when releasing, -1 when pulling: the sign of dT/d(turning angle).
+  double sign() const { return motion == Motion::Releasing ? 1.0 : -1.0; }
+};
+
 /// @brief What the scene asks to simulate. Part of a model's description (a model is built from
 /// a Robot and its Effects); defaults are the paper's code.
 struct Effects {
@@ -74,10 +101,16 @@ struct Effects {
   bool kink_forces = true;
   TendonPath tendon_path = TendonPath::FullyConstrained;         ///< CC only.
   PrbParameters prb;                                             ///< PRB only.
+  TendonFriction tendon_friction;  ///< Capstan friction (CCsub, PRB, VCref); off by default.
 
   /// @brief Throws InputError (field `effects.prb.gamma[i]` or `effects.prb.k_theta[i]`) on a
-  /// PRB parameter that is not a positive finite number.
+  /// PRB parameter that is not a positive finite number, and (field
+  /// `effects.tendon_friction.coefficient` or `...coefficients[k]`) on a friction coefficient that
+  /// is negative or not finite.
   void validate() const;
+  /// @brief validate() and the checks that need the robot: one friction coefficient per tendon
+  /// (`effects.tendon_friction.coefficients`) when the list is given.
+  void validate(const Robot& robot) const;
 };
 
 /// @brief The per-call input of a model: how the tendons are actuated and the external loads.
@@ -100,6 +133,7 @@ struct SceneEffects {
   bool disk_weight = false;      ///< Gravity and nonzero disk mass.
   bool shear_extension = true;            ///< Effects::shear_extension (CC, VC, VCref).
   bool disk_normal_force_removed = true;  ///< Effects::disk_normal_force is Removed (Eq. 58).
+  bool tendon_friction = false;           ///< Effects::tendon_friction is on (some mu > 0).
 };
 
 /// @brief The effects a solve of `robot` with `effects` under `input` turns on.
@@ -115,7 +149,7 @@ struct Scene {
   SolverOptions solver;  ///< Numerical settings (`solver`).
 
   /// @brief Throws InputError naming the field and value for any unusable entry: the robot's
-  /// (Robot::validate), the input's (ModelInput::validate), the effects' (Effects::validate), an
+  /// (Robot::validate), the input's (ModelInput::validate), the effects' (Effects::validate(robot)), an
   /// invalid solver option (SolverOptions::validate). The model name is checked against the
   /// model registry by the models layer (tdcr::validate_scene, models/static_model.hpp).
   void validate() const;

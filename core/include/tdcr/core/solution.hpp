@@ -119,6 +119,9 @@ struct Solution {
   std::vector<Frame> disk_frames;         ///< Base disk (index 0), every disk, tip last.
   std::vector<double> tendon_displacements;  ///< Per tendon (m), positive when pulled, at base.
   std::vector<double> tensions;           ///< Tendon tensions used or implied (N), if known.
+  /// With tendon friction (Effects::tendon_friction on): per tendon, the tension (N) where it
+  /// ends (its last chord), the input tension at the base times the capstan factor. Empty else.
+  std::vector<double> tendon_end_tensions;
   /// The external loads of the input this answer is for (with `tensions`: where a warm start
   /// from this Solution begins its input path).
   Loads loads;

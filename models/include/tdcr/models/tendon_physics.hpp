@@ -33,6 +33,28 @@ inline Vec3 hole_position(const Frame& f, const RoutedTendon& t) { return f.p + 
 DiskWrench disk_wrench(int j, const Frame* frames, const TendonRouting& routing, const double* tensions,
                        bool remove_normal);
 
+/// @brief Capstan friction (Effects::tendon_friction): the tension of every chord of every
+/// tendon of `routing` in the shape `frames`.
+///
+/// Walking from the base, the tension of tendon t starts at base_tensions[t.index] (the
+/// actuator's) and is multiplied at each hole it passes, disks 0 .. end_disk - 1, by
+/// exp(friction.sign() mu_t theta), theta the angle between the incoming and the outgoing
+/// chord (at the base disk the incoming direction is the base disk's z axis). Out:
+/// chord[t.index * D + j] (D = routing.disk_count()) is the tension of the chord from disk j-1
+/// to disk j, j = 1 .. end_disk (and j <= up_to: chord j reads frames 0..j only); other entries
+/// are left alone. Allocation-free.
+void friction_tensions(const Frame* frames, const TendonRouting& routing, const double* base_tensions,
+                       const TendonFriction& friction, double* chord, int up_to = 1 << 30);
+
+/// @brief disk_wrench with the chord tensions of friction_tensions: a tendon pulls disk j towards
+/// disk j-1 with the tension of chord j and towards disk j+1 with that of chord j+1.
+DiskWrench disk_wrench_friction(int j, const Frame* frames, const TendonRouting& routing, const double* chord,
+                                bool remove_normal);
+
+/// @brief Per tendon (global order) the tension of its last chord, from friction_tensions'
+/// output (zero for a tendon of no tension).
+std::vector<double> end_tensions(const TendonRouting& routing, const double* chord, int tendon_count);
+
 /// @brief Length of tendon k along the partially constrained path: the sum of the chords
 /// between its holes in consecutive disks, from disk `first` to its terminating disk.
 double chord_length(const Frame* frames, const TendonRouting& routing, int k, int first = 0);
