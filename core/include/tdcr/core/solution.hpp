@@ -119,6 +119,9 @@ struct Solution {
   std::vector<Frame> disk_frames;         ///< Base disk (index 0), every disk, tip last.
   std::vector<double> tendon_displacements;  ///< Per tendon (m), positive when pulled, at base.
   std::vector<double> tensions;           ///< Tendon tensions used or implied (N), if known.
+  /// Displacement input (CCsub, PRB, VC, VCref): per tendon, true if it is slack (commanded
+  /// below the pull of its path at zero tension, so T = 0). Empty for tension input and CC.
+  std::vector<bool> tendon_slack;
   /// The external loads of the input this answer is for (with `tensions`: where a warm start
   /// from this Solution begins its input path).
   Loads loads;
