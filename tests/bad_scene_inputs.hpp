@@ -208,7 +208,7 @@ inline std::vector<BadInput> bad_inputs() {
       {"TendonStiffnessZero", with("/robot/segments/0/tendons/1/stiffness", 0), "robot.segments[0].tendons[1].stiffness",
        "0"},
       {"TendonStiffnessNegative", with("/robot/segments/1/tendons/0/stiffness", -250.0),
-       "robot.segments[1].tendons[0].stiffness", "-250"},
+       "robot.segments[1].tendons[0].stiffness", "-2.5e+02"},
       {"TendonStiffnessOverflow", with_raw("/robot/segments/1/tendons/1/stiffness", "1e999"),
        "robot.segments[1].tendons[1].stiffness", "1e999"},
       {"TendonStiffnessString", with("/robot/segments/0/tendons/0/stiffness", "stiff"),
@@ -219,7 +219,7 @@ inline std::vector<BadInput> bad_inputs() {
          j["robot"]["segments"][1]["tendons"][0]["stiffness"] = 300.0;
          j["actuation"] = {{"displacements", {0.001, 0, 0, 0}}};
        }),
-       "robot.segments[1].tendons[0].stiffness", "300"},
+       "robot.segments[1].tendons[0].stiffness", "3e+02"},
       // Solver values
       {"Rk4StepsZero", with("/solver", {{"rk4_steps", 0}}), "solver.rk4_steps", "0"},
       {"FunctionToleranceNegative", with("/solver", {{"function_tolerance", -1e-10}}), "solver.function_tolerance",

@@ -256,9 +256,9 @@ Solution solve_displacement_input(const StaticModel& model, ModelWorkspace& work
                                                       : TerminationType::NoConvergence;
   char buf[256];
   std::snprintf(buf, sizeof buf,
-                "displacement input %s: %d outer iterations, max |phi| = %.3g (tolerance %.3g), %d tension solves "
+                "displacement input%s: %d outer iterations, max |phi| = %.3g (tolerance %.3g), %d tension solves "
                 "(%d Newton iterations, %d difference Jacobians); slack tendons: ",
-                converged ? "converged" : "failed", iterations, mismatch, tol, P.solves, P.newton_iterations,
+                converged ? "" : " failed", iterations, mismatch, tol, P.solves, P.newton_iterations,
                 P.jacobians);
   sum.message = buf + slack_list(cur.tendon_slack) + (stop.empty() ? "" : "; stopped: " + stop) +
                 "; last tension solve: " + inner;
