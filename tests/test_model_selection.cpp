@@ -45,7 +45,7 @@ TEST(ModelSelection, DisplacementsGoToCcUnlessStaticsAreNeeded) {
   s.actuation.values = {0.001, -0.001, 0, 0};
   EXPECT_EQ(choose_model(s).kind, ModelKind::CC);
   Scene mixed = s;
-  mixed.actuation.kinds = {Actuation::Kind::Displacements, Actuation::Kind::Tensions, Actuation::Kind::Tensions,
+  mixed.actuation.kinds = {Actuation::Kind::Displacements, Actuation::Kind::Displacements, Actuation::Kind::Tensions,
                            Actuation::Kind::Tensions};
   EXPECT_EQ(choose_model(mixed).kind, ModelKind::VC);
   Scene elastic = s;
