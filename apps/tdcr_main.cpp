@@ -244,6 +244,12 @@ void print_human(const Timed& t, int repeat) {
     std::printf("tip position (mm):                   [%.6g, %.6g, %.6g]\n", p[0], p[1], p[2]);
     std::printf("tip angle from base z axis (deg):    %.6g\n", std::acos(c) * 180.0 / M_PI);
   }
+  if (!s.tendon_slack.empty()) {
+    std::printf("tensions (N), displacement input:    [");
+    for (std::size_t k = 0; k < s.tensions.size(); ++k)
+      std::printf("%s%.6g%s", k ? ", " : "", s.tensions[k], s.tendon_slack[k] ? " (slack)" : "");
+    std::printf("]\n");
+  }
   std::printf("solve time (us):                     median %.1f, min %.1f over %d run%s\n", t.median_us,
               t.min_us, repeat, repeat == 1 ? "" : "s");
 }

@@ -187,6 +187,50 @@ inline std::vector<BadInput> bad_inputs() {
        "actuation.displacement_convention", "\"at_tip\""},
       {"DisplacementsTooMany", edited([](json& j) { j["actuation"] = {{"displacements", {0, 0, 0, 0, 0}}}; }),
        "actuation.displacements", "5 values"},
+      {"DisplacementOverflow",
+       [] {
+         std::string t = edited([](json& j) { j["actuation"] = {{"displacements", {0, "@@RAW@@", 0, 0}}}; });
+         return t.replace(t.find("\"@@RAW@@\""), 9, "1e999");
+       }(),
+       "actuation.displacements[1]", "1e999"},
+      {"DisplacementNullAlone", edited([](json& j) { j["actuation"] = {{"displacements", {0, nullptr, 0, 0}}}; }),
+       "actuation.displacements[1]", "null"},
+      {"TensionNullAlone", with("/actuation/tensions/1", nullptr), "actuation.tensions[1]", "null"},
+      {"MixedTendonGivenTwice",
+       edited([](json& j) {
+         j["actuation"] = {{"tensions", {1, nullptr, 0, 0}}, {"displacements", {nullptr, 0.001, 0.002, nullptr}}};
+       }),
+       "actuation.displacements", "tendon 2 is given both"},
+      {"MixedTendonGivenNowhere",
+       edited([](json& j) {
+         j["actuation"] = {{"tensions", {1, nullptr, 0, nullptr}}, {"displacements", {nullptr, 0.001, nullptr, nullptr}}};
+       }),
+       "actuation.displacements", "tendon 3 is given neither"},
+      {"MixedListLengths",
+       edited([](json& j) { j["actuation"] = {{"tensions", {1, nullptr, 0, 0}}, {"displacements", {nullptr, 0.001}}}; }),
+       "actuation.displacements", "one entry per tendon"},
+      {"MixedInputForCc",
+       edited([](json& j) {
+         j["model"] = "cc";
+         j["actuation"] = {{"tensions", {1, nullptr, 0, 0}}, {"displacements", {nullptr, 0.001, nullptr, nullptr}}};
+       }),
+       "actuation", "kinematic"},
+      // Elastic tendons
+      {"TendonStiffnessZero", with("/robot/segments/0/tendons/1/stiffness", 0), "robot.segments[0].tendons[1].stiffness",
+       "0"},
+      {"TendonStiffnessNegative", with("/robot/segments/1/tendons/0/stiffness", -250.0),
+       "robot.segments[1].tendons[0].stiffness", "-2.5e+02"},
+      {"TendonStiffnessOverflow", with_raw("/robot/segments/1/tendons/1/stiffness", "1e999"),
+       "robot.segments[1].tendons[1].stiffness", "1e999"},
+      {"TendonStiffnessString", with("/robot/segments/0/tendons/0/stiffness", "stiff"),
+       "robot.segments[0].tendons[0].stiffness", "\"stiff\""},
+      {"ElasticTendonForCc",
+       edited([](json& j) {
+         j["model"] = "cc";
+         j["robot"]["segments"][1]["tendons"][0]["stiffness"] = 300.0;
+         j["actuation"] = {{"displacements", {0.001, 0, 0, 0}}};
+       }),
+       "robot.segments[1].tendons[0].stiffness", "3e+02"},
       // Solver values
       {"Rk4StepsZero", with("/solver", {{"rk4_steps", 0}}), "solver.rk4_steps", "0"},
       {"FunctionToleranceNegative", with("/solver", {{"function_tolerance", -1e-10}}), "solver.function_tolerance",

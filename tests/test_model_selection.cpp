@@ -37,13 +37,22 @@ TEST(ModelSelection, TransverseTipForceOnSoftBackboneIsVcOrVcref) {
   EXPECT_EQ(choose_model(s, 1e-4).kind, ModelKind::VCref);
 }
 
-TEST(ModelSelection, DisplacementsGoToCcAndRefuseLoads) {
+// Displacements go to CC (kinematic) unless the scene needs statics: external loads, mixed
+// input or elastic tendons go to the cheapest static model (VC).
+TEST(ModelSelection, DisplacementsGoToCcUnlessStaticsAreNeeded) {
   Scene s = paper::scene(10, 1, "auto");
   s.actuation.kind = Actuation::Kind::Displacements;
   s.actuation.values = {0.001, -0.001, 0, 0};
   EXPECT_EQ(choose_model(s).kind, ModelKind::CC);
+  Scene mixed = s;
+  mixed.actuation.kinds = {Actuation::Kind::Displacements, Actuation::Kind::Displacements, Actuation::Kind::Tensions,
+                           Actuation::Kind::Tensions};
+  EXPECT_EQ(choose_model(mixed).kind, ModelKind::VC);
+  Scene elastic = s;
+  elastic.robot.segments[0].tendons[0].stiffness = 100.0;
+  EXPECT_EQ(choose_model(elastic).kind, ModelKind::VC);
   s.loads.tip_force = Vec3(0, 0.1, 0);
-  EXPECT_THROW(choose_model(s), InputError);
+  EXPECT_EQ(choose_model(s).kind, ModelKind::VC);
   EXPECT_THROW(choose_model(paper::scene(10, 1, "auto"), 0.0), InputError);
 }
 

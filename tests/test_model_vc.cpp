@@ -451,8 +451,8 @@ TEST(VcModel, GlobalEquilibriumThreeSegmentsWithGravity) {
 }
 
 // Input errors are reported, not solved.
-TEST(VcModel, RejectsDisplacementInput) {
-  Scene s = paper_scene(5, {0, 0, 0, 0});
+TEST(VcModel, RejectsNonFiniteDisplacementInput) {
+  Scene s = paper_scene(5, {0, NAN, 0, 0});
   s.actuation.kind = Actuation::Kind::Displacements;
   VcModel m(s.robot, s.effects);
   auto ws = m.make_workspace();

@@ -478,16 +478,17 @@ TEST(Vcref, TrajectorySwitchingTendonsMatchesFreshWorkspaces) {
 }
 
 // Bad input is refused with the field named.
-TEST(Vcref, RejectsDisplacementInput) {
+TEST(Vcref, RejectsNonFiniteDisplacementInput) {
   Scene s = paper::scene(3, 2);
   s.actuation.kind = Actuation::Kind::Displacements;
+  s.actuation.values[1] = NAN;
   VcrefModel m(s.robot, s.effects);
   auto ws = m.make_workspace();
   try {
     tdcr::solve(m, *ws, s.input(), s.solver);
     FAIL() << "no exception";
   } catch (const InputError& e) {
-    EXPECT_EQ(e.field(), "actuation.displacements");
+    EXPECT_EQ(e.field(), "actuation.displacements[1]");
   }
 }
 

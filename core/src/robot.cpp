@@ -77,6 +77,7 @@ void Robot::validate() const {
       const std::string tp = sp + ".tendons[" + std::to_string(k) + "]";
       require_finite(tp + ".x", seg.tendons[k].x);
       require_finite(tp + ".y", seg.tendons[k].y);
+      if (seg.tendons[k].stiffness) require_positive(tp + ".stiffness", *seg.tendons[k].stiffness);
       const double r = std::hypot(seg.tendons[k].x, seg.tendons[k].y);
       // A tendon on the axis has no lever arm: it cannot bend the robot and makes the
       // constant-curvature maps singular.

@@ -52,15 +52,21 @@ bool TendonFriction::on() const {
 void ModelInput::validate(const Robot& robot) const {
   // Called on every solve: field names are built only on the error path.
   const int m = robot.tendon_count();
-  const bool tensions = actuation.kind == Actuation::Kind::Tensions;
-  const char* key = tensions ? "actuation.tensions" : "actuation.displacements";
+  const auto key = [&](std::size_t k) {
+    return actuation.kind_of(k) == Actuation::Kind::Tensions ? "actuation.tensions" : "actuation.displacements";
+  };
   if (static_cast<int>(actuation.values.size()) != m)
-    throw InputError(key, std::to_string(actuation.values.size()) + " values",
+    throw InputError(key(0), std::to_string(actuation.values.size()) + " values",
                      "must list one value per tendon (" + std::to_string(m) + " tendons)");
+  if (actuation.mixed() && (actuation.kinds.size() != actuation.values.size() ||
+                            actuation.kind != Actuation::Kind::Displacements))
+    throw InputError("actuation", std::to_string(actuation.kinds.size()) + " kinds",
+                     "mixed input needs one kind per value and kind Displacements");
   for (std::size_t k = 0; k < actuation.values.size(); ++k) {
     const double v = actuation.values[k];
-    if (std::isfinite(v) && !(tensions && v < 0.0)) continue;
-    const std::string f = std::string(key) + "[" + std::to_string(k) + "]";
+    const bool tension = actuation.kind_of(k) == Actuation::Kind::Tensions;
+    if (std::isfinite(v) && !(tension && v < 0.0)) continue;
+    const std::string f = std::string(key(k)) + "[" + std::to_string(k) + "]";
     if (!std::isfinite(v)) throw InputError(f, format_value(v), "must be a finite number");
     throw InputError(f, format_value(v), "a tension must not be negative (tendons can only pull)");
   }

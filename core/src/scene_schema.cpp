@@ -5,6 +5,9 @@
 // that `model` is a string.
 #include "scene_schema.hpp"
 
+#include <cmath>
+#include <limits>
+
 namespace tdcr::detail {
 
 namespace {
@@ -88,6 +91,11 @@ const Schema<TendonSpec>& tendon_schema() {
       number_field("x", &TendonSpec::x, {"m", nullptr, "finite", kAll}).required(),
       number_field("y", &TendonSpec::y, {"m", nullptr, "finite; (x, y) at least 1e-9 m from the axis", kAll})
           .required(),
+      optional_number_field("stiffness", &TendonSpec::stiffness,
+                            {"N", "absent: inextensible",
+                             "> 0; axial stiffness EA: with displacement input T = EA / L_free max(0, stretch), "
+                             "L_free the tendon's length from the base to its end disk in the straight robot",
+                             "CCsub, PRB, VC, VCref (displacement input)"}),
   });
   return s;
 }
@@ -118,34 +126,96 @@ const Schema<Robot>& robot_schema() {
   return s;
 }
 
+// An actuation list whose entries may be null (mixed input: the other list gives that tendon);
+// null is read as NaN.
+std::vector<double> read_values(const json& j, const std::string& p) {
+  require_array(j, p);
+  std::vector<double> v;
+  for (std::size_t i = 0; i < j.size(); ++i)
+    v.push_back(j[i].is_null() ? std::numeric_limits<double>::quiet_NaN() : read_number(j[i], index_path(p, i)));
+  return v;
+}
+
+// The values of `kind` (null where a tendon is given the other way).
+ojson values_json(const Actuation& a, Actuation::Kind kind) {
+  std::vector<double> v = a.values;
+  for (std::size_t k = 0; k < v.size(); ++k)
+    if (a.kind_of(k) != kind) v[k] = std::numeric_limits<double>::quiet_NaN();
+  return numbers_json(v);
+}
+
+// Mixed input: `displacements` read after `tensions` (held in a.values, NaN where null); each
+// tendon must be given by exactly one of the lists.
+void merge_displacements(const json& j, const std::string& p, const std::vector<double>& d, Actuation& a) {
+  using K = Actuation::Kind;
+  if (d.size() != a.values.size())
+    throw InputError(p, text_of(j), "with \"tensions\" too, must list one entry per tendon as \"tensions\" does (" +
+                                        std::to_string(a.values.size()) + ")");
+  a.kinds.assign(d.size(), K::Tensions);
+  bool any_tension = false, any_displacement = false;
+  for (std::size_t k = 0; k < d.size(); ++k) {
+    const bool t = std::isfinite(a.values[k]), x = std::isfinite(d[k]);
+    if (t == x)
+      throw InputError(p, text_of(j),
+                       "tendon " + std::to_string(k) + (t ? " is given both" : " is given neither") +
+                           " a tension and a displacement (mixed input: null in one list, a number in the other)");
+    if (x) a.values[k] = d[k], a.kinds[k] = K::Displacements;
+    any_tension = any_tension || t;
+    any_displacement = any_displacement || x;
+  }
+  a.kind = any_displacement ? K::Displacements : K::Tensions;
+  if (!(any_tension && any_displacement)) a.kinds.clear();  // one kind after all
+}
+
 const Schema<Actuation>& actuation_schema() {
   using A = Actuation;
-  // The two lists fill the same vector; the key says what its values are.
-  const auto values = [](const char* key, A::Kind kind, KeyDoc doc) {
-    return Field<A>{{key, "array of numbers", doc},
-                    [kind](const json& j, const std::string& p, A& a) {
-                      a.kind = kind;
-                      a.values = read_numbers(j, p);
-                    },
-                    [](const A& a) { return numbers_json(a.values); },
-                    [kind](const A& a) { return a.kind == kind; }};
-  };
+  using K = A::Kind;
+  // Both lists fill Actuation::values; with both (mixed input) each tendon is a number in one
+  // list and null in the other. `tensions` is read first.
   static const Schema<A> s(
       {
-          values("tensions", A::Kind::Tensions, {"N", "", "one per tendon; each finite and >= 0", kAll}),
-          values("displacements", A::Kind::Displacements, {"m", "", "one per tendon; each finite", "CC only"}),
+          {{"tensions", "array of numbers",
+            {"N", "", "one per tendon; each finite and >= 0, or null where `displacements` gives the tendon", kAll}},
+           [](const json& j, const std::string& p, A& a) {
+             a.kind = K::Tensions;
+             a.values = read_values(j, p);
+           },
+           [](const A& a) { return values_json(a, K::Tensions); },
+           [](const A& a) { return a.kind == K::Tensions || a.mixed(); }},
+          {{"displacements", "array of numbers",
+            {"m", "",
+             "one per tendon, positive when pulled; each finite, or null where `tensions` gives the tendon "
+             "(mixed input). A tendon cannot push: commanded below its path's pull it goes slack (T = 0). "
+             "Solved with the tensions of these tendons as unknowns (docs/models.md, \"Displacement input\")",
+             "CC (kinematic; every tendon by displacement); CCsub, PRB, VC, VCref (also mixed)"}},
+           [](const json& j, const std::string& p, A& a) {
+             const std::vector<double> d = read_values(j, p);
+             if (!a.values.empty()) return merge_displacements(j, p, d, a);
+             for (std::size_t k = 0; k < d.size(); ++k)
+               if (!std::isfinite(d[k]))
+                 throw InputError(index_path(p, k), "null", "must be a number (null only with \"tensions\" too)");
+             a.kind = K::Displacements;
+             a.values = d;
+           },
+           [](const A& a) { return values_json(a, K::Displacements); },
+           [](const A& a) { return a.kind == K::Displacements; }},
           choice_field("displacement_convention", &A::convention, kConventions,
                        {"", "`\"at_base\"`", "`\"at_base\"` or `\"per_segment\"`; only with `displacements`",
                         "CC (input); all (reported displacements)"})
-              .when([](const A& a) { return a.kind == A::Kind::Displacements; }),
+              .when([](const A& a) { return a.kind == K::Displacements; }),
       },
-      {
-          {"tensions", "displacements", "give either tensions or displacements, not both"},
-          {"tensions", "displacement_convention", "applies to displacements only, not to tensions"},
-      },
-      [](const JsonObject& o, const A&) {
+      {},
+      [](const JsonObject& o, const A& a) {
         if (!o.has("tensions") && !o.has("displacements"))
           throw InputError(o.path(), text_of(o.value()), "must give either \"tensions\" or \"displacements\"");
+        if (o.has("displacement_convention") && !o.has("displacements"))
+          throw InputError(o.path("displacement_convention"), text_of(o.at("displacement_convention")),
+                           "applies to displacements only, not to tensions");
+        if (o.has("displacements")) return;
+        for (std::size_t k = 0; k < a.values.size(); ++k)
+          if (!std::isfinite(a.values[k]))
+            throw InputError(index_path(o.path("tensions"), k), "null",
+                             "must be a number (null only with \"displacements\" too)");
       });
   return s;
 }

@@ -34,13 +34,13 @@ const std::vector<ModelInfo>& model_registry() {
       {ModelKind::CC, "cc", "constant curvature per segment, kinematic (closed form)", make<CcModel>,
        {true, true, false, false}, {{25.7, 4.27, 0.605, 0.151}, 2.0, INFINITY}, 0},
       {ModelKind::CCsub, "ccsub", "constant curvature per subsegment with twist, static", make<CcsubModel>,
-       {true, false, true, false, true}, {{30.8, 5.12, 0.726, 0.181}, 2.0, 3.2}, 2},
+       {true, true, true, false, true, true}, {{30.8, 5.12, 0.726, 0.181}, 2.0, 3.2}, 2},
       {ModelKind::PRB, "prb", "3R pseudo-rigid body per subsegment with twist, static", make<PrbModel>,
-       {true, false, true, false, true}, {{1.21, 0.231, 0.0165, 0.0345}, 0.0, 3.2}, 3, 5},
+       {true, true, true, false, true, true}, {{1.21, 0.231, 0.0165, 0.0345}, 0.0, 3.2}, 3, 5},
       {ModelKind::VC, "vc", "Cosserat rod with fully constrained tendons (Rucker & Webster 2011)",
-       make<VcModel>, {true, false, true, true}, {{25.7, 4.27, 0.605, 0.151}, 2.0, 3.2}, 1},
+       make<VcModel>, {true, true, true, true, false, true}, {{25.7, 4.27, 0.605, 0.151}, 2.0, 3.2}, 1},
       {ModelKind::VCref, "vcref", "Cosserat rod per subsegment with discrete disk forces (reference)",
-       make<VcrefModel>, {true, false, true, true, true}, {{0.0, 0.0, 0.0, 0.0}, 0.0, 1.0}, 4},
+       make<VcrefModel>, {true, true, true, true, true, true}, {{0.0, 0.0, 0.0, 0.0}, 0.0, 1.0}, 4},
   };
   return table;
 }
@@ -101,6 +101,18 @@ void StaticModel::check_input(const ModelInput& input) const {
     throw InputError("actuation.tensions", "given", "the " + name() + " model takes tendon displacements");
   if (!tensions && !info.capabilities.displacement_input)
     throw InputError("actuation.displacements", "given", "the " + name() + " model takes tendon tensions");
+  if (!tensions && !info.capabilities.displacement_statics) {
+    if (input.actuation.mixed())
+      throw InputError("actuation", "tensions and displacements",
+                       "the " + name() + " model is kinematic: give every tendon by displacement or every tendon by "
+                       "tension (mixed input needs a static model)");
+    for (std::size_t i = 0; i < robot_.segments.size(); ++i)
+      for (std::size_t j = 0; j < robot_.segments[i].tendons.size(); ++j)
+        if (robot_.segments[i].tendons[j].stiffness)
+          throw InputError("robot.segments[" + std::to_string(i) + "].tendons[" + std::to_string(j) + "].stiffness",
+                           format_value(*robot_.segments[i].tendons[j].stiffness),
+                           "the " + name() + " model is kinematic: elastic tendons need a static model");
+  }
   if (!info.capabilities.external_loads) {
     const Loads& l = input.loads;
     auto refuse = [&](const char* field, const Vec3& v) {

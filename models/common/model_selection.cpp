@@ -41,13 +41,14 @@ bool is_reference(const ModelInfo& m) {
 }
 
 // The models that can take an input of this kind (and loads), cheapest first for the scene.
-// Tendon friction acts at the holes of the disks: only the models with tendon forces at disks.
-std::vector<const ModelInfo*> candidates(bool displacements, bool loaded, bool friction) {
+// Mixed input (`statics`) needs a model with displacement statics; tendon friction acts at the
+// holes of the disks: only the models with tendon forces at disks.
+std::vector<const ModelInfo*> candidates(bool displacements, bool statics, bool loaded, bool friction) {
   std::vector<const ModelInfo*> v;
   for (const ModelInfo& m : model_registry()) {
     const ModelCapabilities& c = m.capabilities;
-    if ((displacements ? c.displacement_input : c.tension_input) && (!loaded || c.external_loads) &&
-        (!friction || c.tendon_forces_at_disks))
+    if ((displacements ? c.displacement_input : c.tension_input) && (!statics || c.displacement_statics) &&
+        (!loaded || c.external_loads) && (!friction || c.tendon_forces_at_disks))
       v.push_back(&m);
   }
   auto rank = [loaded](const ModelInfo* m) { return loaded && m->loaded_cost_rank >= 0 ? m->loaded_cost_rank : m->cost_rank; };
@@ -74,13 +75,15 @@ ModelChoice choose_model(const Scene& scene, double tolerance) {
                                std::to_string(n) + " disks per segment (fewest)";
   ModelChoice c;
   const bool displacements = scene.actuation.kind == Actuation::Kind::Displacements;
-  const std::vector<const ModelInfo*> order = candidates(displacements, loaded, e.tendon_friction);
+  bool elastic = false;  // elastic tendons under displacement input need statics too
+  for (const Segment& seg : scene.robot.segments)
+    for (const TendonSpec& t : seg.tendons) elastic = elastic || t.stiffness.has_value();
+  const std::vector<const ModelInfo*> order =
+      candidates(displacements, scene.actuation.mixed() || (displacements && elastic), loaded, e.tendon_friction);
   if (order.empty())
-    throw InputError("model", "auto",
-                     displacements ? "no model takes tendon displacements together with external loads or tendon friction; give tensions"
-                                   : "no model takes this scene");
+    throw InputError("model", "auto", "no model takes this scene");
   if (displacements) {
-    // Kinematic: the cheapest model that takes displacements (there is no accuracy table for them).
+    // The cheapest model that takes displacements (there is no accuracy table for them).
     c.kind = order.front()->kind;
     c.expected_error = expected_model_error(c.kind, n, false);
     c.reason = "tendon displacements: " + to_string(c.kind) + " is the " +

@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "common/differential_kinematics.hpp"
+#include "common/displacement_input.hpp"
 #include "common/load_continuation.hpp"
 #include "common/model_problem.hpp"
 #include "common/newton_summary.hpp"
@@ -189,6 +190,8 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
     throw InputError("workspace", "a workspace of another model",
                      "use the workspace made by this model's make_workspace() (" + model.name() + ")");
   if (warm_start) check_warm_start(model, *warm_start);
+  if (detail::needs_displacement_solve(model, input))  // tensions of displaced tendons as unknowns
+    return detail::solve_displacement_input(model, workspace, input, options, warm_start);
 
   detail::ModelProblem& P = model.bind(workspace, input, options);
   Solution sol;

@@ -50,6 +50,9 @@ struct Backbone {
 struct TendonSpec {
   double x = 0.0;  ///< x coordinate of the tendon hole in the disk frame (m).
   double y = 0.0;  ///< y coordinate of the tendon hole in the disk frame (m).
+  /// Axial stiffness EA of the tendon (N) for displacement input: the tension is EA / L_free
+  /// times the stretch (L_free: base to end disk of the straight robot). Absent: inextensible.
+  std::optional<double> stiffness;
 };
 
 /// @brief One segment: a length of backbone with equally spaced spacer disks; the tendons

@@ -25,11 +25,19 @@ struct Actuation {
                  ///< contributes (Jones & Walker 2006). Default.
     PerSegment   ///< Only the tendon's own segment (the paper's code convention).
   };
-  Kind kind = Kind::Tensions;  ///< Tensions (every model) or displacements (CC only).
+  Kind kind = Kind::Tensions;  ///< What every value is (unless `kinds` is given).
   std::vector<double> values;  ///< One value per tendon, in global tendon order.
-  /// How displacements are referenced: for displacement input (CC) and for the
+  /// How displacements are referenced: for displacement input and for the
   /// Solution::tendon_displacements that every model reports.
   DisplacementConvention convention = DisplacementConvention::AtBase;
+  /// Mixed input: what values[k] is, per tendon (then `kind` is Displacements: the input is not
+  /// tensions alone). Empty: every value is `kind`.
+  std::vector<Kind> kinds;
+
+  /// @brief What values[k] is.
+  Kind kind_of(std::size_t k) const { return kinds.empty() ? kind : kinds[k]; }
+  /// @brief True if some tendons are given by tension and others by displacement.
+  bool mixed() const { return !kinds.empty(); }
 };
 
 /// @brief External loads. Tip force and moment act at the backbone centre of the tip disk and

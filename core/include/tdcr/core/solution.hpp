@@ -122,6 +122,9 @@ struct Solution {
   /// With tendon friction (Effects::tendon_friction on): per tendon, the tension (N) where it
   /// ends (its last chord), the input tension at the base times the capstan factor. Empty else.
   std::vector<double> tendon_end_tensions;
+  /// Displacement input (CCsub, PRB, VC, VCref): per tendon, true if it is slack (commanded
+  /// below the pull of its path at zero tension, so T = 0). Empty for tension input and CC.
+  std::vector<bool> tendon_slack;
   /// The external loads of the input this answer is for (with `tensions`: where a warm start
   /// from this Solution begins its input path).
   Loads loads;

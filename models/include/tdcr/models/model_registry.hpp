@@ -21,6 +21,10 @@ struct ModelCapabilities {
   /// Tendons act on the backbone at the disks only, along straight chords between holes
   /// (Eq. 30-33); else along the backbone (fully constrained path, Eq. 24-29).
   bool tendon_forces_at_disks = false;
+  /// Displacement input with statics: the tensions of the displacement-driven tendons are
+  /// unknowns (common/displacement_input.hpp); mixed input and elastic tendons. Else a model
+  /// that takes displacements maps them kinematically (CC).
+  bool displacement_statics = false;
 };
 
 /// @brief Mean tip position error of a model against VCref (% of the robot length) on the

@@ -1,0 +1,266 @@
+// Displacement input for the static models (CCsub, PRB, VC, VCref): the tensions of the
+// displacement-driven tendons as unknowns, slack tendons, mixed input, elastic tendons.
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "tdcr/core/error.hpp"
+#include "tdcr/core/paper_robot.hpp"
+#include "tdcr/core/scene_io.hpp"
+#include "tdcr/models/model_registry.hpp"
+#include "tdcr/models/static_model.hpp"
+
+using namespace tdcr;
+
+namespace {
+
+using K = Actuation::Kind;
+
+// Every tendon by tension.
+ModelInput tension_input(const std::vector<double>& t, const Loads& loads = {}) {
+  ModelInput in;
+  in.actuation.values = t;
+  in.loads = loads;
+  return in;
+}
+
+// The displacements of `sol` for the tendons of `kinds` (Displacements), the tensions for the others.
+ModelInput from_solution(const Solution& sol, const std::vector<K>& kinds, const Loads& loads) {
+  ModelInput in;
+  in.loads = loads;
+  in.actuation.kind = K::Displacements;
+  bool mixed = false;
+  for (std::size_t k = 0; k < kinds.size(); ++k) {
+    const bool d = kinds[k] == K::Displacements;
+    in.actuation.values.push_back(d ? sol.tendon_displacements[k] : sol.tensions[k]);
+    mixed = mixed || !d;
+  }
+  if (mixed) in.actuation.kinds = kinds;
+  return in;
+}
+
+double max_relative(const std::vector<double>& a, const std::vector<double>& b) {
+  double scale = 0.0, diff = 0.0;
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    scale = std::max(scale, std::abs(b[k]));
+    diff = std::max(diff, std::abs(a[k] - b[k]));
+  }
+  return diff / scale;
+}
+
+Loads tip_load() {
+  Loads l;
+  l.tip_force = Vec3(0.2, -0.1, -0.3);
+  return l;
+}
+
+const std::vector<K> kAllDisplaced(4, K::Displacements);
+const std::vector<K> kMixed = {K::Displacements, K::Tensions, K::Displacements, K::Tensions};
+// Tendons 1 and 4 pulled, their antagonists without tension.
+const std::vector<double> kPulled = {2.0, 0.0, 1.5, 0.0};
+
+class DisplacementInput : public ::testing::TestWithParam<ModelKind> {
+ protected:
+  // The paper robot, 5 disks per segment (10: VC, whose cost does not grow with them).
+  std::unique_ptr<StaticModel> model(const Robot& robot) const { return make_model(GetParam(), robot, Effects{}); }
+  Robot robot() const { return paper::robot(GetParam() == ModelKind::VC ? 10 : 5); }
+
+  // Solve by tension, feed the answer's displacements back (tendons without tension let out by
+  // `let_out` beyond their path: slack), expect the tensions to 1e-8 and the slack tendons.
+  void expect_round_trip(const Robot& r, const std::vector<double>& t, const Loads& loads, const std::vector<K>& kinds,
+                         double let_out = 1e-3) const {
+    const auto m = model(r);
+    const auto ws = m->make_workspace();
+    const Solution ref = solve(*m, *ws, tension_input(t, loads));
+    ASSERT_TRUE(ref.converged()) << ref.summary.brief_report();
+    EXPECT_TRUE(ref.tendon_slack.empty());
+    ModelInput in = from_solution(ref, kinds, loads);
+    for (std::size_t k = 0; k < t.size(); ++k)
+      if (kinds[k] == K::Displacements && t[k] == 0.0) in.actuation.values[k] -= let_out;
+    const Solution back = solve(*m, *ws, in);
+    ASSERT_TRUE(back.converged()) << back.summary.message;
+    EXPECT_LT(max_relative(back.tensions, t), 1e-8) << back.summary.message;
+    EXPECT_LT((back.tip().p - ref.tip().p).norm(), 1e-9);
+    ASSERT_EQ(back.tendon_slack.size(), t.size());
+    for (std::size_t k = 0; k < t.size(); ++k) {
+      EXPECT_EQ(back.tendon_slack[k], kinds[k] == K::Displacements && t[k] == 0.0) << "tendon " << k;
+      if (back.tendon_slack[k]) {
+        EXPECT_EQ(back.tensions[k], 0.0);
+      }
+    }
+    EXPECT_GT(back.summary.iterations, 0);
+    EXPECT_EQ(back.summary.unknowns,
+              ref.summary.unknowns + static_cast<int>(std::count(kinds.begin(), kinds.end(), K::Displacements)));
+  }
+};
+
+// Every tendon by displacement; the unpulled ones let out 1 mm beyond their paths: slack.
+TEST_P(DisplacementInput, DisplacementsOfATensionSolveGiveTheTensionsBack) {
+  expect_round_trip(robot(), kPulled, Loads{}, kAllDisplaced);
+}
+
+TEST_P(DisplacementInput, LoadedRoundTrip) { expect_round_trip(robot(), kPulled, tip_load(), kAllDisplaced); }
+
+// The paper robot example (examples/paper_robot_vc.json, T1 = T_M, the rest at zero).
+TEST_P(DisplacementInput, PaperRobotExample) {
+  const Scene s = load_scene(std::string(TDCR_EXAMPLES_DIR) + "/paper_robot_vc.json");
+  Robot r = s.robot;
+  if (GetParam() != ModelKind::VC)
+    for (Segment& seg : r.segments) seg.disks = 5;
+  expect_round_trip(r, s.actuation.values, Loads{}, kAllDisplaced);
+}
+
+// Antagonists by tension (co-contraction), the others by displacement.
+TEST_P(DisplacementInput, MixedInput) { expect_round_trip(robot(), {2.0, 0.5, 1.5, 0.3}, tip_load(), kMixed); }
+
+// Tendon 2 commanded 1 mm below the pull of its path at zero tension: slack, T = 0, and the rest
+// is the tension solve with that tension 0 (tendons 3 and 4 by tension).
+TEST_P(DisplacementInput, SlackTendon) {
+  const auto m = model(robot());
+  const auto ws = m->make_workspace();
+  const Solution ref = solve(*m, *ws, tension_input({2.0, 0.0, 1.5, 0.3}, tip_load()));
+  ASSERT_TRUE(ref.converged());
+  ModelInput in = from_solution(ref, {K::Displacements, K::Displacements, K::Tensions, K::Tensions}, tip_load());
+  in.actuation.values[1] -= 1e-3;
+  const Solution sol = solve(*m, *ws, in);
+  ASSERT_TRUE(sol.converged()) << sol.summary.message;
+  EXPECT_EQ(sol.tensions[1], 0.0);
+  EXPECT_TRUE(sol.tendon_slack[1]);
+  EXPECT_FALSE(sol.tendon_slack[0]);
+  EXPECT_LT(max_relative(sol.tensions, ref.tensions), 1e-8);
+  EXPECT_NE(sol.summary.message.find("slack tendons: 1"), std::string::npos) << sol.summary.message;
+  // The slack tendon's path pulls more than commanded (it has length to spare).
+  EXPECT_NEAR(sol.tendon_displacements[1], in.actuation.values[1] + 1e-3, 1e-9);
+}
+
+// A warm start from a previous displacement solve starts at its tensions: fewer tension solves.
+TEST_P(DisplacementInput, WarmStart) {
+  const auto m = model(robot());
+  const auto ws = m->make_workspace();
+  const Solution ref = solve(*m, *ws, tension_input(kPulled));
+  ModelInput in = from_solution(ref, kAllDisplaced, Loads{});
+  in.actuation.values[1] -= 1e-3;
+  in.actuation.values[3] -= 1e-3;
+  const Solution cold = solve(*m, *ws, in);
+  ASSERT_TRUE(cold.converged()) << cold.summary.message;
+  in.actuation.values[0] += 1e-5;
+  const Solution warm = solve(*m, *ws, in, SolverOptions(), &cold);
+  ASSERT_TRUE(warm.converged()) << warm.summary.message;
+  EXPECT_LE(warm.summary.iterations, cold.summary.iterations);
+  EXPECT_LE(warm.summary.residual_evaluations, cold.summary.residual_evaluations);
+  EXPECT_GT(warm.tensions[0], cold.tensions[0]);
+}
+
+// Elastic tendon 1: a stiff one gives the inextensible answer (error falling as 1 / EA); a soft
+// one's tension is EA / L times its stretch; let out beyond its path it is slack.
+TEST_P(DisplacementInput, ElasticTendons) {
+  Robot r = robot();
+  const auto rigid = model(r);
+  const auto ws0 = rigid->make_workspace();
+  const Solution ref = solve(*rigid, *ws0, tension_input(kPulled));
+  ModelInput in = from_solution(ref, kAllDisplaced, Loads{});
+  in.actuation.values[1] -= 1e-3;
+  in.actuation.values[3] -= 1e-3;
+  const double l_free = r.segments[0].length;  // tendon 1 ends at segment 1's end
+
+  double error[2];
+  for (int i = 0; i < 2; ++i) {
+    r.segments[0].tendons[0].stiffness = i == 0 ? 1e7 : 1e9;  // N: stretch 1e-8 m, 1e-10 m at 2 N
+    const auto stiff = model(r);
+    const auto ws = stiff->make_workspace();
+    const Solution s = solve(*stiff, *ws, in);
+    ASSERT_TRUE(s.converged()) << s.summary.message;
+    EXPECT_LT(s.tensions[0], ref.tensions[0]);  // a stretching tendon pulls less
+    error[i] = max_relative(s.tensions, ref.tensions);
+  }
+  EXPECT_LT(error[1], 1e-6);
+  EXPECT_NEAR(error[0] / error[1], 100.0, 5.0);
+
+  r.segments[0].tendons[0].stiffness = 200.0;  // N: stretch ~ 0.5 mm at 2 N
+  const auto soft = model(r);
+  const auto ws2 = soft->make_workspace();
+  const Solution s2 = solve(*soft, *ws2, in);
+  ASSERT_TRUE(s2.converged()) << s2.summary.message;
+  const double stretch = in.actuation.values[0] - s2.tendon_displacements[0];
+  EXPECT_GT(stretch, 1e-4);
+  EXPECT_NEAR(s2.tensions[0], 200.0 / l_free * stretch, 1e-8 * s2.tensions[0]);
+  EXPECT_LT(s2.tensions[0], 0.9 * ref.tensions[0]);
+  EXPECT_FALSE(s2.tendon_slack[0]);
+
+  ModelInput slack = in;
+  slack.actuation.values[0] = -1e-3;  // let out: the soft tendon has slack
+  const Solution s3 = solve(*soft, *ws2, slack);
+  ASSERT_TRUE(s3.converged()) << s3.summary.message;
+  EXPECT_EQ(s3.tensions[0], 0.0);
+  EXPECT_TRUE(s3.tendon_slack[0]);
+}
+
+// A solve cut short says so: failed, with its iterations and residual.
+TEST_P(DisplacementInput, NonConvergenceIsReported) {
+  const auto m = model(robot());
+  const auto ws = m->make_workspace();
+  const Solution ref = solve(*m, *ws, tension_input({2.0, 0.5, 1.5, 0.3}, tip_load()));
+  SolverOptions o;
+  o.max_iterations = 1;
+  const Solution sol = solve(*m, *ws, from_solution(ref, kMixed, tip_load()), o);
+  EXPECT_FALSE(sol.converged());
+  EXPECT_LE(sol.summary.iterations, 1);
+  EXPECT_GT(sol.summary.residual_norm, o.function_tolerance);
+  EXPECT_NE(sol.summary.message.find("displacement input failed"), std::string::npos) << sol.summary.message;
+}
+
+INSTANTIATE_TEST_SUITE_P(StaticModels, DisplacementInput,
+                         ::testing::Values(ModelKind::CCsub, ModelKind::PRB, ModelKind::VC, ModelKind::VCref),
+                         [](const auto& info) { return to_string(info.param); });
+
+std::string field_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.field();
+  }
+  return "";
+}
+
+// CC stays kinematic: it refuses mixed input and elastic tendons under displacement input.
+TEST(DisplacementInputCc, RefusesMixedInputAndElasticTendons) {
+  Robot r = paper::robot(5);
+  const auto cc = make_model(ModelKind::CC, r, Effects{});
+  const auto ws = cc->make_workspace();
+  ModelInput in;
+  in.actuation.kind = K::Displacements;
+  in.actuation.values = {0.001, 1.0, 0.0, 0.0};
+  in.actuation.kinds = {K::Displacements, K::Tensions, K::Displacements, K::Displacements};
+  EXPECT_EQ(field_of([&] { solve(*cc, *ws, in); }), "actuation");
+  r.segments[1].tendons[0].stiffness = 100.0;
+  const auto elastic = make_model(ModelKind::CC, r, Effects{});
+  const auto ws2 = elastic->make_workspace();
+  in.actuation.kinds.clear();
+  EXPECT_EQ(field_of([&] { solve(*elastic, *ws2, in); }), "robot.segments[1].tendons[0].stiffness");
+  in.actuation.kind = K::Tensions;  // tensions: the stiffness plays no role
+  EXPECT_TRUE(solve(*elastic, *ws2, in).converged());
+}
+
+// Scene files: mixed input is both lists with null where the other gives the tendon; it
+// round-trips through scene_to_json.
+TEST(DisplacementInputScene, MixedListsRoundTrip) {
+  Scene s = paper::scene(5, 2, "vc");
+  s.actuation.kind = K::Displacements;
+  s.actuation.kinds = {K::Displacements, K::Tensions, K::Tensions, K::Displacements};
+  s.actuation.values = {0.002, 0.5, 0.0, -0.001};
+  s.robot.segments[1].tendons[1].stiffness = 350.0;
+  const std::string text = scene_to_json(s);
+  EXPECT_NE(text.find("null"), std::string::npos) << text;
+  const Scene back = parse_scene(text);
+  EXPECT_EQ(back.actuation.kinds, s.actuation.kinds);
+  EXPECT_EQ(back.actuation.values, s.actuation.values);
+  EXPECT_EQ(back.actuation.kind, K::Displacements);
+  ASSERT_TRUE(back.robot.segments[1].tendons[1].stiffness.has_value());
+  EXPECT_EQ(*back.robot.segments[1].tendons[1].stiffness, 350.0);
+  EXPECT_FALSE(back.robot.segments[0].tendons[0].stiffness.has_value());
+}
+
+}  // namespace
