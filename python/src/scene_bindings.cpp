@@ -192,7 +192,8 @@ void bind_effects(py::module_& m) {
       .def_readwrite("shear_extension", &tdcr::Effects::shear_extension)
       .def_readwrite("kink_forces", &tdcr::Effects::kink_forces)
       .def_readwrite("prb", &tdcr::Effects::prb)
-      .def("validate", &tdcr::Effects::validate);
+      .def("validate", py::overload_cast<>(&tdcr::Effects::validate, py::const_))
+      .def("validate", py::overload_cast<const tdcr::Robot&>(&tdcr::Effects::validate, py::const_), py::arg("robot"));
   enum_property(eff, "disk_normal_force", &tdcr::Effects::disk_normal_force, kDiskNormalForce,
                 "effects.disk_normal_force", "'removed' (Eq. 58) or 'kept'");
   enum_property(eff, "tendon_path", &tdcr::Effects::tendon_path, kTendonPath, "effects.tendon_path",
