@@ -71,7 +71,13 @@ ModelChoice choose_model(const Scene& scene, double tolerance) {
                                std::to_string(n) + " disks per segment (fewest)";
   ModelChoice c;
   const bool displacements = scene.actuation.kind == Actuation::Kind::Displacements;
-  const std::vector<const ModelInfo*> order = candidates(displacements, loaded);
+  std::vector<const ModelInfo*> order = candidates(displacements, loaded);
+  // CC represents straight routing only.
+  for (const Segment& s : scene.robot.segments)
+    for (const TendonSpec& t : s.tendons)
+      if (t.routing.type != TendonRoutingSpec::Type::Straight)
+        order.erase(std::remove_if(order.begin(), order.end(), [](const ModelInfo* m) { return m->kind == ModelKind::CC; }),
+                    order.end());
   if (order.empty())
     throw InputError("model", "auto",
                      displacements ? "no model takes tendon displacements together with external loads; give tensions"
