@@ -169,7 +169,7 @@ inline std::vector<BadInput> bad_inputs() {
        "robot.segments[1].tendons[1].routing.positions", "2 positions"},
       {"RoutingPointNotPair",
        with("/robot/segments/0/tendons/0/routing", {{"type", "points"}, {"positions", json::array({json::array({0.0, 0.008, 0.0})})}}),
-       "robot.segments[0].tendons[0].routing.positions[0]", "[0,0.008,0]"},
+       "robot.segments[0].tendons[0].routing.positions[0]", "[0.0,0.008,0.0]"},
       {"RoutingPointOnAxis",
        edited([](json& j) {
          json p = json::array();
