@@ -49,12 +49,13 @@ struct Backbone {
 
 /// @brief How a tendon runs from the base to its end disk (docs/models.md, "Tendon routing").
 struct TendonRoutingSpec {
+  /// @brief The kind of path.
   enum class Type {
     Straight,  ///< Parallel to the backbone at (x, y) in every disk.
     Helical,   ///< Radius |(x, y)| kept, angle advancing linearly by `turns` from the base to the end disk.
     Points,    ///< Given hole positions, one per disk after the base disk (the base hole is (x, y)).
   };
-  Type type = Type::Straight;
+  Type type = Type::Straight;                    ///< The kind of path.
   double turns = 0.0;                            ///< Helical: turns over the tendon's length (sign: direction).
   std::vector<std::array<double, 2>> positions;  ///< Points: (x, y) in disks 1..end disk (m).
 };
@@ -111,11 +112,13 @@ struct RoutedTendon {
   double helix_phase = 0.0;      ///< Helical: angle of r at s = 0 (rad).
   double helix_rate = 0.0;       ///< Helical: angle rate 2 pi turns / s_end (rad/m).
   /// Points: a natural C2 cubic spline per coordinate through the holes of disks 0..end_disk
-  /// over their arc lengths: the knots, and per interval the Taylor coefficients at its start
-  /// (x, dx, d2x / 2, d3x / 6, then the same for y).
+  /// over their arc lengths; these are its knots (the disks' arc lengths).
   std::vector<double> knots;
+  /// Points: per spline interval the Taylor coefficients at its start (x, dx, d2x / 2, d3x / 6,
+  /// then the same for y).
   std::vector<std::array<double, 8>> spline;
   std::vector<Vec3> holes;       ///< Points: the hole of every disk 0..end_disk (exact).
+  /// @brief True for straight routing (a constant offset r).
   bool straight() const { return routing == TendonRoutingSpec::Type::Straight; }
 };
 
