@@ -162,6 +162,32 @@ inline std::vector<BadInput> bad_inputs() {
       {"DisksNegative", with("/robot/segments/1/disks", -3), "robot.segments[1].disks", "-3"},
       {"TendonOnAxis", with("/robot/segments/0/tendons/1", {{"x", 0}, {"y", 0}}), "robot.segments[0].tendons[1]",
        "(0, 0)"},
+      // Tendon routing (segment 0 passes 10 disks after the base)
+      {"RoutingTypeUnknown", with("/robot/segments/0/tendons/0/routing", {{"type", "spiral"}}),
+       "robot.segments[0].tendons[0].routing.type", "\"spiral\""},
+      {"RoutingTurnsMissing", with("/robot/segments/0/tendons/0/routing", {{"type", "helical"}}),
+       "robot.segments[0].tendons[0].routing.turns", "is required"},
+      {"RoutingTurnsOverflow",
+       [] {
+         std::string t = with("/robot/segments/0/tendons/0/routing", {{"type", "helical"}, {"turns", "@@RAW@@"}});
+         return t.replace(t.find("\"@@RAW@@\""), 9, "1e999");
+       }(),
+       "robot.segments[0].tendons[0].routing.turns", "1e999"},
+      {"RoutingTurnsWithPoints", with("/robot/segments/0/tendons/0/routing", {{"type", "points"}, {"turns", 1.0}}),
+       "robot.segments[0].tendons[0].routing.turns", "applies to \"helical\" routing only"},
+      {"RoutingPointsTooFew",
+       with("/robot/segments/1/tendons/1/routing", {{"type", "points"}, {"positions", json::array({{0, 0.008}, {0, 0.008}})}}),
+       "robot.segments[1].tendons[1].routing.positions", "2 positions"},
+      {"RoutingPointNotPair",
+       with("/robot/segments/0/tendons/0/routing", {{"type", "points"}, {"positions", json::array({json::array({0.0, 0.008, 0.0})})}}),
+       "robot.segments[0].tendons[0].routing.positions[0]", "[0.0,0.008,0.0]"},
+      {"RoutingPointOnAxis",
+       edited([](json& j) {
+         json p = json::array();
+         for (int i = 0; i < 10; ++i) p.push_back(i == 4 ? json::array({0.0, 0.0}) : json::array({0.0, 0.008}));
+         j["robot"]["segments"][0]["tendons"][0]["routing"] = {{"type", "points"}, {"positions", p}};
+       }),
+       "robot.segments[0].tendons[0].routing.positions[4]", "(0, 0)"},
       {"DiskMassNegative", with("/robot/segments/0/disk_mass", -0.001), "robot.segments[0].disk_mass",
        "-0.001"},
       {"YoungsModulusNegative", with("/robot/backbone/youngs_modulus", -1e9), "robot.backbone.youngs_modulus",

@@ -1,5 +1,6 @@
 #include "tdcr/core/robot.hpp"
 
+#include <array>
 #include <cmath>
 #include <string>
 
@@ -19,6 +20,78 @@ void require_positive(const std::string& field, double v) {
 void require_non_negative(const std::string& field, double v) {
   require_finite(field, v);
   if (v < 0.0) throw InputError(field, format_value(v), "must not be negative");
+}
+
+void require_off_axis(const std::string& field, double x, double y) {
+  // A tendon on the axis has no lever arm: it cannot bend the robot and makes the
+  // constant-curvature maps singular.
+  if (!(std::hypot(x, y) > 1e-9))
+    throw InputError(field, "(" + format_value(x) + ", " + format_value(y) + ")",
+                     "tendon lies on the backbone axis (distance must exceed 1e-9 m)");
+}
+
+void validate_routing(const std::string& tp, const TendonRoutingSpec& r, int disks_passed) {
+  using Type = TendonRoutingSpec::Type;
+  if (r.type == Type::Helical) require_finite(tp + ".routing.turns", r.turns);
+  if (r.type != Type::Points) return;
+  const std::string pp = tp + ".routing.positions";
+  if (static_cast<int>(r.positions.size()) != disks_passed)
+    throw InputError(pp, std::to_string(r.positions.size()) + " positions",
+                     "must give one position per disk the tendon passes after the base disk: " +
+                         std::to_string(disks_passed));
+  for (std::size_t j = 0; j < r.positions.size(); ++j) {
+    const std::string jp = pp + "[" + std::to_string(j) + "]";
+    require_finite(jp, r.positions[j][0]);
+    require_finite(jp, r.positions[j][1]);
+    require_off_axis(jp, r.positions[j][0], r.positions[j][1]);
+  }
+}
+
+/// Natural cubic spline through (x_i, y_i): per interval (y, y', y''/2, y'''/6) at its start.
+void natural_spline(const std::vector<double>& x, const std::vector<double>& y, int column,
+                    std::vector<std::array<double, 8>>& coef) {
+  const int n = static_cast<int>(x.size()) - 1;
+  std::vector<double> M(n + 1, 0.0), c(n + 1, 0.0), d(n + 1, 0.0);
+  // Tridiagonal system for the interior second derivatives (Thomas algorithm).
+  for (int i = 1; i < n; ++i) {
+    const double h0 = x[i] - x[i - 1], h1 = x[i + 1] - x[i];
+    const double a = h0, b = 2.0 * (h0 + h1), rhs = 6.0 * ((y[i + 1] - y[i]) / h1 - (y[i] - y[i - 1]) / h0);
+    const double m = b - a * c[i - 1];
+    c[i] = h1 / m;
+    d[i] = (rhs - a * d[i - 1]) / m;
+  }
+  for (int i = n - 1; i >= 1; --i) M[i] = d[i] - c[i] * M[i + 1];
+  for (int i = 0; i < n; ++i) {
+    const double h = x[i + 1] - x[i];
+    std::array<double, 8>& k = coef[i];
+    k[4 * column + 0] = y[i];
+    k[4 * column + 1] = (y[i + 1] - y[i]) / h - h * (2.0 * M[i] + M[i + 1]) / 6.0;
+    k[4 * column + 2] = 0.5 * M[i];
+    k[4 * column + 3] = (M[i + 1] - M[i]) / (6.0 * h);
+  }
+}
+
+/// The routing data of `rt` (its segment and end disk set) from `spec`, over the disks `disk_s`.
+void route(const TendonRoutingSpec& spec, const std::vector<double>& disk_s, RoutedTendon& rt) {
+  using Type = TendonRoutingSpec::Type;
+  rt.routing = spec.type;
+  if (spec.type == Type::Helical) {
+    rt.helix_radius = rt.r.norm();
+    rt.helix_phase = std::atan2(rt.r.y(), rt.r.x());
+    rt.helix_rate = 2.0 * M_PI * spec.turns / disk_s[rt.end_disk];
+  } else if (spec.type == Type::Points) {
+    rt.knots.assign(disk_s.begin(), disk_s.begin() + rt.end_disk + 1);
+    std::vector<double> px{rt.r.x()}, py{rt.r.y()};
+    for (const auto& q : spec.positions) {
+      px.push_back(q[0]);
+      py.push_back(q[1]);
+    }
+    rt.holes.clear();
+    for (std::size_t j = 0; j < px.size(); ++j) rt.holes.emplace_back(px[j], py[j], 0.0);
+    rt.spline.assign(rt.end_disk, std::array<double, 8>{});
+    natural_spline(rt.knots, px, 0, rt.spline);
+    natural_spline(rt.knots, py, 1, rt.spline);
+  }
 }
 
 }  // namespace
@@ -66,6 +139,7 @@ void Robot::validate() const {
   if (backbone.mass_per_length) require_non_negative(bb + ".mass_per_length", *backbone.mass_per_length);
 
   if (segments.empty()) throw InputError("robot.segments", "[]", "must list at least one segment");
+  int disks_passed = 0;  // disks after the base up to the current segment's end
   for (std::size_t i = 0; i < segments.size(); ++i) {
     const std::string sp = "robot.segments[" + std::to_string(i) + "]";
     const Segment& seg = segments[i];
@@ -73,17 +147,14 @@ void Robot::validate() const {
     if (seg.disks < 1)
       throw InputError(sp + ".disks", std::to_string(seg.disks), "must be at least 1");
     require_non_negative(sp + ".disk_mass", seg.disk_mass);
+    disks_passed += seg.disks;
     for (std::size_t k = 0; k < seg.tendons.size(); ++k) {
       const std::string tp = sp + ".tendons[" + std::to_string(k) + "]";
       require_finite(tp + ".x", seg.tendons[k].x);
       require_finite(tp + ".y", seg.tendons[k].y);
       if (seg.tendons[k].stiffness) require_positive(tp + ".stiffness", *seg.tendons[k].stiffness);
-      const double r = std::hypot(seg.tendons[k].x, seg.tendons[k].y);
-      // A tendon on the axis has no lever arm: it cannot bend the robot and makes the
-      // constant-curvature maps singular.
-      if (!(r > 1e-9))
-        throw InputError(tp, "(" + format_value(seg.tendons[k].x) + ", " + format_value(seg.tendons[k].y) + ")",
-                         "tendon lies on the backbone axis (distance must exceed 1e-9 m)");
+      require_off_axis(tp, seg.tendons[k].x, seg.tendons[k].y);
+      validate_routing(tp, seg.tendons[k].routing, disks_passed);
     }
   }
 }
@@ -129,6 +200,7 @@ TendonRouting TendonRouting::from(const Robot& robot) {
       rt.segment = static_cast<int>(i);
       rt.r = Vec3(tendon.x, tendon.y, 0.0);
       rt.end_disk = t.segment_end_disk.back();
+      route(tendon.routing, t.disk_s, rt);
       t.tendons.push_back(rt);
     }
   }

@@ -21,6 +21,9 @@ const Names<TendonPath> kTendonPath = {{"fully_constrained", TendonPath::FullyCo
                                        {"partially_constrained", TendonPath::PartiallyConstrained}};
 const Names<TendonFriction::Motion> kMotion = {{"pulling", TendonFriction::Motion::Pulling},
                                               {"releasing", TendonFriction::Motion::Releasing}};
+const Names<TendonRoutingSpec::Type> kRoutingTypes = {{"straight", TendonRoutingSpec::Type::Straight},
+                                                      {"helical", TendonRoutingSpec::Type::Helical},
+                                                      {"points", TendonRoutingSpec::Type::Points}};
 const Names<IntegratorKind> kIntegrators = {{"rk4", IntegratorKind::FixedStepRK4}, {"cvode", IntegratorKind::Cvode}};
 const Names<LinearSolverKind> kLinearSolvers = {
     {"auto", LinearSolverKind::Automatic}, {"dense", LinearSolverKind::Dense}, {"klu", LinearSolverKind::SparseKLU}};
@@ -86,6 +89,60 @@ const Schema<Backbone>& backbone_schema() {
   return s;
 }
 
+const Schema<TendonRoutingSpec>& routing_schema() {
+  using R = TendonRoutingSpec;
+  constexpr const char* kRouted = "CCsub, PRB, VC, VCref (CC: straight only)";
+  const auto is = [](R::Type t) { return [t](const R& r) { return r.type == t; }; };
+  // A list of (x, y) pairs.
+  Field<R> positions{{"positions", "array of [2] numbers",
+                      {"m", nullptr,
+                       "one (x, y) per disk the tendon passes after the base disk (the base hole is the "
+                       "tendon's `x`, `y`), each finite and at least 1e-9 m from the axis; only with "
+                       "`\"points\"`",
+                       kRouted}},
+                     [](const json& j, const std::string& p, R& r) {
+                       require_array(j, p);
+                       r.positions.clear();
+                       for (std::size_t i = 0; i < j.size(); ++i) {
+                         const std::vector<double> q = read_numbers(j[i], index_path(p, i), 2);
+                         r.positions.push_back({q[0], q[1]});
+                       }
+                     },
+                     [](const R& r) {
+                       ojson a = ojson::array();
+                       for (const auto& q : r.positions) a.push_back(numbers_json({q[0], q[1]}));
+                       return a;
+                     },
+                     is(R::Type::Points)};
+  static const Schema<R> s(
+      {
+          choice_field("type", &R::type, kRoutingTypes,
+                       {"", nullptr,
+                        "`\"straight\"` (parallel to the backbone), `\"helical\"` (radius kept, angle "
+                        "advancing linearly from the base to the end disk) or `\"points\"` (a hole position "
+                        "per disk)",
+                        kRouted})
+              .required(),
+          number_field("turns", &R::turns,
+                       {"turns", nullptr, "finite (the sign sets the direction); required with `\"helical\"`, only there",
+                        kRouted})
+              .when(is(R::Type::Helical)),
+          std::move(positions),
+      },
+      {},
+      [](const JsonObject& o, const R& r) {
+        const auto only = [&](const char* key, R::Type t, const char* name) {
+          if (r.type == t)
+            o.at(key);  // throws "is required"
+          else if (o.has(key))
+            throw InputError(o.path(key), text_of(o.at(key)), std::string("applies to \"") + name + "\" routing only");
+        };
+        only("turns", R::Type::Helical, "helical");
+        only("positions", R::Type::Points, "points");
+      });
+  return s;
+}
+
 const Schema<TendonSpec>& tendon_schema() {
   static const Schema<TendonSpec> s({
       number_field("x", &TendonSpec::x, {"m", nullptr, "finite", kAll}).required(),
@@ -96,6 +153,9 @@ const Schema<TendonSpec>& tendon_schema() {
                              "> 0; axial stiffness EA: with displacement input T = EA / L_free max(0, stretch), "
                              "L_free the tendon's length from the base to its end disk in the straight robot",
                              "CCsub, PRB, VC, VCref (displacement input)"}),
+      object_field("routing", &TendonSpec::routing, routing_schema(),
+                   {"", "`{\"type\": \"straight\"}`", "the keys below", "CCsub, PRB, VC, VCref (CC: straight only)"})
+          .when([](const TendonSpec& t) { return t.routing.type != TendonRoutingSpec::Type::Straight; }),
   });
   return s;
 }

@@ -37,6 +37,15 @@ CcModel::CcModel(const Robot& robot, const Effects& effects) : StaticModel(robot
   // Kinematic: the arcs follow from the tendon moments at the base, no tension along a path.
   if (effects.tendon_friction.on())
     throw InputError("effects.tendon_friction", "on", "the CC model has no tendon friction; use ccsub, prb or vcref");
+  // Constant curvature per segment needs tendons parallel to the backbone.
+  for (std::size_t i = 0; i < this->robot().segments.size(); ++i)
+    for (std::size_t k = 0; k < this->robot().segments[i].tendons.size(); ++k)
+      if (this->robot().segments[i].tendons[k].routing.type != TendonRoutingSpec::Type::Straight)
+        throw InputError("robot.segments[" + std::to_string(i) + "].tendons[" + std::to_string(k) + "].routing",
+                         this->robot().segments[i].tendons[k].routing.type == TendonRoutingSpec::Type::Helical
+                             ? "\"helical\""
+                             : "\"points\"",
+                         "the CC model supports straight routing only (use CCsub, PRB, VC or VCref)");
   for (const Segment& seg : this->robot().segments) {
     Eigen::MatrixXd A(seg.tendons.size(), 2);
     for (std::size_t i = 0; i < seg.tendons.size(); ++i)

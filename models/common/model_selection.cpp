@@ -78,8 +78,14 @@ ModelChoice choose_model(const Scene& scene, double tolerance) {
   bool elastic = false;  // elastic tendons under displacement input need statics too
   for (const Segment& seg : scene.robot.segments)
     for (const TendonSpec& t : seg.tendons) elastic = elastic || t.stiffness.has_value();
-  const std::vector<const ModelInfo*> order =
+  std::vector<const ModelInfo*> order =
       candidates(displacements, scene.actuation.mixed() || (displacements && elastic), loaded, e.tendon_friction);
+  // CC represents straight routing only.
+  for (const Segment& s : scene.robot.segments)
+    for (const TendonSpec& t : s.tendons)
+      if (t.routing.type != TendonRoutingSpec::Type::Straight)
+        order.erase(std::remove_if(order.begin(), order.end(), [](const ModelInfo* m) { return m->kind == ModelKind::CC; }),
+                    order.end());
   if (order.empty())
     throw InputError("model", "auto", "no model takes this scene");
   if (displacements) {

@@ -94,6 +94,23 @@ double chord_length(const Frame* frames, const TendonRouting& routing, int k, in
   return L;
 }
 
+namespace {
+
+/// chord_length on the straight, unloaded robot (disk j at s_j e_z).
+double rest_chord_length(const TendonRouting& routing, int k, int first) {
+  const RoutedTendon& t = routing.tendons[k];
+  double L = 0.0;
+  for (int j = first + 1; j <= t.end_disk; ++j) {
+    const double h = routing.disk_s[j] - routing.disk_s[j - 1];
+    L += (h * Vec3::UnitZ() + physics::tendon_offset(t, routing.disk_s[j]) -
+          physics::tendon_offset(t, routing.disk_s[j - 1]))
+             .norm();
+  }
+  return L;
+}
+
+}  // namespace
+
 std::vector<double> chord_displacements(const std::vector<Frame>& frames, const TendonRouting& routing,
                                         Actuation::DisplacementConvention convention) {
   std::vector<double> d(routing.tendons.size(), 0.0);
@@ -102,7 +119,8 @@ std::vector<double> chord_displacements(const std::vector<Frame>& frames, const 
     int first = 0;
     if (convention == Actuation::DisplacementConvention::PerSegment && t.segment > 0)
       first = routing.segment_end_disk[t.segment - 1];
-    const double straight = routing.disk_s[t.end_disk] - routing.disk_s[first];
+    const double straight = t.straight() ? routing.disk_s[t.end_disk] - routing.disk_s[first]
+                                         : rest_chord_length(routing, static_cast<int>(k), first);
     d[k] = straight - chord_length(frames.data(), routing, static_cast<int>(k), first);
   }
   return d;

@@ -52,7 +52,7 @@ EIGEN_ALWAYS_INLINE Mat3T<T> hat(const Vec3T<T>& u) {
   }
 }
 
-/// physics::tendon_tangent (no offset rate: the offsets are constant along a segment).
+/// physics::tendon_tangent without offset rate (straight routing).
 template <typename T>
 EIGEN_ALWAYS_INLINE Vec3T<T> tangent(const Vec3T<T>& v, const Vec3T<T>& u, const Vec3& r) {
   if constexpr (std::is_same_v<T, double>) {
@@ -60,6 +60,11 @@ EIGEN_ALWAYS_INLINE Vec3T<T> tangent(const Vec3T<T>& v, const Vec3T<T>& u, const
   } else {
     return v + cross(u, r);
   }
+}
+/// physics::tendon_tangent of a tendon load: v + u x r_k + r_k'.
+template <typename T>
+EIGEN_ALWAYS_INLINE Vec3T<T> tangent(const Vec3T<T>& v, const Vec3T<T>& u, const TendonLoad& t) {
+  return tangent(v, u, t.r) + t.dr;
 }
 
 /// Section::curvature and Section::strain in the scalar type.
@@ -82,7 +87,10 @@ EIGEN_ALWAYS_INLINE Eigen::Matrix<T, N, 1> spd_solve(const Eigen::Matrix<T, N, N
 }
 
 /// cosserat::rod_rhs for one combination of the section's shear/extension and gravity flags.
-template <bool Shear, bool Gravity, typename T>
+/// Routed: the tendons' offsets vary along s (TendonLoad::dr, ddr, evaluated by the caller at
+/// s): the general fully constrained path of Rucker & Webster 2011, tangent q_k = v + u x r_k +
+/// r_k' and a_k = A_k (u x q_k + u x r_k' + r_k''); otherwise r_k' = r_k'' = 0 (straight).
+template <bool Shear, bool Gravity, bool Routed = false, typename T>
 EIGEN_ALWAYS_INLINE StrainsT<T> rod_rhs(const Section& S, const TendonLoad* tendons, int count, const T* y, T* dyds) {
   using V3 = Vec3T<T>;
   using M3 = Mat3T<T>;
@@ -116,12 +124,14 @@ EIGEN_ALWAYS_INLINE StrainsT<T> rod_rhs(const Section& S, const TendonLoad* tend
   V3 sumra = V3::Zero();   // sum r_k x a_k
   for (int k = 0; k < count; ++k) {
     const TendonLoad& t = tendons[k];
-    const V3 q = tangent(v, u, t.r);
+    V3 q = tangent(v, u, t.r);
+    if constexpr (Routed) q += t.dr;
     const T inv_q = 1.0 / q.norm();
     const V3 tk = q * inv_q;
     const T c = t.T * inv_q;
     const M3 A = c * (M3::Identity() - tk * tk.transpose());
-    const V3 a = c * u.cross(q);
+    V3 a = c * u.cross(q);  // = A_k (u x q_k): u x q_k is normal to q_k
+    if constexpr (Routed) a += A * (cross(u, t.dr) + t.ddr);
     const M3 Ar = A * t.rx;
     if constexpr (Shear) sumA += A;
     sumAr += Ar;

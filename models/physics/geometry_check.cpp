@@ -109,7 +109,7 @@ void check_geometry(const Robot& robot, const TendonRouting& rt, Solution& sol, 
   if (static_cast<int>(f.size()) != rt.disk_count() || rt.tendons.empty()) return;
   const double rb = robot.backbone.outer_radius;
   double disk_radius = 0.0;
-  for (const RoutedTendon& t : rt.tendons) disk_radius = std::max(disk_radius, t.r.norm());
+  for (const RoutedTendon& t : rt.tendons) disk_radius = std::max(disk_radius, max_offset(t));
   // A known curvature bound kappa turns disks h apart by at most kappa h: quiet() for every pair.
   if (max_curvature >= 0.0 && max_curvature * disk_radius <= 0.5) return;
   // Most shapes turn gently between every pair of disks: then there is nothing to find.

@@ -167,8 +167,8 @@ struct KinkMap {
     const Vec3T<T> vp = cosserat::detail::strain<T>(S, R, z.template head<3>());
     Vec6T<T> g = base;
     for (const cosserat::TendonLoad& t : tendons) {
-      const Vec3T<T> qm = tangent(v, u, t.r);
-      const Vec3T<T> qp = tangent(vp, up, t.r);
+      const Vec3T<T> qm = tangent(v, u, t);
+      const Vec3T<T> qp = tangent(vp, up, t);
       const Vec3T<T> K = t.T * (R * (qp / qp.norm() - qm / qm.norm()));
       g.template head<3>() -= K;
       g.template tail<3>() -= (R * t.r).cross(K);

@@ -21,20 +21,29 @@ constexpr int kN = cosserat::kStateSize;
 #define TDCR_FLATTEN
 #endif
 
-/// The segment's rod (TendonRod without length states) in dual numbers.
-TDCR_FLATTEN void dual_rhs(const cosserat::Section& S, const SegmentLoads& seg, const Dual* y, Dual* dyds) {
-  const cosserat::TendonLoad* t = seg.tendons.data();
-  const int count = static_cast<int>(seg.tendons.size());
+/// The segment's rod (TendonRod without length states) in dual numbers, at arc length s.
+template <bool Routed>
+TDCR_FLATTEN void dual_rhs(const cosserat::Section& S, const SegmentLoads& seg, double s, const Dual* y, Dual* dyds) {
+  const std::vector<cosserat::TendonLoad>& loads = seg.tendons_at(s);
+  const cosserat::TendonLoad* t = loads.data();
+  const int count = static_cast<int>(loads.size());
   if (S.shear_extension) {
     if (S.gravity)
-      cosserat::detail::rod_rhs<true, true>(S, t, count, y, dyds);
+      cosserat::detail::rod_rhs<true, true, Routed>(S, t, count, y, dyds);
     else
-      cosserat::detail::rod_rhs<true, false>(S, t, count, y, dyds);
+      cosserat::detail::rod_rhs<true, false, Routed>(S, t, count, y, dyds);
   } else if (S.gravity) {
-    cosserat::detail::rod_rhs<false, true>(S, t, count, y, dyds);
+    cosserat::detail::rod_rhs<false, true, Routed>(S, t, count, y, dyds);
   } else {
-    cosserat::detail::rod_rhs<false, false>(S, t, count, y, dyds);
+    cosserat::detail::rod_rhs<false, false, Routed>(S, t, count, y, dyds);
   }
+}
+
+void dual_rhs(const cosserat::Section& S, const SegmentLoads& seg, double s, const Dual* y, Dual* dyds) {
+  if (seg.all_straight)
+    dual_rhs<false>(S, seg, s, y, dyds);
+  else
+    dual_rhs<true>(S, seg, s, y, dyds);
 }
 
 /// The steps of bvp::Rk4Integrator::integrate from s0 to s1, operation for operation.
@@ -46,13 +55,17 @@ bool rk4(const bvp::Rk4Integrator& integ, const cosserat::Section& S, const Segm
   const double h = (s1 - s0) / steps;
   Dual k1[kN], k2[kN], k3[kN], k4[kN], t[kN];
   for (int step = 0; step < steps; ++step) {
-    dual_rhs(S, seg, y, k1);
+    // The stage points of bvp::Rk4Integrator.
+    const double s = s0 + step * h;
+    const double s_mid = s + 0.5 * h;
+    const double s_end = (step + 1 == steps) ? s1 : s0 + (step + 1) * h;
+    dual_rhs(S, seg, s, y, k1);
     for (int i = 0; i < kN; ++i) t[i] = y[i] + 0.5 * h * k1[i];
-    dual_rhs(S, seg, t, k2);
+    dual_rhs(S, seg, s_mid, t, k2);
     for (int i = 0; i < kN; ++i) t[i] = y[i] + 0.5 * h * k2[i];
-    dual_rhs(S, seg, t, k3);
+    dual_rhs(S, seg, s_mid, t, k3);
     for (int i = 0; i < kN; ++i) t[i] = y[i] + h * k3[i];
-    dual_rhs(S, seg, t, k4);
+    dual_rhs(S, seg, s_end, t, k4);
     for (int i = 0; i < kN; ++i) y[i] += (h / 6.0) * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i]);
   }
   for (int i = 0; i < kN; ++i)

@@ -5,6 +5,7 @@
 
 #include "tdcr/bvp/newton_solver.hpp"
 #include "tdcr/bvp/shooting.hpp"
+#include "physics/tendon_path.hpp"
 #include "vc/vc_shooting.hpp"
 #include "vc/vc_stability.hpp"
 
@@ -196,9 +197,10 @@ class MultipleShooting final : public detail::ModelProblem {
       }
       for (const RoutedTendon& t : rt.tendons)
         if (t.end_disk > k) {
-          const double T = Lc.tension(t.index);
-          n -= T * Vec3::UnitZ();
-          m += T * Vec3::UnitZ().cross(t.r);
+          // A tendon crossing the cut pulls the distal part with T_k t_k at r_k.
+          const Vec3 pull = Lc.tension(t.index) * physics::rest_tangent(t, s);
+          n -= pull;
+          m -= physics::tendon_offset(t, s).cross(pull);
         }
       cosserat::position(y) = s * Vec3::UnitZ();
       cosserat::rotation(y) = Mat3::Identity();

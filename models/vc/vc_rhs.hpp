@@ -6,14 +6,16 @@
 #include <vector>
 
 #include "tdcr/bvp/integrator.hpp"
+#include "tdcr/core/robot.hpp"
 #include "tdcr/models/cosserat_rod.hpp"
 
 namespace tdcr::vc {
 
 /// A tendon whose length is integrated (every tendon through the segment, tensioned or not).
 struct LengthTerm {
-  Vec3 r = Vec3::Zero();  ///< Body-frame offset.
-  int index = 0;          ///< Global tendon index.
+  Vec3 r = Vec3::Zero();               ///< Body-frame offset (straight routing).
+  int index = 0;                       ///< Global tendon index.
+  const RoutedTendon* tendon = nullptr;  ///< Its routing (read when the segment is not all straight).
 };
 
 /// The tendon loads of one segment at the current load factor.
@@ -23,6 +25,17 @@ struct SegmentLoads {
   std::vector<cosserat::TendonLoad> terminating;  ///< Tensioned, ending at the segment's end.
   std::vector<int> terminating_index;             ///< Global index of each of `terminating`.
   std::vector<LengthTerm> lengths;                ///< Every tendon running through the segment.
+  // General routing (docs/models.md, "Tendon routing").
+  bool all_straight = true;  ///< Every tendon through the segment straight: offsets constant (fast path).
+  std::vector<const RoutedTendon*> routed;              ///< The routing of each of `tendons`.
+  std::vector<const RoutedTendon*> terminating_routed;  ///< The routing of each of `terminating`.
+  mutable std::vector<cosserat::TendonLoad> at_s;              ///< Scratch: `tendons` at one s.
+  mutable std::vector<cosserat::TendonLoad> terminating_at_s;  ///< Scratch: `terminating` at one s.
+
+  /// `tendons` with r_k, r_k', r_k'' at arc length s (themselves if all straight; no allocation).
+  const std::vector<cosserat::TendonLoad>& tendons_at(double s) const;
+  /// `terminating` likewise.
+  const std::vector<cosserat::TendonLoad>& terminating_at(double s) const;
 };
 
 /// The most degenerate tensioned tendon path seen by a watching rod (TendonRod::watch).

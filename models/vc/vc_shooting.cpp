@@ -79,21 +79,32 @@ void bind_input(VcWorkspace::Impl& W, const VcModel& model, const ModelInput& in
     s.terminating.clear();
     s.terminating_index.clear();
     s.lengths.clear();
+    s.routed.clear();
+    s.terminating_routed.clear();
+    s.all_straight = true;
   }
   for (const RoutedTendon& t : rt.tendons) {
     const double T = W.loads.tension(t.index);
     const cosserat::TendonLoad load = cosserat::TendonLoad::make(physics::tendon_offset(t, 0.0), T);
     for (int i = 0; i <= t.segment; ++i) {
-      W.segments[i].lengths.push_back(LengthTerm{load.r, t.index});
+      SegmentLoads& s = W.segments[i];
+      s.lengths.push_back(LengthTerm{load.r, t.index, &t});
+      s.all_straight = s.all_straight && t.straight();
       if (T > 0.0) {
-        W.segments[i].tendons.push_back(load);
-        W.segments[i].tendon_index.push_back(t.index);
+        s.tendons.push_back(load);
+        s.tendon_index.push_back(t.index);
+        s.routed.push_back(&t);
       }
     }
     if (T > 0.0) {
       W.segments[t.segment].terminating.push_back(load);
       W.segments[t.segment].terminating_index.push_back(t.index);
+      W.segments[t.segment].terminating_routed.push_back(&t);
     }
+  }
+  for (SegmentLoads& s : W.segments) {
+    s.at_s.resize(s.tendons.size());
+    s.terminating_at_s.resize(s.terminating.size());
   }
 
   if (W.shot_integrator && same_integration(W.integration, options)) return;
@@ -179,6 +190,7 @@ bool disk_point_loads(const VcWorkspace::Impl& W, int i, int j, T* y) {
   const bool terminates = j == last && !seg.terminating.empty();
   const bool weighted = W.loads.has_disk_weight() && W.loads.disk_weight(j).squaredNorm() > 0.0;
   if (!terminates && !weighted) return true;
+  const double s = rt.disk_s[j];
   // Point loads at disk j, with u, v just proximal of it.
   const Mat3T<T> R = Eigen::Map<const Mat3T<T>>(y + 3);
   Eigen::Map<V3> n(y + 12), m(y + 15);
@@ -187,8 +199,8 @@ bool disk_point_loads(const VcWorkspace::Impl& W, int i, int j, T* y) {
   if (terminates) {
     // Eq. 40-41: tendon termination forces F_k = -T_k R t_k at p + R r_k.
     V3 dn = V3::Zero(), dm = V3::Zero();
-    for (const cosserat::TendonLoad& t : seg.terminating) {
-      const V3 q = cosserat::detail::tangent(v, u, t.r);
+    for (const cosserat::TendonLoad& t : seg.terminating_at(s)) {
+      const V3 q = cosserat::detail::tangent(v, u, t);
       const V3 F = -(t.T / q.norm()) * (R * q);
       dn += F;
       dm += (R * t.r).cross(F);
@@ -202,9 +214,9 @@ bool disk_point_loads(const VcWorkspace::Impl& W, int i, int j, T* y) {
   // t_k+ depends on the wrench after the kink: a fixed point z = G(z) (kink_fixed_point).
   const std::vector<cosserat::TendonLoad>* cont = nullptr;
   if (j < last)
-    cont = &seg.tendons;
+    cont = &seg.tendons_at(s);
   else if (i + 1 < nseg)
-    cont = &W.segments[i + 1].tendons;
+    cont = &W.segments[i + 1].tendons_at(s);
   if (!W.model->options().kink_forces || !cont || cont->empty()) return true;
   Vec6T<T> z;
   z << n, m;
@@ -273,13 +285,15 @@ void tendon_displacements(const VcWorkspace::Impl& W, const std::vector<double>&
   const int K = W.tendon_count;
   displacements.assign(K, 0.0);
   for (const RoutedTendon& t : rt.tendons) {
-    double straight = rt.disk_s[t.end_disk];
+    // The length of the path on the straight robot (the disks' arc length for straight routing).
+    double s0 = 0.0;
     double len = lengths[t.segment * K + t.index];
     if (W.per_segment && t.segment > 0) {
-      straight -= rt.segment_end_s[t.segment - 1];
+      s0 = rt.segment_end_s[t.segment - 1];
       len -= lengths[(t.segment - 1) * K + t.index];
     }
-    displacements[t.index] = straight - len;
+    const double rest = t.straight() ? rt.disk_s[t.end_disk] - s0 : physics::rest_length(t, s0, rt.disk_s[t.end_disk]);
+    displacements[t.index] = rest - len;
   }
 }
 

@@ -1,5 +1,6 @@
 // VC by single shooting: unknowns n(0), m(0), residual the tip wrench (vc.hpp).
 #include "tdcr/bvp/newton_solver.hpp"
+#include "physics/tendon_path.hpp"
 #include "vc/vc_shooting.hpp"
 #include "vc/vc_stability.hpp"
 
@@ -125,12 +126,12 @@ class SingleShooting final : public detail::ModelProblem {
     const physics::LoadCase& L = W_.loads;
     const TendonRouting& rt = W_.model->routing();
     const double length = W_.model->robot().total_length();
-    double sum_T = 0.0;
-    Vec3 tm = Vec3::Zero();
+    // The tendons' pull on the straight robot at the base, T_k t_k(0) at r_k(0).
+    Vec3 pull = Vec3::Zero(), tm = Vec3::Zero();
     for (const RoutedTendon& t : rt.tendons) {
-      const double T = L.tension(t.index);
-      sum_T += T;
-      tm += T * Vec3::UnitZ().cross(t.r);
+      const Vec3 p = L.tension(t.index) * physics::rest_tangent(t, 0.0);
+      pull += p;
+      tm -= physics::tendon_offset(t, 0.0).cross(p);
     }
     // Weights of the straight robot and their moments about the base.
     Vec3 weight = Vec3::Zero(), weight_moment = Vec3::Zero();
@@ -143,7 +144,7 @@ class SingleShooting final : public detail::ModelProblem {
       weight += length * L.backbone_weight();
       weight_moment += (0.5 * length * length * Vec3::UnitZ()).cross(L.backbone_weight());
     }
-    x.head<3>() = L.tip_force() + weight - sum_T * Vec3::UnitZ();
+    x.head<3>() = L.tip_force() + weight - pull;
     x.tail<3>() = L.tip_moment() + (length * Vec3::UnitZ()).cross(L.tip_force()) + weight_moment + tm;
     return x;
   }
@@ -163,9 +164,11 @@ class SingleShooting final : public detail::ModelProblem {
     for (const RoutedTendon& t : rt.tendons) {
       const double T = L.tension(t.index);
       if (T <= 0.0) continue;
-      const Vec3 pull = T * (v0 + u0.cross(t.r)).normalized();  // the tendon's pull on the robot at the base
+      const Vec3 r0 = physics::tendon_offset(t, 0.0);
+      // The tendon's pull on the robot at the base.
+      const Vec3 pull = T * physics::tendon_tangent(v0, u0, r0, physics::tendon_offset_rate(t, 0.0)).normalized();
       n -= pull;
-      m -= t.r.cross(pull);
+      m -= r0.cross(pull);
     }
     if (L.has_disk_weight())
       for (int j = 1; j < nd; ++j) {

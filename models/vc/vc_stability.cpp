@@ -57,12 +57,12 @@ constexpr double kUndecided = 1e-6;
 
 // The tensioned tendons crossing the cut just distal of disk j (0 = base): those running on
 // past it in its segment, or in the next segment at a segment's end.
-const std::vector<cosserat::TendonLoad>* crossing(const VcWorkspace::Impl& W, int j) {
+const SegmentLoads* crossing(const VcWorkspace::Impl& W, int j) {
   const TendonRouting& rt = W.model->routing();
   const int nseg = static_cast<int>(W.segments.size());
   for (int i = 0; i < nseg; ++i) {
-    if (j < rt.segment_end_disk[i]) return &W.segments[i].tendons;
-    if (j == rt.segment_end_disk[i]) return i + 1 < nseg ? &W.segments[i + 1].tendons : nullptr;
+    if (j < rt.segment_end_disk[i]) return &W.segments[i];
+    if (j == rt.segment_end_disk[i]) return i + 1 < nseg ? &W.segments[i + 1] : nullptr;
   }
   return nullptr;
 }
@@ -71,12 +71,12 @@ const std::vector<cosserat::TendonLoad>* crossing(const VcWorkspace::Impl& W, in
 Vec6 cut_wrench(const VcWorkspace::Impl& W, int j, const BackboneSample& b) {
   Vec6 w;
   w << b.n, b.m;
-  const std::vector<cosserat::TendonLoad>* tendons = crossing(W, j);
-  if (!tendons) return w;
+  const SegmentLoads* seg = crossing(W, j);
+  if (!seg) return w;
   const Mat3& R = b.frame.R;
   const Vec3 u = W.section.curvature(R, b.m), v = W.section.strain(R, b.n);
-  for (const cosserat::TendonLoad& t : *tendons) {
-    const Vec3 q = physics::tendon_tangent(v, u, t.r);
+  for (const cosserat::TendonLoad& t : seg->tendons_at(b.s)) {
+    const Vec3 q = physics::tendon_tangent(v, u, t.r, t.dr);
     const Vec3 F = (t.T / q.norm()) * (R * q);
     w.head<3>() += F;
     w.tail<3>() += (R * t.r).cross(F);

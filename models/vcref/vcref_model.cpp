@@ -11,6 +11,7 @@
 #include "tdcr/core/error.hpp"
 #include "tdcr/core/lie.hpp"
 #include "tdcr/models/tendon_physics.hpp"
+#include "physics/tendon_path.hpp"
 #include "vcref/vcref_shooting.hpp"
 #include "vcref/vcref_stability.hpp"
 
@@ -183,7 +184,7 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
       Vec3 u = Vec3::Zero();
       if (arcs)
         for (const RoutedTendon& t : problem_.active().tendons)
-          if (t.segment >= seg) u += T[t.index] * Vec3::UnitZ().cross(t.r);
+          if (t.segment >= seg) u += T[t.index] * Vec3::UnitZ().cross(physics::tendon_offset(t, routing.disk_s[j]));
       u = d_.section.inv_kbt.cwiseProduct(u);
       frames_[j] = frames_[j - 1] * lie::exp_se3(u * l, Vec3::UnitZ() * l);
       if (j < N) problem_.reference(j) = frames_[j].R;

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "physics/tendon_path.hpp"
 #include "tdcr/core/lie.hpp"
 #include "tdcr/models/tendon_physics.hpp"
 
@@ -34,7 +35,7 @@ void VcrefShooting::bind(const ModelInput& input, const SolverOptions& options) 
   std::fill(passes_.begin(), passes_.end(), 0);
   double r_max = 0.0;
   for (const RoutedTendon& t : active_.tendons) {
-    r_max = std::max(r_max, t.r.norm());
+    r_max = std::max(r_max, physics::max_offset(t));
     for (int j = 1; j <= t.end_disk; ++j) {
       tendon_at_[j] = 1;
       if (j < t.end_disk) passes_[j] = 1;

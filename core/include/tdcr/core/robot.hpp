@@ -8,6 +8,7 @@
 /// are numbered segment by segment in input order.
 #pragma once
 
+#include <array>
 #include <optional>
 #include <string>
 #include <vector>
@@ -46,13 +47,29 @@ struct Backbone {
   double linear_mass() const;
 };
 
-/// @brief A tendon: its position (x, y) in the disk frame (m). The z component is 0.
+/// @brief How a tendon runs from the base to its end disk (docs/models.md, "Tendon routing").
+struct TendonRoutingSpec {
+  /// @brief The kind of path.
+  enum class Type {
+    Straight,  ///< Parallel to the backbone at (x, y) in every disk.
+    Helical,   ///< Radius |(x, y)| kept, angle advancing linearly by `turns` from the base to the end disk.
+    Points,    ///< Given hole positions, one per disk after the base disk (the base hole is (x, y)).
+  };
+  Type type = Type::Straight;                    ///< The kind of path.
+  double turns = 0.0;                            ///< Helical: turns over the tendon's length (sign: direction).
+  std::vector<std::array<double, 2>> positions;  ///< Points: (x, y) in disks 1..end disk (m).
+};
+
+/// @brief A tendon: its position (x, y) in the disk frame (m) at the base; the z component is 0.
 struct TendonSpec {
+  TendonSpec() = default;
+  TendonSpec(double x_, double y_) : x(x_), y(y_) {}  ///< Straight routing at (x, y).
   double x = 0.0;  ///< x coordinate of the tendon hole in the disk frame (m).
   double y = 0.0;  ///< y coordinate of the tendon hole in the disk frame (m).
   /// Axial stiffness EA of the tendon (N) for displacement input: the tension is EA / L_free
   /// times the stretch (L_free: base to end disk of the straight robot). Absent: inextensible.
   std::optional<double> stiffness;
+  TendonRoutingSpec routing;  ///< Straight unless given.
 };
 
 /// @brief One segment: a length of backbone with equally spaced spacer disks; the tendons
@@ -73,8 +90,10 @@ struct Robot {
   /// unusable: a non-finite number; a non-positive Young's modulus, outer radius, shear modulus,
   /// direct stiffness or segment length; an inner radius outside [0, outer radius); a Poisson
   /// ratio outside (-1, 0.5); a negative density, mass per length or disk mass; no segment; a
-  /// segment with fewer than 1 disk; a tendon within 1e-9 m of the backbone axis. A segment
-  /// without tendons is allowed (a passive segment).
+  /// segment with fewer than 1 disk; a tendon within 1e-9 m of the backbone axis; a non-finite
+  /// helix `turns`; a points routing whose count is not the number of disks the tendon passes
+  /// (base disk excluded), or with a non-finite point or one on the axis. A segment without
+  /// tendons is allowed (a passive segment).
   void validate() const;
 
   double total_length() const;  ///< Sum of segment lengths (m).
@@ -83,13 +102,27 @@ struct Robot {
 };
 
 /// @brief One tendon as the models see it: global index, the segment where it terminates and
-/// its position vector in the disk frame (z = 0).
+/// its position vector in the disk frame (z = 0) at the base; for non-straight routing the data
+/// of its offset r(s), evaluated by the models (models/physics/tendon_path.hpp).
 struct RoutedTendon {
   int index = 0;                 ///< Global tendon number (0-based, input order).
   int segment = 0;               ///< Segment (0-based) at whose last disk it terminates.
-  Vec3 r = Vec3::Zero();         ///< Position in the disk frame (m).
+  Vec3 r = Vec3::Zero();         ///< Position in the disk frame at the base (m).
   int end_disk = 0;              ///< Index of its terminating disk in the disk list (1-based;
                                  ///< 0 is the base disk).
+  TendonRoutingSpec::Type routing = TendonRoutingSpec::Type::Straight;  ///< How r varies with s.
+  double helix_radius = 0.0;     ///< Helical: |r| (m).
+  double helix_phase = 0.0;      ///< Helical: angle of r at s = 0 (rad).
+  double helix_rate = 0.0;       ///< Helical: angle rate 2 pi turns / s_end (rad/m).
+  /// Points: a natural C2 cubic spline per coordinate through the holes of disks 0..end_disk
+  /// over their arc lengths; these are its knots (the disks' arc lengths).
+  std::vector<double> knots;
+  /// Points: per spline interval the Taylor coefficients at its start (x, dx, d2x / 2, d3x / 6,
+  /// then the same for y).
+  std::vector<std::array<double, 8>> spline;
+  std::vector<Vec3> holes;       ///< Points: the hole of every disk 0..end_disk (exact).
+  /// @brief True for straight routing (a constant offset r).
+  bool straight() const { return routing == TendonRoutingSpec::Type::Straight; }
 };
 
 /// @brief The discretisation of a robot into disks and the tendon routing through them.

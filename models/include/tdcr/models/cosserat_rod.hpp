@@ -85,6 +85,8 @@ struct TendonLoad {
   Vec3 r = Vec3::Zero();   ///< Body-frame offset r_k (m).
   Mat3 rx = Mat3::Zero();  ///< [r_k]x.
   double T = 0.0;          ///< Tension (N).
+  Vec3 dr = Vec3::Zero();  ///< r_k' (general routing; rod_rhs reads it only when routed).
+  Vec3 ddr = Vec3::Zero(); ///< r_k'' (idem).
   /// @brief The load of a tendon at offset r with tension T.
   static TendonLoad make(const Vec3& r, double T);
 };
