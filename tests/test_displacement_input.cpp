@@ -198,6 +198,32 @@ TEST_P(DisplacementInput, ElasticTendons) {
   EXPECT_TRUE(s3.tendon_slack[0]);
 }
 
+// A helically routed elastic tendon: its free length is the helix's, L sqrt(1 + (rho phi')^2),
+// not the segments' (a quarter turn over the two segments), so its tension is EA / L_helix times the stretch of its routed path.
+TEST_P(DisplacementInput, ElasticHelicalTendonStretchesOverTheHelixLength) {
+  Robot r = robot();
+  TendonSpec& t = r.segments[1].tendons[0];
+  t.routing.type = TendonRoutingSpec::Type::Helical;
+  t.routing.turns = 0.25;
+  t.stiffness = 200.0;  // N
+  const auto m = model(r);
+  const auto ws = m->make_workspace();
+  const Solution ref = solve(*m, *ws, tension_input({0.0, 0.0, 1.5, 0.0}));
+  ASSERT_TRUE(ref.converged()) << ref.summary.brief_report();
+  std::vector<K> kinds(4, K::Tensions);
+  kinds[2] = K::Displacements;
+  ModelInput in = from_solution(ref, kinds, Loads{});
+  in.actuation.values[2] += 1e-3;  // 1 mm more than the inextensible answer's pull
+  const Solution s = solve(*m, *ws, in);
+  ASSERT_TRUE(s.converged()) << s.summary.message;
+  const double L = r.total_length(), rho = std::hypot(t.x, t.y), rate = 2.0 * 3.14159265358979323846 * 0.25 / L;
+  const double l_free = L * std::hypot(1.0, rho * rate);
+  const double stretch = in.actuation.values[2] - s.tendon_displacements[2];
+  EXPECT_GT(stretch, 1e-4);
+  EXPECT_NEAR(s.tensions[2], 200.0 / l_free * stretch, 1e-8 * s.tensions[2]);
+  EXPECT_GT(std::abs(s.tensions[2] - 200.0 / L * stretch), 1e-3 * s.tensions[2]);  // the helix length matters
+}
+
 // A solve cut short says so: failed, with its iterations and residual.
 TEST_P(DisplacementInput, NonConvergenceIsReported) {
   const auto m = model(robot());

@@ -1,6 +1,8 @@
 // Displacement input by an outer semismooth Newton over tensions (displacement_input.hpp).
 #include "common/displacement_input.hpp"
 
+#include "physics/tendon_path.hpp"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -40,15 +42,17 @@ std::vector<DrivenTendon> driven_tendons(const StaticModel& model, const ModelIn
   const double EI = robot.backbone.effective_stiffness().EI;
   std::vector<DrivenTendon> out;
   int k = 0;
-  double l_free = 0.0;  // base to the end disk of the straight robot
   for (const Segment& seg : robot.segments) {
-    l_free += seg.length;
     for (const TendonSpec& spec : seg.tendons) {
       if (input.actuation.kind_of(static_cast<std::size_t>(k)) == Actuation::Kind::Displacements) {
+        const RoutedTendon& rt = model.routing().tendons[static_cast<std::size_t>(k)];
+        // Free length: the tendon's path from the base to its end disk on the straight robot
+        // (its routing included: a helix is longer than the segments it spans).
+        const double l_free = physics::rest_length(rt, 0.0, model.routing().disk_s[static_cast<std::size_t>(rt.end_disk)]);
         DrivenTendon t;
         t.index = k;
         t.delta = input.actuation.values[static_cast<std::size_t>(k)];
-        t.r = model.routing().tendons[static_cast<std::size_t>(k)].r.norm();
+        t.r = rt.r.norm();
         t.t_scale = EI / (t.r * l_free);
         t.c = spec.stiffness ? *spec.stiffness / l_free : 0.0;
         out.push_back(t);
