@@ -127,6 +127,20 @@ TEST(SweepFile, RelativeScenePathIsTakenFromTheSweepFile) {
   EXPECT_EQ(tdcr::load_sweep(kExamples + "/sweeps/stiffness_design.json").sample_count(), 15u);
 }
 
+// Mixed input (examples/paper_robot_displacements.json: tendons 0-2 by displacement, 3 by
+// tension): an axis sweeps the list that gives its tendon, and only that one.
+TEST(SweepFile, MixedInputAxesFollowEachTendonsKind) {
+  const std::string scene = R"({"scene": ")" + kExamples + "/paper_robot_displacements.json" + R"(", "models": ["vc"], )";
+  const tdcr::SweepSpec ok = tdcr::parse_sweep(
+      scene + R"("axes": [{"field": "actuation.displacements[1]", "values": [-0.003, -0.002]},
+                          {"field": "actuation.tensions[3]", "values": [0.1, 0.2, 0.3]}]})",
+      "mixed.json", "/nonexistent");
+  EXPECT_EQ(ok.sample_count(), 6u);
+  EXPECT_THROW(tdcr::parse_sweep(scene + R"("axes": [{"field": "actuation.tensions[0]", "values": [1]}]})", "mixed.json",
+                                 "/nonexistent"),
+               tdcr::InputError);
+}
+
 struct BadSweep {
   const char* what;
   std::string text;
@@ -161,6 +175,9 @@ TEST(SweepFile, BadInputNamesTheFieldAndTheValue) {
        "seed", ""},
       {"grid range without count", "{" + scene + R"("models": ["vc"], "axes": [{"field": "actuation.tensions[0]", "from": 0, "to": 1}]})",
        "axes[0].count", ""},
+      {"displacement of a tendon given by tension",
+       "{" + scene + R"("models": ["vc"], "axes": [{"field": "actuation.displacements[0]", "values": [0.001]}]})",
+       "actuation.displacements[0]", ""},
       {"not a sweepable field", "{" + scene + R"("models": ["vc"], "axes": [{"field": "model", "values": [1]}]})", "axes[0].field",
        "model"},
   };

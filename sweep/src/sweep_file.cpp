@@ -58,12 +58,13 @@ void classify(SweepAxis& axis, const Scene& base, const std::string& where) {
     axis.index = static_cast<int>(std::min<std::size_t>(k, 1 << 30));
     if (group == "actuation" && (name == "tensions" || name == "displacements")) {
       const bool tensions = name == "tensions";
-      if ((base.actuation.kind == Actuation::Kind::Tensions) != tensions)
-        throw InputError(axis.field, "", "does not exist: the base scene's actuation gives " +
-                                             std::string(tensions ? "displacements" : "tensions"));
       if (k >= base.actuation.values.size())
         throw InputError(axis.field, "", "does not exist: the base scene has " +
                                              std::to_string(base.actuation.values.size()) + " tendons");
+      // Mixed input: each tendon is given by one of the two lists.
+      if ((base.actuation.kind_of(k) == Actuation::Kind::Tensions) != tensions)
+        throw InputError(axis.field, "", "does not exist: the base scene's actuation gives tendon " + std::to_string(k) +
+                                             " by " + std::string(tensions ? "displacement" : "tension"));
       axis.target = tensions ? SweepAxis::Target::Tension : SweepAxis::Target::Displacement;
       return;
     }
