@@ -18,6 +18,8 @@ namespace tdcr_python {
 void bind_scene(pybind11::module_& m);
 /// StaticModel, ModelWorkspace, Solution and its parts, the solve functions, model selection.
 void bind_solve(pybind11::module_& m);
+/// InverseTarget, InverseOptions, InverseResult and inverse_solve (after bind_solve: uses Solution).
+void bind_inverse(pybind11::module_& m);
 /// json.loads(text): a Python object from JSON text.
 pybind11::object json_loads(const std::string& text);
 

@@ -1,7 +1,9 @@
 // Bindings of the scene description: robot, actuation, loads, effects, solver options, scenes and
 // scene files. Enumerations are their scene-file strings ("rk4", "removed", ...), so a scene built
 // field by field reads like its JSON file.
+#include <algorithm>
 #include <array>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -37,6 +39,11 @@ const Names<tdcr::TendonPath> kTendonPath = {{"fully_constrained", tdcr::TendonP
                                              {"partially_constrained", tdcr::TendonPath::PartiallyConstrained}};
 const Names<tdcr::IntegratorKind> kIntegrator = {{"rk4", tdcr::IntegratorKind::FixedStepRK4},
                                                  {"cvode", tdcr::IntegratorKind::Cvode}};
+const Names<tdcr::TendonRoutingSpec::Type> kRoutingType = {{"straight", tdcr::TendonRoutingSpec::Type::Straight},
+                                                           {"helical", tdcr::TendonRoutingSpec::Type::Helical},
+                                                           {"points", tdcr::TendonRoutingSpec::Type::Points}};
+const Names<tdcr::TendonFriction::Motion> kMotion = {{"pulling", tdcr::TendonFriction::Motion::Pulling},
+                                                     {"releasing", tdcr::TendonFriction::Motion::Releasing}};
 const Names<tdcr::LinearSolverKind> kLinearSolver = {{"auto", tdcr::LinearSolverKind::Automatic},
                                                      {"dense", tdcr::LinearSolverKind::Dense},
                                                      {"klu", tdcr::LinearSolverKind::SparseKLU}};
@@ -82,6 +89,46 @@ void array_property(py::class_<tdcr::PrbParameters>& c, const char* name, double
       });
 }
 
+/// A read-only numpy copy of `v` (`a.values[0] = x` raises instead of changing a temporary).
+py::array_t<double> readonly_array(const std::vector<double>& v) {
+  py::array_t<double> a(static_cast<py::ssize_t>(v.size()), v.data());
+  py::detail::array_proxy(a.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
+  return a;
+}
+
+/// Points routing: an (k, 2) array (or anything numpy reads as one, e.g. a list of pairs) as
+/// hole positions; InputError naming `routing.positions` on another shape.
+std::vector<std::array<double, 2>> positions_of(const py::object& obj) {
+  const auto a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(obj);
+  if (!a) throw tdcr::InputError("routing.positions", py::str(obj), "must be an (k, 2) array of numbers");
+  if (a.size() == 0) return {};
+  if (a.ndim() != 2 || a.shape(1) != 2)
+    throw tdcr::InputError("routing.positions", "shape " + std::string(py::str(a.attr("shape"))),
+                           "must have shape (k, 2): one (x, y) per disk after the base disk");
+  std::vector<std::array<double, 2>> out(static_cast<std::size_t>(a.shape(0)));
+  for (py::ssize_t i = 0; i < a.shape(0); ++i) out[static_cast<std::size_t>(i)] = {a.at(i, 0), a.at(i, 1)};
+  return out;
+}
+
+py::array_t<double> positions_array(const std::vector<std::array<double, 2>>& p) {
+  py::array_t<double> out({static_cast<py::ssize_t>(p.size()), py::ssize_t{2}});
+  auto a = out.mutable_unchecked<2>();
+  for (std::size_t k = 0; k < p.size(); ++k) a(k, 0) = p[k][0], a(k, 1) = p[k][1];
+  return out;
+}
+
+/// Actuation::kinds from names, normalised as the scene parser does: a mixed list sets `kind`
+/// to displacements; a list of one kind is that kind (and no list).
+void set_kinds(tdcr::Actuation& a, const std::vector<std::string>& names) {
+  a.kinds.clear();
+  for (std::size_t k = 0; k < names.size(); ++k)
+    a.kinds.push_back(parse_name(kActuationKind, names[k], "actuation.kinds[" + std::to_string(k) + "]"));
+  if (a.kinds.empty()) return;
+  const bool one_kind = std::all_of(a.kinds.begin(), a.kinds.end(), [&](auto x) { return x == a.kinds[0]; });
+  a.kind = one_kind ? a.kinds[0] : tdcr::Actuation::Kind::Displacements;
+  if (one_kind) a.kinds.clear();
+}
+
 std::string json_dumps(const py::object& obj) { return py::str(py::module_::import("json").attr("dumps")(obj)); }
 
 void bind_robot(py::module_& m) {
@@ -107,12 +154,52 @@ void bind_robot(py::module_& m) {
       .def("effective_stiffness", &tdcr::Backbone::effective_stiffness)
       .def("linear_mass", &tdcr::Backbone::linear_mass);
 
-  py::class_<tdcr::TendonSpec>(m, "TendonSpec", "A tendon hole at (x, y) in the disk frame (m)")
-      .def(py::init([](double x, double y) { return tdcr::TendonSpec{x, y}; }), "x"_a = 0.0, "y"_a = 0.0)
+  py::class_<tdcr::TendonRoutingSpec> routing(m, "TendonRoutingSpec",
+                                              "How a tendon runs from the base to its end disk (scene key `routing`)");
+  routing
+      .def(py::init([](const std::string& type, double turns, const py::object& positions) {
+             tdcr::TendonRoutingSpec r;
+             r.type = parse_name(kRoutingType, type, "routing.type");
+             r.turns = turns;
+             if (!positions.is_none()) r.positions = positions_of(positions);
+             return r;
+           }),
+           "type"_a = "straight", "turns"_a = 0.0, "positions"_a = py::none())
+      .def_readwrite("turns", &tdcr::TendonRoutingSpec::turns, "helical: turns from the base to the end disk")
+      .def_property(
+          "positions", [](const tdcr::TendonRoutingSpec& r) { return positions_array(r.positions); },
+          [](tdcr::TendonRoutingSpec& r, const py::object& p) { r.positions = positions_of(p); },
+          "points: (k, 2) hole positions (m) in disks 1..end disk (assign an array or a list of pairs)")
+      .def("__repr__", [](const tdcr::TendonRoutingSpec& r) {
+        std::string s = "TendonRoutingSpec(type=\"" + name_of(kRoutingType, r.type) + "\"";
+        if (r.type == tdcr::TendonRoutingSpec::Type::Helical) s += ", turns=" + tdcr::format_value(r.turns);
+        if (r.type == tdcr::TendonRoutingSpec::Type::Points) s += ", positions=<" + std::to_string(r.positions.size()) + " points>";
+        return s + ")";
+      });
+  enum_property(routing, "type", &tdcr::TendonRoutingSpec::type, kRoutingType, "routing.type",
+                "'straight', 'helical' or 'points'");
+
+  py::class_<tdcr::TendonSpec>(m, "TendonSpec",
+                               "A tendon hole at (x, y) in the disk frame at the base (m), its axial stiffness "
+                               "EA (N, None: inextensible) and its routing")
+      .def(py::init([](double x, double y, std::optional<double> stiffness,
+                       const std::optional<tdcr::TendonRoutingSpec>& routing) {
+             tdcr::TendonSpec t{x, y};
+             t.stiffness = stiffness;
+             if (routing) t.routing = *routing;
+             return t;
+           }),
+           "x"_a = 0.0, "y"_a = 0.0, py::kw_only(), "stiffness"_a = py::none(), "routing"_a = py::none())
       .def_readwrite("x", &tdcr::TendonSpec::x)
       .def_readwrite("y", &tdcr::TendonSpec::y)
+      .def_readwrite("stiffness", &tdcr::TendonSpec::stiffness, "axial stiffness EA (N) or None (inextensible)")
+      .def_readwrite("routing", &tdcr::TendonSpec::routing, "TendonRoutingSpec (straight unless given)")
       .def("__repr__", [](const tdcr::TendonSpec& t) {
-        return "TendonSpec(x=" + tdcr::format_value(t.x) + ", y=" + tdcr::format_value(t.y) + ")";
+        std::string s = "TendonSpec(x=" + tdcr::format_value(t.x) + ", y=" + tdcr::format_value(t.y);
+        if (t.stiffness) s += ", stiffness=" + tdcr::format_value(*t.stiffness);
+        if (t.routing.type != tdcr::TendonRoutingSpec::Type::Straight)
+          s += ", routing=" + std::string(py::repr(py::cast(t.routing)));
+        return s + ")";
       });
   py::bind_vector<std::vector<tdcr::TendonSpec>>(m, "TendonList");
   py::implicitly_convertible<py::list, std::vector<tdcr::TendonSpec>>();
@@ -144,24 +231,32 @@ void bind_robot(py::module_& m) {
 
 void bind_input(py::module_& m) {
   py::class_<tdcr::Actuation> act(m, "Actuation", "Tendon tensions (N) or displacements (m), one per tendon");
-  act.def(py::init([](std::vector<double> values, const std::string& kind, const std::string& convention) {
+  act.def(py::init([](std::vector<double> values, const std::string& kind, const std::string& convention,
+                       const std::vector<std::string>& kinds) {
             tdcr::Actuation a;
             a.values = std::move(values);
             a.kind = parse_name(kActuationKind, kind, "actuation");
             a.convention = parse_name(kConvention, convention, "actuation.displacement_convention");
+            set_kinds(a, kinds);
             return a;
           }),
-          "values"_a = std::vector<double>{}, "kind"_a = "tensions", "convention"_a = "at_base")
+          "values"_a = std::vector<double>{}, "kind"_a = "tensions", "convention"_a = "at_base",
+          "kinds"_a = std::vector<std::string>{})
       .def_property(
-          "values",
-          [](const tdcr::Actuation& a) {
-            // A read-only copy: `a.values[0] = x` raises instead of changing a temporary.
-            py::array_t<double> v(static_cast<py::ssize_t>(a.values.size()), a.values.data());
-            py::detail::array_proxy(v.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
-            return v;
-          },
+          "values", [](const tdcr::Actuation& a) { return readonly_array(a.values); },
           [](tdcr::Actuation& a, const std::vector<double>& v) { a.values = v; },
-          "one value per tendon, N or m (assign a whole list)");
+          "one value per tendon, N or m (assign a whole list)")
+      .def_property(
+          "kinds",
+          [](const tdcr::Actuation& a) {
+            std::vector<std::string> k;
+            for (tdcr::Actuation::Kind x : a.kinds) k.push_back(name_of(kActuationKind, x));
+            return k;
+          },
+          &set_kinds,
+          "mixed input: 'tensions' or 'displacements' per tendon; [] when every value is `kind` (a list of one "
+          "kind is stored as that kind)")
+      .def_property_readonly("mixed", &tdcr::Actuation::mixed, "some tendons by tension, others by displacement");
   enum_property(act, "kind", &tdcr::Actuation::kind, kActuationKind, "actuation", "'tensions' or 'displacements'");
   enum_property(act, "convention", &tdcr::Actuation::convention, kConvention, "actuation.displacement_convention",
                 "'at_base' or 'per_segment'");
@@ -187,11 +282,31 @@ void bind_effects(py::module_& m) {
   array_property<4>(prb, "gamma", &tdcr::PrbParameters::gamma, "effects.prb.gamma");
   array_property<3>(prb, "k_theta", &tdcr::PrbParameters::k_theta, "effects.prb.k_theta");
 
+  py::class_<tdcr::TendonFriction> fr(m, "TendonFriction",
+                                     "Capstan friction at the disk holes and the direction of tendon motion");
+  fr.def(py::init([](double coefficient, const std::vector<double>& coefficients, const std::string& motion) {
+           tdcr::TendonFriction f;
+           f.coefficient = coefficient;
+           f.coefficients = coefficients;
+           f.motion = parse_name(kMotion, motion, "effects.tendon_friction.motion");
+           return f;
+         }),
+         "coefficient"_a = 0.0, "coefficients"_a = std::vector<double>{}, "motion"_a = "pulling")
+      .def_readwrite("coefficient", &tdcr::TendonFriction::coefficient, "mu of every tendon (>= 0; 0: off)")
+      .def_property(
+          "coefficients", [](const tdcr::TendonFriction& f) { return readonly_array(f.coefficients); },
+          [](tdcr::TendonFriction& f, const std::vector<double>& v) { f.coefficients = v; },
+          "one mu per tendon (global order) overriding `coefficient`, or empty (assign a whole list)")
+      .def_property_readonly("on", &tdcr::TendonFriction::on, "some tendon has a nonzero coefficient");
+  enum_property(fr, "motion", &tdcr::TendonFriction::motion, kMotion, "effects.tendon_friction.motion",
+                "'pulling' (tension drops away from the base) or 'releasing' (it rises)");
+
   py::class_<tdcr::Effects> eff(m, "Effects", "What a model simulates (defaults: the paper's code)");
   eff.def(py::init<>())
       .def_readwrite("shear_extension", &tdcr::Effects::shear_extension)
       .def_readwrite("kink_forces", &tdcr::Effects::kink_forces)
       .def_readwrite("prb", &tdcr::Effects::prb)
+      .def_readwrite("tendon_friction", &tdcr::Effects::tendon_friction, "TendonFriction (off by default)")
       .def("validate", py::overload_cast<>(&tdcr::Effects::validate, py::const_))
       .def("validate", py::overload_cast<const tdcr::Robot&>(&tdcr::Effects::validate, py::const_), py::arg("robot"));
   enum_property(eff, "disk_normal_force", &tdcr::Effects::disk_normal_force, kDiskNormalForce,

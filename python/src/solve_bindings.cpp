@@ -146,6 +146,16 @@ void bind_solution(py::module_& m) {
       .def_property_readonly("tendon_displacements", [](const S& s) { return vector_array(s.tendon_displacements); },
                              "(m,) displacement of each tendon at the base (m), positive when pulled")
       .def_property_readonly("tensions", [](const S& s) { return vector_array(s.tensions); }, "(m,) tensions (N)")
+      .def_property_readonly("tendon_end_tensions", [](const S& s) { return vector_array(s.tendon_end_tensions); },
+                             "(m,) tension of each tendon at its end disk (N) with friction; empty without")
+      .def_property_readonly("tendon_slack",
+                             [](const S& s) {
+                               py::array_t<bool> out(static_cast<py::ssize_t>(s.tendon_slack.size()));
+                               for (std::size_t k = 0; k < s.tendon_slack.size(); ++k)
+                                 out.mutable_at(k) = s.tendon_slack[k];
+                               return out;
+                             },
+                             "(m,) bool: tendon went slack (displacement input); empty for tension input")
       .def_property_readonly("unknowns", [](const S& s) { return Eigen::VectorXd(s.unknowns); })
       .def_property_readonly("backbone_s",
                              [](const S& s) {
@@ -254,6 +264,7 @@ void bind_solve(py::module_& m) {
   bind_solution_parts(m);
   bind_solution(m);
   bind_models(m);
+  bind_inverse(m);
 }
 
 }  // namespace tdcr_python
