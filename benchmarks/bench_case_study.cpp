@@ -324,6 +324,37 @@ void tradeoff(const Settings& cfg) {
   }
 }
 
+// Displacement input (issue 14) and elastic tendons (issue 15): the pulled tendons of the
+// baseline given by the displacements of its answer, the others by their tension (0), so the
+// inextensible answer is the baseline's; elastic: the same with EA = 1e4 N per tendon (it
+// stretches about 0.1 mm). Each solve is a sequence of warm-started tension solves.
+void displacement_effects(ModelKind kind, int reps, bench::Csv& csv) {
+  const Scene s = paper::scene(10, 2);
+  Runner base(kind, s.robot, s.effects);
+  const auto b = base.time(s.input(), s.solver, 1);
+  if (!b || !b->last.converged()) return;
+  for (const bool elastic : {false, true}) {
+    Scene d = s;
+    d.actuation.kind = Actuation::Kind::Displacements;
+    d.actuation.kinds.assign(s.actuation.values.size(), Actuation::Kind::Tensions);
+    std::size_t k = 0;
+    for (Segment& seg : d.robot.segments)
+      for (TendonSpec& t : seg.tendons) {
+        if (s.actuation.values[k] > 0.0) {
+          d.actuation.kinds[k] = Actuation::Kind::Displacements;
+          d.actuation.values[k] = b->last.tendon_displacements[k];
+          if (elastic) t.stiffness = 1e4;
+        }
+        ++k;
+      }
+    Runner run(kind, d.robot, d.effects);
+    const auto t = run.time(d.input(), d.solver, reps);
+    if (!t) continue;
+    csv.row(to_string(kind), elastic ? "elastic_tendons" : "displacement_input", t->median_us,
+            t->last.summary.iterations, t->last.converged() ? 1 : 0);
+  }
+}
+
 // The same solve with and without each effect: what an effect costs when a scene calls for it.
 void effects(const Settings& cfg) {
   bench::Csv csv(cfg.out + "/effects.csv", "model,effect,median_us,iterations,converged");
@@ -350,6 +381,7 @@ void effects(const Settings& cfg) {
       if (!t) continue;
       csv.row(to_string(kind), v.name, t->median_us, t->last.summary.iterations, t->last.converged() ? 1 : 0);
     }
+    displacement_effects(kind, reps, csv);
     bench::progress("effects: " + to_string(kind), 1, 1);
   }
 }
