@@ -16,6 +16,7 @@ namespace {
 
 constexpr int kExitInternal = 3;
 
+#ifdef TDCR_PYTHON_BUILD_DIR
 bool exists(const std::string& path) {
   struct stat st {};
   return ::stat(path.c_str(), &st) == 0;
@@ -30,7 +31,6 @@ std::string exe_dir() {
   return path.substr(0, path.find_last_of('/'));
 }
 
-#ifdef TDCR_PYTHON_BUILD_DIR
 /// The directory holding the package tdcr: the installed one (relative to bin/) first, so an
 /// installed tdcr uses its installed module, else the build tree's.
 std::string module_dir() {
