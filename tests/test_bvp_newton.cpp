@@ -179,6 +179,40 @@ TEST(BvpNewton, RosenbrockFromZeroInTwoFullNewtonSteps) {
   EXPECT_NE(r.message.find("KIN_SUCCESS"), std::string::npos) << r.message;
 }
 
+// Rosenbrock computing its own Newton steps (ResidualSystem::has_newton_step) with the exact
+// inverse Jacobian: the same two full steps, no Jacobian matrix formed.
+class RosenbrockOwnStep : public Rosenbrock {
+ public:
+  bool has_newton_step() const override { return true; }
+  bool setup_newton_step(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>&) override {
+    J << -20.0 * x[0], 10.0, -1.0, 0.0;
+    ++setups;
+    return true;
+  }
+  bool solve_newton_step(Eigen::Ref<Eigen::VectorXd> b) override {
+    b = J.inverse() * b;
+    return true;
+  }
+  Eigen::Matrix2d J;
+  int setups = 0;
+};
+
+TEST(BvpNewton, SystemNewtonStepsGiveTheSameIterations) {
+  RosenbrockOwnStep sys;
+  NewtonSolver solver;
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(2);
+  NewtonOptions o;
+  o.line_search = false;
+  const auto r = solver.solve(sys, x, o);
+  ASSERT_TRUE(r.converged()) << r.message;
+  EXPECT_EQ(r.iterations, 2);
+  EXPECT_EQ(sys.setups, 2);
+  EXPECT_EQ(r.fd_residual_evaluations, 0);
+  EXPECT_EQ(r.linear_solver, "system");
+  EXPECT_NEAR(x[0], 1.0, 1e-14);
+  EXPECT_NEAR(x[1], 1.0, 1e-14);
+}
+
 TEST(BvpNewton, RosenbrockFromZeroWithLineSearch) {
   Rosenbrock sys;
   NewtonSolver solver;

@@ -6,7 +6,6 @@
 #include <kinsol/kinsol.h>
 #include <nvector/nvector_serial.h>
 #include <sundials/sundials_context.h>
-#include <sunlinsol/sunlinsol_dense.h>
 #include <sunmatrix/sunmatrix_dense.h>
 #include <sunmatrix/sunmatrix_sparse.h>
 
@@ -17,6 +16,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "dense_linear_solver.hpp"
 #include "klu_linear_solver.hpp"
 #include "tdcr/core/error.hpp"
 
@@ -77,6 +77,7 @@ struct NewtonSolver::Impl {
   // What the objects were built for.
   int n = -1;
   bool sparse = false;
+  bool stepper = false;  // the system's own Newton steps (ResidualSystem::has_newton_step)
   SparsityPattern pattern;     // copy of the system's pattern (empty if dense system)
   bool has_pattern = false;
   bool dense_fallback = false;  // pattern is SparsityPattern::dense(n): KLU without a pattern
@@ -137,7 +138,7 @@ struct NewtonSolver::Impl {
     fd_groups = false;
   }
 
-  void build(int size, bool use_klu, const SparsityPattern* p) {
+  void build(int size, bool use_klu, bool own_step, const SparsityPattern* p) {
     destroy();
     factored = nullptr;
     ++rebuilds;
@@ -145,12 +146,15 @@ struct NewtonSolver::Impl {
     uscale = N_VNew_Serial(size, ctx);
     fscale = N_VNew_Serial(size, ctx);
     if (!u || !uscale || !fscale) throw std::runtime_error("NewtonSolver: N_VNew_Serial failed");
-    if (use_klu) {
+    if (own_step) {
+      J = SUNDenseMatrix(1, 1, ctx);  // placeholder: no Jacobian is formed
+      if (J) LS = detail::make_system_step_solver(ctx, &Impl::step_fn, this);
+    } else if (use_klu) {
       J = SUNSparseMatrix(size, size, p->nnz(), CSC_MAT, ctx);
       if (J) LS = detail::make_klu_linear_solver(ctx);
     } else {
       J = SUNDenseMatrix(size, size, ctx);
-      if (J) LS = SUNLinSol_Dense(u, J, ctx);
+      if (J) LS = detail::make_dense_linear_solver(ctx);
     }
     if (!J || !LS) throw std::runtime_error("NewtonSolver: cannot create the linear solver");
     kin = KINCreate(ctx);
@@ -167,6 +171,7 @@ struct NewtonSolver::Impl {
                                kinsol_flag_name(ret) + " " + kinsol_message);
     n = size;
     sparse = use_klu;
+    stepper = own_step;
   }
 
   // ---- C callbacks. They never let an exception cross KINSOL's C frames. ----
@@ -221,10 +226,23 @@ struct NewtonSolver::Impl {
     }
   }
 
+  static int step_fn(double* b, double* x, void* user) {
+    auto* self = static_cast<Impl*>(user);
+    try {
+      Eigen::Map<Eigen::VectorXd> d(x, self->n);
+      d = Eigen::Map<const Eigen::VectorXd>(b, self->n);
+      return self->system->solve_newton_step(d) && d.allFinite() ? 0 : 1;
+    } catch (...) {
+      self->exception = std::current_exception();
+      return -1;
+    }
+  }
+
   EvalFailure fill_jacobian(N_Vector uu, N_Vector fu, SUNMatrix Jm) {
     Eigen::Map<const Eigen::VectorXd> x(N_VGetArrayPointer(uu), n);
     Eigen::Map<const Eigen::VectorXd> f(N_VGetArrayPointer(fu), n);
     ResidualSystem& sys = *system;
+    if (stepper) return sys.setup_newton_step(x, f) ? EvalFailure::None : EvalFailure::NotEvaluated;
     const bool analytic = sys.has_jacobian();
     bool ok = false;
     if (sparse) {
@@ -274,34 +292,6 @@ struct NewtonSolver::Impl {
   }
 };
 
-NewtonOptions NewtonOptions::from(const SolverOptions& options) {
-  NewtonOptions o;
-  o.function_tolerance = options.function_tolerance;
-  o.step_tolerance = options.step_tolerance;
-  o.max_iterations = options.max_iterations;
-  o.linear_solver = options.linear_solver;
-  return o;
-}
-
-void NewtonOptions::validate() const {
-  auto positive = [](double v, const char* field) {
-    if (!(v > 0.0) || !std::isfinite(v))
-      throw InputError(std::string("newton.") + field, format_value(v), "must be positive and finite");
-  };
-  positive(function_tolerance, "function_tolerance");
-  positive(step_tolerance, "step_tolerance");
-  if (max_iterations < 1)
-    throw InputError("newton.max_iterations", std::to_string(max_iterations), "must be >= 1");
-  if (!(max_newton_step >= 0.0) || !std::isfinite(max_newton_step))
-    throw InputError("newton.max_newton_step", format_value(max_newton_step),
-                     "must be >= 0 (0 = automatic)");
-  if (max_setup_calls < 1)
-    throw InputError("newton.max_setup_calls", std::to_string(max_setup_calls), "must be >= 1");
-  if (dense_size_limit < 0)
-    throw InputError("newton.dense_size_limit", std::to_string(dense_size_limit),
-                     "must be >= 0");
-}
-
 NewtonSolver::NewtonSolver() : impl_(std::make_unique<Impl>()) {}
 NewtonSolver::~NewtonSolver() = default;
 NewtonSolver::NewtonSolver(NewtonSolver&&) noexcept = default;
@@ -336,13 +326,14 @@ NewtonResult NewtonSolver::solve(ResidualSystem& system, Eigen::VectorXd& x,
   // Linear solver choice. KLU without a declared pattern uses a dense pattern: correct, just
   // not sparse.
   bool use_klu = false;
-  switch (options.linear_solver) {
+  const bool own_step = system.has_newton_step();
+  if (!own_step) switch (options.linear_solver) {
     case LinearSolverKind::Dense: use_klu = false; break;
     case LinearSolverKind::SparseKLU: use_klu = true; break;
     case LinearSolverKind::Automatic: use_klu = p && n > options.dense_size_limit; break;
   }
   const bool dense_fallback = use_klu && !p;
-  const bool same_size = s.n == n && s.sparse == use_klu;
+  const bool same_size = s.n == n && s.sparse == use_klu && s.stepper == own_step;
   const bool reuse_dense = dense_fallback && same_size && s.dense_fallback;
   const SparsityPattern dense_pattern =
       dense_fallback && !reuse_dense ? SparsityPattern::dense(n) : SparsityPattern();
@@ -354,7 +345,7 @@ NewtonResult NewtonSolver::solve(ResidualSystem& system, Eigen::VectorXd& x,
       (eff != nullptr) != s.has_pattern || (eff && eff != &s.pattern && *eff != s.pattern);
   if (!same_size) {
     s.set_pattern(eff, dense_fallback);
-    s.build(n, use_klu, eff);
+    s.build(n, use_klu, own_step, eff);
   } else if (pattern_changed) {
     s.set_pattern(eff, dense_fallback);
     if (use_klu && SUNSparseMatrix_Reallocate(s.J, eff->nnz()) != 0)
@@ -417,7 +408,7 @@ NewtonResult NewtonSolver::solve(ResidualSystem& system, Eigen::VectorXd& x,
   result.iterations = static_cast<int>(nni);
   result.jacobian_evaluations = s.nje;
   result.fd_residual_evaluations = s.fd.evaluations - fd_before;
-  result.linear_solver = use_klu ? "klu" : "dense";
+  result.linear_solver = own_step ? "system" : use_klu ? "klu" : "dense";
   x = u;
 
   // Judge the returned point ourselves: KINSOL's flag alone is not a proof of convergence

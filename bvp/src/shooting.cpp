@@ -128,6 +128,7 @@ void ShootingSystem::check_problem() {
   pstarts_.assign(total, 0.0);
   pends_.assign(total, 0.0);
   xnode_.assign(m_, 0.0);
+  dy_.assign(m_, 0.0);
   rblock_.assign(m_, 0.0);
   sbuf_.assign(m_, 1.0);
   scale_.assign(size_, 1.0);
@@ -209,6 +210,7 @@ bool ShootingSystem::sparse_jacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
     double* py = pstarts_.data() + off;
     double* pe = pends_.data() + off;
     const int d = offset_[k + 1] - offset_[k];
+    const bool linear = problem_.linearize_shot(k, *integrator_, y0, e0);
     std::copy(x.data() + offset_[k], x.data() + offset_[k + 1], xnode_.begin());
     for (int j = 0; j < d; ++j) {
       const int col = offset_[k] + j;
@@ -221,6 +223,10 @@ bool ShootingSystem::sparse_jacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
       bool ok = true;
       if (problem_.shifts_end(k, j)) {
         for (int q = 0; q < m_; ++q) pe[q] = e0[q] + (py[q] - y0[q]);
+      } else if (linear) {
+        for (int q = 0; q < m_; ++q) dy_[q] = py[q] - y0[q];
+        problem_.shot_tangent(k, dy_.data(), pe);
+        for (int q = 0; q < m_; ++q) pe[q] += e0[q];
       } else {
         for (int q = 0; q < m_; ++q) pe[q] = py[q];
         ++integrations_;

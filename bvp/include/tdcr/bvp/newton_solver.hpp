@@ -64,7 +64,7 @@ struct NewtonResult {
   int fd_residual_evaluations = 0;  ///< Residual evaluations spent in FD Jacobians.
   double residual_norm = 0.0;   ///< max_i |s_i F_i(x)| at the returned x (dimensionless).
   double physical_residual = 0.0;  ///< |F(x)|_2 at the returned x, unscaled (system units).
-  std::string linear_solver;    ///< "dense" or "klu".
+  std::string linear_solver;    ///< "dense", "klu" or "system" (ResidualSystem::has_newton_step).
 
   /// @brief True if the residual at the returned x satisfies the tolerance.
   bool converged() const { return termination == TerminationType::Converged; }

@@ -116,6 +116,24 @@ class ResidualSystem {
     return false;
   }
 
+  /// @brief True if the system computes its Newton steps itself (setup_newton_step,
+  /// solve_newton_step), e.g. by eliminating auxiliary unknowns from a larger structured system;
+  /// the solver then forms no Jacobian and takes linear_solver "system".
+  virtual bool has_newton_step() const { return false; }
+  /// @brief Linearise at x (f = F(x), already evaluated) for the following solve_newton_step
+  /// calls; false if it cannot be evaluated (recoverable, like residual()).
+  virtual bool setup_newton_step(const Eigen::Ref<const Eigen::VectorXd>& x,
+                                 const Eigen::Ref<const Eigen::VectorXd>& f) {
+    (void)x;
+    (void)f;
+    return false;
+  }
+  /// @brief Overwrite b with the solution d of J d = b, J = dF/dx at the last setup's x.
+  virtual bool solve_newton_step(Eigen::Ref<Eigen::VectorXd> b) {
+    (void)b;
+    return false;
+  }
+
   /// @brief Residual scale factors s (length size()): the solver drives s_i F_i to zero and
   /// tests max_i |s_i F_i| against its tolerance. Choose 1 / (typical magnitude of F_i) so
   /// every scaled residual is O(1): force balances (N) and moment balances (N m) of a

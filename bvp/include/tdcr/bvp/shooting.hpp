@@ -108,6 +108,21 @@ class ShootingProblem {
   /// @brief Forward-difference increment of unknown j of node k at `value` (`scale`: its unknown
   /// scale, `noise`: the integrator's relative noise). Default: finite_difference_step().
   virtual double increment(int k, int j, double value, double scale, double noise) const;
+
+  // Exact shot derivatives (optional).
+
+  /// @brief Linearise interval k's shot, the map `integrator` evaluates from the start state y0
+  /// (m values) to the end state `end`, if the problem can do so more cheaply than by
+  /// integrating once per unknown of node k (e.g. through a symmetry of the ODE): then the
+  /// Jacobian takes the end-state change of each unknown of node k from shot_tangent().
+  /// Default: false (not available).
+  virtual bool linearize_shot(int k, Integrator& integrator, const double* y0, const double* end) const {
+    (void)k, (void)integrator, (void)y0, (void)end;
+    return false;
+  }
+  /// @brief The end-state change (m values) of interval k for the start-state change dy (m
+  /// values), linear in dy, at the last linearize_shot(k) that returned true.
+  virtual void shot_tangent(int k, const double* dy, double* dend) const { (void)k, (void)dy, (void)dend; }
 };
 
 /// @brief The layout and Jacobian structure of a ShootingProblem: they depend only on its
@@ -123,9 +138,10 @@ struct ShootingStructure {
 
 /// @brief The ResidualSystem of a ShootingProblem, with a structured finite-difference
 /// Jacobian: perturbing unknown j of node k re-integrates interval k only (or none, for
-/// ShootingProblem::shifts_end) and re-evaluates only the residual blocks that read it, so a
-/// Jacobian costs at most sum_k d_k single-interval integrations (N*m by default), not N*m
-/// full residual evaluations. Allocation free after construction.
+/// ShootingProblem::shifts_end, or when the problem linearises the shot) and re-evaluates only
+/// the residual blocks that read it, so a Jacobian costs at most sum_k d_k single-interval
+/// integrations (N*m by default), not N*m full residual evaluations. Allocation free after
+/// construction.
 class ShootingSystem : public ResidualSystem {
  public:
   /// @param problem,integrator Must outlive this object.
@@ -189,6 +205,7 @@ class ShootingSystem : public ResidualSystem {
   std::vector<double> starts_, ends_;       // trajectory at x_
   std::vector<double> pstarts_, pends_;     // perturbed copies for the Jacobian
   std::vector<double> xnode_;               // perturbed unknowns of one node
+  std::vector<double> dy_;                  // start-state change of one perturbed unknown
   std::vector<double> rblock_;              // one residual block
   mutable std::vector<double> scale_;       // unknown scales (size()), refreshed by unknown_scale()
   mutable std::vector<double> sbuf_;        // one node's or block's scales (m)

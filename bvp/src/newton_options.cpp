@@ -1,0 +1,39 @@
+/// @file newton_options.cpp
+/// @brief NewtonOptions: the Newton fields of SolverOptions and their validation.
+#include <cmath>
+#include <string>
+
+#include "tdcr/bvp/newton_solver.hpp"
+#include "tdcr/core/error.hpp"
+
+namespace tdcr::bvp {
+
+NewtonOptions NewtonOptions::from(const SolverOptions& options) {
+  NewtonOptions o;
+  o.function_tolerance = options.function_tolerance;
+  o.step_tolerance = options.step_tolerance;
+  o.max_iterations = options.max_iterations;
+  o.linear_solver = options.linear_solver;
+  return o;
+}
+
+void NewtonOptions::validate() const {
+  auto positive = [](double v, const char* field) {
+    if (!(v > 0.0) || !std::isfinite(v))
+      throw InputError(std::string("newton.") + field, format_value(v), "must be positive and finite");
+  };
+  positive(function_tolerance, "function_tolerance");
+  positive(step_tolerance, "step_tolerance");
+  if (max_iterations < 1)
+    throw InputError("newton.max_iterations", std::to_string(max_iterations), "must be >= 1");
+  if (!(max_newton_step >= 0.0) || !std::isfinite(max_newton_step))
+    throw InputError("newton.max_newton_step", format_value(max_newton_step),
+                     "must be >= 0 (0 = automatic)");
+  if (max_setup_calls < 1)
+    throw InputError("newton.max_setup_calls", std::to_string(max_setup_calls), "must be >= 1");
+  if (dense_size_limit < 0)
+    throw InputError("newton.dense_size_limit", std::to_string(dense_size_limit),
+                     "must be >= 0");
+}
+
+}  // namespace tdcr::bvp
