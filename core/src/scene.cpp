@@ -50,8 +50,15 @@ bool TendonFriction::on() const {
 }
 
 void ModelInput::validate(const Robot& robot) const {
-  // Called on every solve: field names are built only on the error path.
+  // Called on every solve: one pass over the values for valid input; field names and the error
+  // are found by the checks below only when something is wrong.
   const int m = robot.tendon_count();
+  if (static_cast<int>(actuation.values.size()) == m && !actuation.mixed()) {
+    const bool tensions = actuation.kind == Actuation::Kind::Tensions;
+    bool ok = loads.tip_force.allFinite() && loads.tip_moment.allFinite() && loads.gravity.allFinite();
+    for (double v : actuation.values) ok = ok && std::isfinite(v) && !(tensions && v < 0.0);
+    if (ok) return;
+  }
   const auto key = [&](std::size_t k) {
     return actuation.kind_of(k) == Actuation::Kind::Tensions ? "actuation.tensions" : "actuation.displacements";
   };

@@ -299,7 +299,7 @@ const Schema<PrbParameters>& prb_schema() {
   return s;
 }
 
-constexpr const char* kFriction = "CCsub, PRB, VCref (CC and VC refuse mu > 0)";
+constexpr const char* kFriction = "CCsub, PRB, VC, VCref (CC refuses mu > 0)";
 
 const Schema<TendonFriction>& friction_schema() {
   using F = TendonFriction;
@@ -350,7 +350,9 @@ const Schema<Effects>& effects_schema() {
                     "CC (displacement input and reported displacements)"}),
       object_field("prb", &E::prb, prb_schema(), {"", "Table 1", "the two keys below", "PRB"}),
       object_field("tendon_friction", &E::tendon_friction, friction_schema(),
-                   {"", "off", "capstan friction at the disk holes; the keys below (docs/models.md)", kFriction})
+                   {"", "off",
+                    "capstan friction at the disk holes (VC: along the tendon path); the keys below (docs/models.md)",
+                    kFriction})
           .when([](const E& e) {
             const TendonFriction& f = e.tendon_friction;
             return f.coefficient != 0.0 || !f.coefficients.empty() || f.motion != TendonFriction::Motion::Pulling;

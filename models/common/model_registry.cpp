@@ -34,20 +34,22 @@ const std::vector<ModelInfo>& model_registry() {
       {ModelKind::CC, "cc", "constant curvature per segment, kinematic (closed form)", make<CcModel>,
        {true, true, false, false}, {{25.7, 4.27, 0.605, 0.151}, 2.0, INFINITY}, 0},
       {ModelKind::CCsub, "ccsub", "constant curvature per subsegment with twist, static", make<CcsubModel>,
-       {true, true, true, false, true, true}, {{30.8, 5.12, 0.726, 0.181}, 2.0, 3.2}, 2},
+       {true, true, true, false, true, true, true}, {{30.8, 5.12, 0.726, 0.181}, 2.0, 3.2}, 2},
       {ModelKind::PRB, "prb", "3R pseudo-rigid body per subsegment with twist, static", make<PrbModel>,
-       {true, true, true, false, true, true}, {{1.21, 0.231, 0.0165, 0.0345}, 0.0, 3.2}, 3, 5},
+       {true, true, true, false, true, true, true}, {{1.21, 0.231, 0.0165, 0.0345}, 0.0, 3.2}, 3, 5},
       {ModelKind::VC, "vc", "Cosserat rod with fully constrained tendons (Rucker & Webster 2011)",
-       make<VcModel>, {true, true, true, true, false, true}, {{25.7, 4.27, 0.605, 0.151}, 2.0, 3.2}, 1},
+       make<VcModel>, {true, true, true, true, false, true, true}, {{25.7, 4.27, 0.605, 0.151}, 2.0, 3.2}, 1},
       {ModelKind::VCref, "vcref", "Cosserat rod per subsegment with discrete disk forces (reference)",
-       make<VcrefModel>, {true, true, true, true, true, true}, {{0.0, 0.0, 0.0, 0.0}, 0.0, 1.0}, 4},
+       make<VcrefModel>, {true, true, true, true, true, true, true}, {{0.0, 0.0, 0.0, 0.0}, 0.0, 1.0}, 4},
   };
   return table;
 }
 
 const ModelInfo& model_info(ModelKind kind) {
-  for (const ModelInfo& m : model_registry())
-    if (m.kind == kind) return m;
+  // Called on every solve: the table is in ModelKind order, so the entry is found by index.
+  const std::vector<ModelInfo>& table = model_registry();
+  const auto i = static_cast<std::size_t>(kind);
+  if (i < table.size() && table[i].kind == kind) return table[i];
   throw InputError("model", std::to_string(static_cast<int>(kind)), "not in the model registry");
 }
 

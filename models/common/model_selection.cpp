@@ -41,14 +41,14 @@ bool is_reference(const ModelInfo& m) {
 }
 
 // The models that can take an input of this kind (and loads), cheapest first for the scene.
-// Mixed input (`statics`) needs a model with displacement statics; tendon friction acts at the
-// holes of the disks: only the models with tendon forces at disks.
+// Mixed input (`statics`) needs a model with displacement statics; tendon friction a model that
+// simulates it.
 std::vector<const ModelInfo*> candidates(bool displacements, bool statics, bool loaded, bool friction) {
   std::vector<const ModelInfo*> v;
   for (const ModelInfo& m : model_registry()) {
     const ModelCapabilities& c = m.capabilities;
     if ((displacements ? c.displacement_input : c.tension_input) && (!statics || c.displacement_statics) &&
-        (!loaded || c.external_loads) && (!friction || c.tendon_forces_at_disks))
+        (!loaded || c.external_loads) && (!friction || c.tendon_friction))
       v.push_back(&m);
   }
   auto rank = [loaded](const ModelInfo* m) { return loaded && m->loaded_cost_rank >= 0 ? m->loaded_cost_rank : m->cost_rank; };

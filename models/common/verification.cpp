@@ -71,9 +71,14 @@ EquilibriumCheck verify(const ModelInfo& info, const Robot& robot, const Effects
     const double Tk = loads.tension(t.index);
     if (Tk == 0.0) continue;
     const Vec3 r = physics::tendon_offset(t, 0.0);
-    const Vec3 d = at_disks ? Vec3(physics::hole_position(sol.disk_frames[1], t, rt.disk_s[1]) - r)
-                            : physics::tendon_tangent(v0, u0, r, physics::tendon_offset_rate(t, 0.0));
-    add(-Tk * d.normalized(), r);
+    const Vec3 d = (at_disks ? Vec3(physics::hole_position(sol.disk_frames[1], t, rt.disk_s[1]) - r)
+                             : physics::tendon_tangent(v0, u0, r, physics::tendon_offset_rate(t, 0.0)))
+                       .normalized();
+    // Friction: the tension past the base hole, after the turn from the base axis into d.
+    const double turn = std::atan2(d.cross(Vec3::UnitZ()).norm(), d.z());
+    const TendonFriction& f = effects.tendon_friction;
+    const double rate = f.on() ? f.sign() * f.of(t.index) : 0.0;
+    add(-Tk * std::exp(rate * turn) * d, r);
   }
   // Forces Eq. 58 drops at the disks the tendons pass through: the disk wrench with the full
   // pass-through force minus the one the model applies. They act on the tendon-disk system.

@@ -20,9 +20,10 @@ long VcWorkspace::rhs_evaluations() const {
 VcModel::VcModel(const Robot& robot, const Effects& effects, VcOptions options)
     : StaticModel(robot, effects), options_(options) {
   options_.kink_forces = options_.kink_forces && effects.kink_forces;  // either turns them off
-  if (effects.tendon_friction.on())
+  // Friction (vc_friction.hpp): single shooting only (multiple shooting has no tension states).
+  if (effects.tendon_friction.on() && options_.formulation == VcFormulation::MultipleShooting)
     throw InputError("effects.tendon_friction", "on",
-                     "the VC model does not simulate tendon friction yet; use vcref, ccsub or prb");
+                     "VC's multiple shooting has no tension states; use single shooting or the automatic formulation");
   if (!(options_.multiple_shooting_threshold >= 0.0))
     throw InputError("multiple_shooting_threshold", format_value(options_.multiple_shooting_threshold),
                      "must be a number >= 0");
@@ -43,6 +44,7 @@ bool VcModel::uses_multiple_shooting(const ModelInput& input) const {
 }
 
 bool VcModel::multiple_shooting(double load_parameter) const {
+  if (effects().tendon_friction.on()) return false;
   switch (options_.formulation) {
     case VcFormulation::SingleShooting: return false;
     case VcFormulation::MultipleShooting: return true;

@@ -109,7 +109,7 @@ struct Effects {
   bool kink_forces = true;
   TendonPath tendon_path = TendonPath::FullyConstrained;         ///< CC only.
   PrbParameters prb;                                             ///< PRB only.
-  TendonFriction tendon_friction;  ///< Capstan friction (CCsub, PRB, VCref); off by default.
+  TendonFriction tendon_friction;  ///< Capstan friction (CCsub, PRB, VC, VCref); off by default.
 
   /// @brief Throws InputError (field `effects.prb.gamma[i]` or `effects.prb.k_theta[i]`) on a
   /// PRB parameter that is not a positive finite number, and (field

@@ -45,7 +45,7 @@ struct SolverSummary {
   double physical_residual = 0.0;///< Final unscaled residual 2-norm (mixed N, N m, m).
   int unknowns = 0;              ///< Size of the nonlinear system.
   int continuation_steps = 0;    ///< Load steps used by continuation (0: direct solve).
-  std::string linear_solver;     ///< "dense", "klu", or "none" (closed form).
+  std::string linear_solver;     ///< "dense", "klu", "system" (the model's own Newton steps), or "none" (closed form).
   std::string integrator;        ///< "rk4", "cvode", or "none".
   double solve_time_s = 0.0;     ///< Wall time of the solve (s).
 
@@ -120,7 +120,7 @@ struct Solution {
   std::vector<double> tendon_displacements;  ///< Per tendon (m), positive when pulled, at base.
   std::vector<double> tensions;           ///< Tendon tensions used or implied (N), if known.
   /// With tendon friction (Effects::tendon_friction on): per tendon, the tension (N) where it
-  /// ends (its last chord), the input tension at the base times the capstan factor. Empty else.
+  /// ends (last chord; VC: end point), the base tension times the capstan factor; else empty.
   std::vector<double> tendon_end_tensions;
   /// Displacement input (CCsub, PRB, VC, VCref): per tendon, true if it is slack (commanded
   /// below the pull of its path at zero tension, so T = 0). Empty for tension input and CC.

@@ -25,6 +25,7 @@ struct ModelCapabilities {
   /// unknowns (common/displacement_input.hpp); mixed input and elastic tendons. Else a model
   /// that takes displacements maps them kinematically (CC).
   bool displacement_statics = false;
+  bool tendon_friction = false;  ///< Capstan tendon friction (Effects::tendon_friction).
 };
 
 /// @brief Mean tip position error of a model against VCref (% of the robot length) on the

@@ -8,7 +8,9 @@
 /// free body) and the tendons' pull at the base cut, -T_k d_k applied at the base hole r_k,
 /// with d_k the tendon's direction there. Their sum, forces and moments about the base origin,
 /// must vanish for every model whose tendon forces are internal (a tendon in equilibrium with
-/// constant tension: its loads on the backbone telescope to the pull at the base).
+/// constant tension: its loads on the backbone telescope to the pull at the base). With tendon
+/// friction the friction forces are internal too, and the pull is the tension past the base
+/// hole: T_k exp(s mu_k theta_k), theta_k the turn from the base axis into d_k.
 ///
 /// Which models it applies to is read from the model registry (model_registry.hpp):
 /// - Models whose Solutions carry the backbone wrench (capability backbone_wrench), with tendons
