@@ -80,4 +80,24 @@ void expect_banded_matches_recursive(const tdcr::Scene& s) {
   EXPECT_LT((b2.tip().p - a.tip().p).norm(), 1e-9);
 }
 
+// Automatic with at least 100 loaded subsegments (reduced Newton steps on the banded system)
+// matches the recursive formulation with dense LU, in its number of iterations.
+template <class Model>
+void expect_reduced_matches_recursive(const tdcr::Scene& s) {
+  using tdcr::LumpedFormulation;
+  const Model rec(s.robot, s.effects, LumpedFormulation::Recursive);
+  const Model aut(s.robot, s.effects, LumpedFormulation::Automatic);
+  auto wr = rec.make_workspace();
+  auto wa = aut.make_workspace();
+  const tdcr::Solution a = tdcr::solve(rec, *wr, s.input(), s.solver);
+  const tdcr::Solution b = tdcr::solve(aut, *wa, s.input(), s.solver);
+  ASSERT_TRUE(a.converged()) << a.summary.message;
+  ASSERT_TRUE(b.converged()) << b.summary.message;
+  EXPECT_EQ(a.summary.linear_solver, "dense");
+  EXPECT_EQ(b.summary.linear_solver, "system");
+  EXPECT_EQ(b.summary.unknowns, a.summary.unknowns);
+  EXPECT_LE(b.summary.iterations, a.summary.iterations + 1);
+  EXPECT_LT((a.tip().p - b.tip().p).norm(), 1e-9);
+}
+
 }  // namespace lumped_reference

@@ -259,6 +259,13 @@ TEST(PrbModel, WarmStartAcrossInputsWithOtherLoadedSubsegments) {
   EXPECT_LT((sa2.tip().p - sa.tip().p).norm(), 1e-9);
 }
 
+// Reduced Newton steps (Automatic, 100 loaded subsegments) match the recursive form.
+TEST(PrbModel, ReducedNewtonMatchesRecursive) {
+  const double TM = paper::max_tension(paper::robot(50));
+  const Scene s = paper_scene(50, {0.3 * TM, 0, 0.6 * TM, 0}, Vec3(0.03, -0.02, 0.0));
+  lumped_reference::expect_reduced_matches_recursive<PrbModel>(s);
+}
+
 // The banded formulation matches the recursive one under tendons, a tip force and gravity
 // (backbone centroids): lumped_reference::expect_banded_matches_recursive.
 TEST(PrbModel, BandedFormulationMatchesRecursive) {

@@ -388,10 +388,13 @@ TEST(Vcref, GlobalEquilibriumThreeSegments) {
   EXPECT_GT((F - s.loads.tip_force).norm(), 0.01);
 }
 
-// Warm start from the answer: converged at once, same shape; and with a nearby load.
+// Warm start from the answer: converged at once, same shape; and with a nearby load (fewer
+// iterations than cold with fresh Jacobians, fewer Jacobians than cold with the reused one).
 TEST(Vcref, WarmStart) {
   Scene s = loaded_scene(10);
-  VcrefModel model(s.robot, s.effects);
+  VcrefOptions fresh_jacobians;
+  fresh_jacobians.reuse_jacobian = false;
+  VcrefModel model(s.robot, s.effects, fresh_jacobians);
   auto ws = model.make_workspace();
   const Solution cold = tdcr::solve(model, *ws, s.input(), s.solver);
   ASSERT_TRUE(cold.converged());
@@ -406,6 +409,15 @@ TEST(Vcref, WarmStart) {
   ASSERT_TRUE(w2.converged() && c2.converged());
   EXPECT_LT(w2.summary.iterations, c2.summary.iterations);
   EXPECT_LT((w2.tip().p - c2.tip().p).norm(), 1e-10);
+  VcrefOptions reuse;
+  reuse.reuse_jacobian = true;
+  VcrefModel reusing(s.robot, s.effects, reuse);
+  auto rws = reusing.make_workspace();
+  const Solution rc = tdcr::solve(reusing, *rws, s.input(), s.solver);
+  const Solution r2 = tdcr::solve(reusing, *rws, s2.input(), s2.solver, &rc);
+  ASSERT_TRUE(r2.converged()) << r2.summary.message;
+  EXPECT_LT(r2.summary.jacobian_evaluations, c2.summary.jacobian_evaluations);
+  EXPECT_LT((r2.tip().p - c2.tip().p).norm(), 1e-10);
 }
 
 // The Jacobian pattern follows the tensioned tendons: configuration 2 (T1 only, ending at the
@@ -429,7 +441,8 @@ TEST(Vcref, PatternFollowsTensionedTendons) {
 
 // A trajectory switching tendons on and off gives the answers of fresh workspaces with the same
 // warm start (or none). The pass-through masks (none, segment 1, segments 1-2, all) change,
-// return, and outnumber the workspace's two cached patterns.
+// return, and outnumber the workspace's two cached patterns. Without Jacobian reuse, which
+// would make the answers depend on the workspace's last solve (within the Newton tolerance).
 TEST(Vcref, TrajectorySwitchingTendonsMatchesFreshWorkspaces) {
   Scene base = three_segments();
   base.loads.gravity = Vec3(0.0, 0.0, -9.81);
@@ -438,9 +451,15 @@ TEST(Vcref, TrajectorySwitchingTendonsMatchesFreshWorkspaces) {
   const std::vector<Vec3> steps = {{1.5, 0, 0}, {1.5, 1.0, 0}, {0, 1.0, 0.5}, {0, 0, 0},     {1.0, 0, 0},
                                    {0, 0, 0},   {0, 0.8, 0},   {0.5, 0, 0.5}, {0, 0.8, 0.2}, {1.2, 0, 0},
                                    {0, 0, 0.6}, {1.5, 0, 0}};
-  VcrefModel model(base.robot, base.effects);
+  VcrefOptions fresh_jacobians;
+  fresh_jacobians.reuse_jacobian = false;
+  VcrefModel model(base.robot, base.effects, fresh_jacobians);
   auto ws = model.make_workspace();
-  Solution prev;
+  VcrefOptions reuse;  // Jacobian reuse through the pattern changes
+  reuse.reuse_jacobian = true;
+  VcrefModel reusing(base.robot, base.effects, reuse);
+  auto rws = reusing.make_workspace();
+  Solution prev, rprev;
   for (std::size_t k = 0; k < steps.size(); ++k) {
     Scene s = base;
     s.actuation.values.assign(9, 0.0);
@@ -453,7 +472,11 @@ TEST(Vcref, TrajectorySwitchingTendonsMatchesFreshWorkspaces) {
     EXPECT_EQ(a.summary.iterations, b.summary.iterations) << "step " << k;
     EXPECT_LT((a.tip().p - b.tip().p).norm(), 1e-12) << "step " << k;
     EXPECT_LT(lie::rotation_angle(a.tip().R, b.tip().R), 1e-12) << "step " << k;
+    const Solution r = tdcr::solve(reusing, *rws, s.input(), s.solver, warm ? &rprev : nullptr);
+    ASSERT_TRUE(r.converged()) << "step " << k << ": " << r.summary.message;
+    EXPECT_LT((r.tip().p - a.tip().p).norm(), 1e-10) << "step " << k;
     prev = a;
+    rprev = r;
   }
   // The patterns of the four masks differ, and the one the trajectory's workspace uses leaves out
   // no dependency: an entry outside it is 0 in the assembled Jacobian, so central differences

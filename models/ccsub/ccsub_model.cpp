@@ -27,8 +27,8 @@ struct ArcCoefficients {
   }
 };
 
-// Automatic formulation: banded from this many loaded subsegments on (the measured crossover,
-// docs/design-notes/lumped.md).
+// Automatic formulation: reduced Newton steps on the banded system from this many loaded
+// subsegments on (docs/design-notes/lumped.md).
 constexpr int kBandedFrom = 100;
 
 class CcsubBody final : public detail::LumpedBody {

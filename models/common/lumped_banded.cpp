@@ -64,6 +64,7 @@ bool LumpedProblem::banded_residual(const double* y, double* f) {
     frames_[j].R = rotation_exp(Eigen::Map<const Vec3>(yj + n.T()));
     body_.local(j, yj, poses_[j]);
   }
+  body_.statics.disk_loads(loads_, frames_.data(), disk_f_.data(), disk_m_.data());
   for (int j = 1; j <= J; ++j) {
     const double* yj = y + K * (j - 1);
     double* fj = f + K * (j - 1);
@@ -80,8 +81,7 @@ bool LumpedProblem::banded_residual(const double* y, double* f) {
     const Mat3 A = (a.R * g.R).transpose() * b.R;
     Eigen::Map<Vec3>(fj + n.T()) = 0.5 * Vec3(A(2, 1) - A(1, 2), A(0, 2) - A(2, 0), A(1, 0) - A(0, 1));
     // Balance of disk j with the distal wrench of disk j+1 (Eq. 44-47).
-    Vec3 fb, mb;
-    body_.statics.disk_load(loads_, j, frames_.data(), fb, mb);
+    Vec3 fb = disk_f_[j], mb = disk_m_[j];
     if (j < J) {
       const double* yn = y + K * j;
       const Eigen::Map<const Vec3> Fn(yn + n.F()), Mn(yn + n.M());
@@ -124,9 +124,13 @@ void LumpedProblem::lift(const Eigen::VectorXd& x, Eigen::VectorXd& y) {
     y = x;
     return;
   }
+  lift_banded(x, y);
+}
+
+void LumpedProblem::lift_banded(const Eigen::VectorXd& x, Eigen::VectorXd& y) {
   const Node n{body_.per_subsegment};
   evaluate(x.data());
-  y.resize(size());
+  y.resize(n.size() * active());
   for (int j = 1; j <= active(); ++j) {
     double* yj = y.data() + n.size() * (j - 1);
     for (int i = 0; i < n.m; ++i) yj[i] = x[n.m * (j - 1) + i];
@@ -175,6 +179,44 @@ void LumpedProblem::build_pattern() {
   }
   pattern_ = bvp::SparsityPattern::from_triplets(K * J, K * J, e);
   pattern_J_ = J;
+}
+
+bool LumpedProblem::setup_newton_step(const Eigen::Ref<const Eigen::VectorXd>& x,
+                                      const Eigen::Ref<const Eigen::VectorXd>& f) {
+  (void)f;
+  const int K = body_.per_subsegment + 12, N = K * active();
+  x_ = x;
+  lift_banded(x_, y_);
+  fy_.resize(N);
+  if (!banded_residual(y_.data(), fy_.data())) return false;
+  if (lu_J_ != active()) {
+    fd_.prepare(pattern_);
+    std::vector<Eigen::Triplet<double>> t;
+    for (int c = 0; c < N; ++c)
+      for (int k = pattern_.col_ptr[c]; k < pattern_.col_ptr[c + 1]; ++k) t.emplace_back(pattern_.row_idx[k], c, 1.0);
+    A_.resize(N, N);
+    A_.setFromTriplets(t.begin(), t.end());
+    A_.makeCompressed();
+    lu_.analyzePattern(A_);
+    rhs_.resize(N);
+    lu_J_ = active();
+  }
+  // The pattern's CSC order is that of the compressed matrix (sorted rows per column).
+  if (!bvp::finite_difference_sparse_jacobian(view_, y_, fy_, pattern_, A_.valuePtr(), &fd_)) return false;
+  lu_.factorize(A_);
+  return lu_.info() == Eigen::Success;
+}
+
+bool LumpedProblem::solve_newton_step(Eigen::Ref<Eigen::VectorXd> b) {
+  const int m = body_.per_subsegment, K = m + 12;
+  // Recursive residual rows are the banded constitutive rows; the poses and wrenches of the
+  // lifted iterate satisfy the other rows exactly.
+  rhs_.setZero();
+  for (int j = 0; j < active(); ++j) rhs_.segment(K * j, m) = b.segment(m * j, m);
+  fy_ = lu_.solve(rhs_);
+  if (lu_.info() != Eigen::Success) return false;
+  for (int j = 0; j < active(); ++j) b.segment(m * j, m) = fy_.segment(K * j, m);
+  return true;
 }
 
 }  // namespace tdcr::detail

@@ -40,13 +40,10 @@ LumpedBody::LumpedBody(const Robot& robot, const TendonRouting& routing, const E
 
 LumpedBody::~LumpedBody() = default;
 
-bool LumpedBody::banded(int J) const {
-  switch (formulation) {
-    case LumpedFormulation::Recursive: return false;
-    case LumpedFormulation::Banded: return true;
-    case LumpedFormulation::Automatic: break;
-  }
-  return J >= banded_from && !statics.friction();
+bool LumpedBody::banded() const { return formulation == LumpedFormulation::Banded; }
+
+bool LumpedBody::reduced(int J) const {
+  return formulation == LumpedFormulation::Automatic && J >= banded_from && !statics.friction();
 }
 
 void LumpedBody::compute_frames(const double* x, int J, Frame* frames, SubsegmentPose* poses, Vec3* centroids) const {
@@ -85,17 +82,29 @@ LumpedProblem::LumpedProblem(const LumpedBody& body) : body_(body) {
   centroids_.assign(body.N + 1, Vec3::Zero());
   F_.assign(body.N + 1, Vec3::Zero());
   M_.assign(body.N + 1, Vec3::Zero());
+  disk_f_.assign(body.N + 1, Vec3::Zero());
+  disk_m_.assign(body.N + 1, Vec3::Zero());
 }
 
 void LumpedProblem::bind(const ModelInput& input) {
   body_.statics.bind(input, loads_);
   convention_ = input.actuation.convention;
-  banded_ = body_.banded(active());
-  if (banded_ && pattern_J_ != active()) build_pattern();
+  banded_ = body_.banded();
+  reduced_ = body_.reduced(active());
+  if ((banded_ || reduced_) && pattern_J_ != active()) build_pattern();
 }
 
 void LumpedProblem::adjust(bvp::NewtonOptions& options) const {
   options.linear_solver = banded_ ? LinearSolverKind::SparseKLU : LinearSolverKind::Dense;
+}
+
+void LumpedProblem::adjust_warm(bvp::NewtonOptions& options) const {
+  // Iterations one Jacobian serves (modified Newton), and the iterations of the previous solve
+  // above which its Jacobian is too stale to start from.
+  constexpr int kReuseSetupCalls = 10;
+  constexpr int kStaleAfterIterations = 3;
+  options.reuse_jacobian = last_iterations_ <= kStaleAfterIterations;
+  options.max_setup_calls = kReuseSetupCalls;
 }
 
 void LumpedProblem::x_scale(double* s) const {
@@ -153,6 +162,7 @@ bool LumpedProblem::recursive_residual(const double* x, double* f) {
 
 void LumpedProblem::extract(const Eigen::VectorXd& y, bool evaluated, Solution& solution) {
   (void)evaluated;
+  last_iterations_ = solution.summary.iterations;
   gather_x(y, x_);
   Eigen::VectorXd full = Eigen::VectorXd::Zero(body_.per_subsegment * body_.N);
   full.head(x_.size()) = x_;

@@ -4,13 +4,15 @@
 // constitutive residuals: a LumpedBody (immutable, owned by the model) says those, a
 // LumpedProblem (one per workspace) binds an input and gives the solve driver the rest.
 //
-// Two formulations of the same equations (lumped_model.hpp, LumpedFormulation):
+// Formulations of the same equations (lumped_model.hpp, LumpedFormulation):
 //  - recursive: the m unknowns x_j of each loaded subsegment; frames follow from the base, the
 //    distal wrenches from the tip (dense Jacobian, dense LU: ~J^3);
 //  - banded (lumped_banded.cpp): besides x_j, the pose (p_j, rotation vector th_j) of disk j and
 //    the distal wrench (F_j, M_j) are unknowns; residuals of subsegment j are its constitutive
 //    law, pose continuity with disk j-1 and the balance of disk j (tendon forces of disks j-1,
-//    j, j+1): a block-banded Jacobian (declared pattern, grouped finite differences, KLU: ~J).
+//    j, j+1): a block-banded Jacobian (declared pattern, grouped finite differences, KLU: ~J);
+//  - reduced (Automatic from LumpedBody::banded_from on): the recursive unknowns and residual,
+//    each Newton step solved on the banded Jacobian at the lifted iterate (sparse LU: ~J).
 // Both give the same solution; Solution::unknowns always holds the x_j of all N subsegments.
 #pragma once
 
@@ -18,6 +20,8 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/SparseCore>
+#include <Eigen/SparseLU>
 
 #include "common/model_problem.hpp"
 #include "common/subsegment_statics.hpp"
@@ -53,8 +57,11 @@ class LumpedBody {
                       Vec3* centroids = nullptr) const;
   /// Disk frames for a full unknown vector (per_subsegment N values; InputError otherwise).
   std::vector<Frame> disk_frames(const Eigen::VectorXd& x) const;
-  /// True if J loaded subsegments are solved in the banded formulation.
-  bool banded(int J) const;
+  /// True if solved in the banded formulation (LumpedFormulation::Banded).
+  bool banded() const;
+  /// True if J loaded subsegments are solved in the recursive unknowns with reduced Newton
+  /// steps from the banded system (LumpedFormulation::Automatic from banded_from on).
+  bool reduced(int J) const;
 
   SubsegmentStatics statics;
   double EI = 0.0, GJ = 0.0;  ///< Bending and torsional stiffness (N m^2).
@@ -90,6 +97,9 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   bvp::NewtonSolver& newton() override { return newton_; }
   /// Dense LU for the recursive formulation, KLU for the banded one.
   void adjust(bvp::NewtonOptions& options) const override;
+  /// Warm starts: modified Newton from the previous solve's Jacobian, unless that solve needed
+  /// many iterations (its Jacobian is then too far from this one's).
+  void adjust_warm(bvp::NewtonOptions& options) const override;
   /// The straight robot (straight_x), lifted to the formulation's unknowns.
   void cold_guess(Eigen::VectorXd& y) final;
   void rest_state(Eigen::VectorXd& y) final;
@@ -103,6 +113,13 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   bool residual(const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> f) final;
   const bvp::SparsityPattern* sparsity() const final { return banded_ ? &pattern_ : nullptr; }
   void unknown_scale(Eigen::Ref<Eigen::VectorXd> s) const final;
+  // Reduced Newton step (lumped_banded.cpp): the banded system at the lifted x, solved for the
+  // step of the x_j with the residuals of the recursive form as its constitutive rows; the
+  // poses and wrenches follow from the recursion at every iterate, so the iterations are those
+  // of the recursive form at a cost linear in J.
+  bool has_newton_step() const final { return reduced_; }
+  bool setup_newton_step(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& f) final;
+  bool solve_newton_step(Eigen::Ref<Eigen::VectorXd> b) final;
 
  protected:
   /// Constitutive residuals (per_subsegment values) of subsegment j with geometry g: F, M
@@ -143,6 +160,7 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   // lumped_banded.cpp
   bool banded_residual(const double* y, double* f);
   void lift(const Eigen::VectorXd& x, Eigen::VectorXd& y);
+  void lift_banded(const Eigen::VectorXd& x, Eigen::VectorXd& y);
   void gather_x(const Eigen::VectorXd& y, Eigen::VectorXd& x) const;
   void build_pattern();
   void banded_scale(double* s) const;
@@ -151,9 +169,29 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   bvp::NewtonSolver newton_;
   Actuation::DisplacementConvention convention_ = Actuation::DisplacementConvention::AtBase;
   bool banded_ = false;
+  bool reduced_ = false;
+  // Reduced Newton steps: the banded residual as a system (grouped finite differences), its
+  // Jacobian at the lifted iterate and that Jacobian's LU.
+  struct BandedView final : bvp::ResidualSystem {
+    explicit BandedView(LumpedProblem& p) : p(p) {}
+    int size() const override { return (p.body_.per_subsegment + 12) * p.active(); }
+    bool residual(const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> f) override {
+      return p.banded_residual(y.data(), f.data());
+    }
+    void unknown_scale(Eigen::Ref<Eigen::VectorXd> s) const override { p.banded_scale(s.data()); }
+    LumpedProblem& p;
+  };
+  BandedView view_{*this};
+  bvp::FiniteDifferenceWorkspace fd_;
+  Eigen::VectorXd y_, fy_, rhs_;
+  Eigen::SparseMatrix<double> A_;
+  Eigen::SparseLU<Eigen::SparseMatrix<double>> lu_;
+  int lu_J_ = -1;
   bvp::SparsityPattern pattern_;
   int pattern_J_ = -1;
   Eigen::VectorXd x_;  // x_j of the loaded subsegments (guesses, lifting)
+  std::vector<Vec3> disk_f_, disk_m_;  // disk loads of the banded residual
+  int last_iterations_ = 0;  // Newton iterations of the last solve (adjust_warm)
 };
 
 }  // namespace tdcr::detail

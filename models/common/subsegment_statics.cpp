@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "physics/tendon_path.hpp"
 #include "tdcr/models/tendon_physics.hpp"
 
 namespace tdcr::detail {
@@ -26,6 +27,9 @@ void SubsegmentStatics::bind(const ModelInput& input, SubsegmentLoads& out) cons
   out.loads.bind(*robot_, *routing_, input);
   out.tensions = out.loads.full_tensions();
   if (friction_on_) out.chord.assign(out.tensions.size() * routing_->disk_count(), 0.0);
+  const std::size_t slots = routing_->tendons.size() * static_cast<std::size_t>(routing_->disk_count());
+  out.holes.resize(slots);
+  out.chords.resize(slots);
   // Last disk that carries any load: beyond it the robot is straight.
   if (out.loads.has_tip_wrench() || out.loads.has_gravity()) {
     out.active = n_;
@@ -40,41 +44,66 @@ void SubsegmentStatics::update_friction(SubsegmentLoads& b, const Frame* frames)
   tendon::friction_tensions(frames, *routing_, b.tensions.data(), friction_, b.chord.data());
 }
 
-void SubsegmentStatics::disk_load(const SubsegmentLoads& b, int j, const Frame* frames, Vec3& f, Vec3& m) const {
+void SubsegmentStatics::disk_loads(SubsegmentLoads& b, const Frame* frames, Vec3* f, Vec3* m) const {
+  const int J = b.active;
+  const int D = routing_->disk_count();
+  const double* s = routing_->disk_s.data();
+  for (int j = 1; j <= J; ++j) f[j] = m[j] = Vec3::Zero();
+  // Eq. 30-33 (+ Eq. 58) as tendon::disk_wrench, tendon by tendon in the same order and with
+  // the same operations (the pull towards disk j+1 is minus the chord towards disk j).
+  for (const RoutedTendon& t : routing_->tendons) {
+    const double* chord = friction_on_ ? b.chord.data() + t.index * D : nullptr;
+    const double T0 = b.tensions[t.index];
+    if (!chord && T0 == 0.0) continue;
+    auto tension = [&](int c) { return chord ? chord[c] : T0; };
+    Vec3* H = b.holes.data() + t.index * D;
+    Vec3* C = b.chords.data() + t.index * D;
+    const int last = std::min(t.end_disk, J + 1);
+    H[0] = physics::hole_position(frames[0], t, s[0]);
+    for (int c = 1; c <= last; ++c) {
+      H[c] = physics::hole_position(frames[c], t, s[c]);
+      C[c] = (H[c - 1] - H[c]).normalized();
+    }
+    const int end = std::min(t.end_disk, J);
+    for (int j = 1; j <= end; ++j) {
+      const double T = tension(j);
+      if (T == 0.0) continue;
+      Vec3 F = T * C[j];
+      if (j < t.end_disk) {
+        F += tension(j + 1) * (-C[j + 1]);
+        if (remove_normal_) {
+          const Vec3 z = frames[j].R.col(2);
+          F -= F.dot(z) * z;
+        }
+      }
+      f[j] += F;
+      m[j] += (H[j] - frames[j].p).cross(F);
+    }
+  }
   const physics::LoadCase& L = b.loads;
-  // Eq. 30-33 (+ Eq. 58): the tendon forces at disk j, moment about O_j.
-  const tendon::DiskWrench w = friction_on_
-                                   ? tendon::disk_wrench_friction(j, frames, *routing_, b.chord.data(), remove_normal_)
-                                   : tendon::disk_wrench(j, frames, *routing_, b.tensions.data(), remove_normal_);
-  f = w.force;
-  m = w.moment;
-  if (L.has_disk_weight()) f += L.disk_weight(j);
-  if (j == n_ && L.has_tip_wrench()) {  // Eq. 44-45: the external tip wrench acts at O_n.
-    f += L.tip_force();
-    m += L.tip_moment();
+  if (L.has_disk_weight())
+    for (int j = 1; j <= J; ++j) f[j] += L.disk_weight(j);
+  if (J == n_ && L.has_tip_wrench()) {  // Eq. 44-45: the external tip wrench acts at O_n.
+    f[J] += L.tip_force();
+    m[J] += L.tip_moment();
   }
 }
 
-void SubsegmentStatics::distal_wrenches(const SubsegmentLoads& b, const Frame* frames, const Vec3* backbone_centroid,
+void SubsegmentStatics::distal_wrenches(SubsegmentLoads& b, const Frame* frames, const Vec3* backbone_centroid,
                                         Vec3* F, Vec3* M) const {
   const int J = b.active;
   const bool bb = b.loads.has_backbone_weight();
-  for (int j = J; j >= 1; --j) {
-    Vec3 f, m;
-    disk_load(b, j, frames, f, m);
-    if (j < J) {
-      // Eq. 46-47: propagate the wrench of the distal subsegments from O_{j+1} to O_j.
-      const Vec3& pj = frames[j].p;
-      f += F[j + 1];
-      m += M[j + 1] + (frames[j + 1].p - pj).cross(F[j + 1]);
-      if (bb) {
-        const Vec3 W = backbone_weight(b, j + 1);
-        f += W;
-        m += (backbone_centroid[j + 1] - pj).cross(W);
-      }
+  disk_loads(b, frames, F, M);
+  for (int j = J - 1; j >= 1; --j) {
+    // Eq. 46-47: propagate the wrench of the distal subsegments from O_{j+1} to O_j.
+    const Vec3& pj = frames[j].p;
+    F[j] += F[j + 1];
+    M[j] += M[j + 1] + (frames[j + 1].p - pj).cross(F[j + 1]);
+    if (bb) {
+      const Vec3 W = backbone_weight(b, j + 1);
+      F[j] += W;
+      M[j] += (backbone_centroid[j + 1] - pj).cross(W);
     }
-    F[j] = f;
-    M[j] = m;
   }
 }
 

@@ -23,6 +23,9 @@ struct SubsegmentLoads {
   std::vector<double> chord;
   /// J: subsegments 1..J can carry load; J+1..N are exactly straight and untwisted.
   int active = 0;
+  /// Scratch of SubsegmentStatics::disk_loads, sized at bind: hole positions and unit chord
+  /// directions (towards the previous disk) by tendon and disk.
+  std::vector<Vec3> holes, chords;
 
   /// @brief Scale every load by lambda (continuation); allocation-free.
   void set_load_factor(double lambda);
@@ -59,12 +62,13 @@ class SubsegmentStatics {
   /// @brief True if the tensions follow the shape (Effects::tendon_friction on).
   bool friction() const { return friction_on_; }
   /// @brief With friction: b.chord from the base tensions in the shape `frames` (disk frames 0..N);
-  /// call before disk_load / distal_wrenches. Allocation-free after bind.
+  /// call before disk_loads / distal_wrenches. Allocation-free after bind.
   void update_friction(SubsegmentLoads& b, const Frame* frames) const;
 
-  /// @brief The load on disk j alone at the current load factor: its tendon forces (Eq. 30-33,
-  /// 58), its weight and, at the tip disk, the tip wrench; moment m about O_j.
-  void disk_load(const SubsegmentLoads& b, int j, const Frame* frames, Vec3& f, Vec3& m) const;
+  /// @brief The loads on disks 1..J alone at the current load factor (f, m index 1..J): their
+  /// tendon forces (Eq. 30-33, 58, as tendon::disk_wrench), weights and, at the tip disk, the
+  /// tip wrench; m[j] about O_j. Every hole position and chord direction is computed once.
+  void disk_loads(SubsegmentLoads& b, const Frame* frames, Vec3* f, Vec3* m) const;
   /// @brief The recursive balance (Eq. 44-47) for subsegments 1..J at the current load factor.
   ///
   /// @param frames Disk frames 0..N (base disk first).
@@ -74,7 +78,7 @@ class SubsegmentStatics {
   ///        and beyond (tendon forces at disks >= j, disk weights at disks >= j, backbone weight
   ///        of subsegments > j, tip force). Excludes the backbone weight of subsegment j itself.
   /// @param M Out, index 1..J: the moment of the same loads about the centre O_j of disk j.
-  void distal_wrenches(const SubsegmentLoads& b, const Frame* frames, const Vec3* backbone_centroid, Vec3* F,
+  void distal_wrenches(SubsegmentLoads& b, const Frame* frames, const Vec3* backbone_centroid, Vec3* F,
                        Vec3* M) const;
 
  private:

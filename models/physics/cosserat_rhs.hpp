@@ -80,10 +80,48 @@ EIGEN_ALWAYS_INLINE Vec3T<T> strain(const Section& S, const Mat3T<T>& R, const V
   return v;
 }
 
-/// K x = b for symmetric positive definite K (a dual-number overload is found by ADL).
-template <typename T, int N>
-EIGEN_ALWAYS_INLINE Eigen::Matrix<T, N, 1> spd_solve(const Eigen::Matrix<T, N, N>& K, const Eigen::Matrix<T, N, 1>& b) {
-  return K.llt().solve(b);
+/// The inverse of a symmetric positive definite 3x3 matrix by cofactors.
+EIGEN_ALWAYS_INLINE Mat3 spd_inverse(const Mat3& A) {
+  const double c00 = A(1, 1) * A(2, 2) - A(1, 2) * A(1, 2);
+  const double c01 = A(0, 2) * A(1, 2) - A(0, 1) * A(2, 2);
+  const double c02 = A(0, 1) * A(1, 2) - A(0, 2) * A(1, 1);
+  const double c11 = A(0, 0) * A(2, 2) - A(0, 2) * A(0, 2);
+  const double c12 = A(0, 1) * A(0, 2) - A(0, 0) * A(1, 2);
+  const double c22 = A(0, 0) * A(1, 1) - A(0, 1) * A(0, 1);
+  const double inv_det = 1.0 / (A(0, 0) * c00 + A(0, 1) * c01 + A(0, 2) * c02);
+  Mat3 B;
+  B << c00, c01, c02, c01, c11, c12, c02, c12, c22;
+  return B * inv_det;
+}
+
+/// K x = b for symmetric positive definite 3x3 K (a dual-number overload is found by ADL).
+EIGEN_ALWAYS_INLINE Vec3 spd_solve(const Mat3& K, const Vec3& b) { return spd_inverse(K) * b; }
+
+/// The factors of a symmetric positive definite block matrix [P, Q; Q^T, S] (3x3 blocks) by its
+/// Schur complement: P^-1, X = P^-1 Q and (S - Q^T X)^-1, closed forms throughout.
+struct SpdBlocks {
+  Mat3 Pinv, X, Cinv;
+  EIGEN_ALWAYS_INLINE SpdBlocks(const Mat3& P, const Mat3& Q, const Mat3& S) : Pinv(spd_inverse(P)) {
+    X.noalias() = Pinv * Q;
+    Mat3 C = S;
+    C.noalias() -= Q.transpose() * X;
+    Cinv = spd_inverse(C);
+  }
+  /// [P, Q; Q^T, S] (x1; x2) = (b1; b2) for one or several right-hand sides.
+  template <typename B1, typename B2, typename X1, typename X2>
+  EIGEN_ALWAYS_INLINE void solve(const Mat3& Q, const B1& b1, const B2& b2, X1& x1, X2& x2) const {
+    const auto y1 = (Pinv * b1).eval();
+    x2.noalias() = Cinv * (b2 - Q.transpose() * y1);
+    x1 = y1;
+    x1.noalias() -= X * x2;
+  }
+};
+
+/// [P, Q; Q^T, S] (x1; x2) = (b1; b2), the matrix symmetric positive definite with 3x3 blocks
+/// (a dual-number overload is found by ADL).
+EIGEN_ALWAYS_INLINE void spd_block_solve(const Mat3& P, const Mat3& Q, const Mat3& S, const Vec3& b1, const Vec3& b2,
+                                         Vec3& x1, Vec3& x2) {
+  SpdBlocks(P, Q, S).solve(Q, b1, b2, x1, x2);
 }
 
 /// cosserat::rod_rhs for one combination of the section's shear/extension and gravity flags.
@@ -117,9 +155,16 @@ EIGEN_ALWAYS_INLINE StrainsT<T> rod_rhs(const Section& S, const TendonLoad* tend
     dm_out = -dp.cross(n);
     return {u, v};
   }
-  M3 sumA = M3::Zero();    // sum A_k
-  M3 sumAr = M3::Zero();   // sum A_k [r_k]x
-  M3 sumrAr = M3::Zero();  // sum [r_k]x A_k [r_k]x
+  // With t_k = q_k / |q_k|, c_k = T_k / |q_k| and w_k = r_k x t_k: A_k = c_k (I - t_k t_k^T),
+  // A_k [r_k]x = c_k ([r_k]x + t_k w_k^T), [r_k]x A_k [r_k]x = c_k ([r_k]x^2 + w_k w_k^T), [r]x^2 =
+  // r r^T - |r|^2 I: sums of scaled symmetric outer products instead of 3x3 matrix products. G
+  // holds the lower triangle (row by row) of sum c_k g_k g_k^T, g_k = (t_k, w_k); H that of
+  // sum c_k [r_k]x^2.
+  T G[21], H[6];
+  for (T& g : G) g = T(0.0);
+  for (T& h : H) h = T(0.0);
+  T sum_c(0.0);
+  V3 sum_cr = V3::Zero();  // sum c_k r_k
   V3 suma = V3::Zero();    // sum a_k
   V3 sumra = V3::Zero();   // sum r_k x a_k
   for (int k = 0; k < count; ++k) {
@@ -129,42 +174,55 @@ EIGEN_ALWAYS_INLINE StrainsT<T> rod_rhs(const Section& S, const TendonLoad* tend
     const T inv_q = 1.0 / q.norm();
     const V3 tk = q * inv_q;
     const T c = t.T * inv_q;
-    const M3 A = c * (M3::Identity() - tk * tk.transpose());
+    const V3 w = -cross(tk, t.r);  // r_k x t_k
+    const T g[6] = {tk.x(), tk.y(), tk.z(), w.x(), w.y(), w.z()};
+    for (int i = 0, e = 0; i < 6; ++i) {
+      const T cg = c * g[i];
+      for (int j = 0; j <= i; ++j, ++e) G[e] += cg * g[j];
+    }
+    const Vec3& r = t.r;
+    const double r2 = r.squaredNorm();
+    const double rr[6] = {r.x() * r.x() - r2, r.y() * r.x(), r.y() * r.y() - r2,
+                          r.z() * r.x(), r.z() * r.y(), r.z() * r.z() - r2};
+    for (int e = 0; e < 6; ++e) H[e] += c * rr[e];
+    sum_c += c;
+    sum_cr += c * r;
     V3 a = c * u.cross(q);  // = A_k (u x q_k): u x q_k is normal to q_k
-    if constexpr (Routed) a += A * (cross(u, t.dr) + t.ddr);
-    const M3 Ar = A * t.rx;
-    if constexpr (Shear) sumA += A;
-    sumAr += Ar;
-    sumrAr.noalias() += t.rx * Ar;
+    if constexpr (Routed) {
+      const V3 z = cross(u, t.dr) + t.ddr;
+      a += c * (z - tk * tk.dot(z));  // A_k z
+    }
     suma += a;
     if constexpr (std::is_same_v<T, double>)
-      sumra += t.r.cross(a);
+      sumra += r.cross(a);
     else
-      sumra -= cross(a, t.r);  // r_k x a_k
+      sumra -= cross(a, r);  // r_k x a_k
   }
+  // G's blocks: t t^T rows/columns 0-2 (entries 0-5), w t^T rows 3-5 x columns 0-2, w w^T rows and
+  // columns 3-5.
+  M3 sumAr = hat(sum_cr);  // sum A_k [r_k]x = hat(sum c_k r_k) + sum c_k t_k w_k^T
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) sumAr(i, j) += G[(3 + j) * (4 + j) / 2 + i];
+  M3 K22;  // Kbt - sum [r_k]x A_k [r_k]x
+  for (int i = 0, e = 0; i < 3; ++i)
+    for (int j = 0; j <= i; ++j, ++e) K22(i, j) = K22(j, i) = -(H[e] + G[(3 + i) * (4 + i) / 2 + 3 + j]);
+  K22.diagonal() += S.kbt;
   V3 fe_b = V3::Zero();
   if constexpr (Gravity) fe_b = R.transpose() * S.weight;
   const V3 b_m = -u.cross(mb) - v.cross(nb) - sumra;
   if constexpr (Shear) {
-    Eigen::Matrix<T, 6, 6> K;
-    K.template topLeftCorner<3, 3>() = sumA;
-    K.template topLeftCorner<3, 3>().diagonal() += S.kse;
-    K.template topRightCorner<3, 3>() = -sumAr;
-    K.template bottomLeftCorner<3, 3>() = -sumAr.transpose();  // = sum [r]x A (A symmetric)
-    K.template bottomRightCorner<3, 3>() = -sumrAr;
-    K.template bottomRightCorner<3, 3>().diagonal() += S.kbt;
-    Eigen::Matrix<T, 6, 1> b;
-    b.template head<3>() = -u.cross(nb) - suma - fe_b;
-    b.template tail<3>() = b_m;
-    const Eigen::Matrix<T, 6, 1> x = spd_solve(K, b);
-    const V3 vs = x.template head<3>();
-    const V3 us = x.template tail<3>();
+    M3 K11;  // Kse + sum A_k
+    for (int i = 0, e = 0; i < 3; ++i)
+      for (int j = 0; j <= i; ++j, ++e) K11(i, j) = K11(j, i) = -G[e];
+    K11.diagonal().array() += sum_c;
+    K11.diagonal() += S.kse;
+    const V3 b_n = -u.cross(nb) - suma - fe_b;
+    V3 vs, us;
+    spd_block_solve(K11, M3(-sumAr), K22, b_n, b_m, vs, us);
     dn_out = R * (S.kse.cwiseProduct(vs) + u.cross(nb));
     dm_out = R * (S.kbt.cwiseProduct(us) + u.cross(mb));
   } else {
-    M3 K = -sumrAr;
-    K.diagonal() += S.kbt;
-    const V3 us = spd_solve(K, b_m);
+    const V3 us = spd_solve(K22, b_m);
     // Body-frame tendon force sum a_k + A_k (u_s x r_k) = sum a_k - (sum A_k [r_k]x) u_s.
     const V3 fb = suma - sumAr * us;
     V3 dn = -(R * fb);

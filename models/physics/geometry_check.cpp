@@ -123,7 +123,7 @@ void check_geometry(const Robot& robot, const TendonRouting& rt, Solution& sol, 
     // chord distance only where a cheap lower bound (midpoint distance minus the half chord
     // lengths) does not already clear the backbone radius.
     int jc = -1, jd = -1;
-    double worst_c = 1.0, worst_d = rb;
+    double worst_c = kTendonLimitWarn, worst_d = rb;
     Vec3 h0 = hole_position(f[0], t, rt.disk_s[0]);
     for (int j = 1; j <= t.end_disk; ++j) {
       if (quiet(f[j - 1], f[j], rt.disk_s[j] - rt.disk_s[j - 1], disk_radius)) {
@@ -142,7 +142,13 @@ void check_geometry(const Robot& robot, const TendonRouting& rt, Solution& sol, 
       h0 = h1;
     }
     if (jc > 0) {
-      std::snprintf(buf, sizeof buf, ": curvature x offset %.4f >= 1, the tendon would cross the backbone", worst_c);
+      if (worst_c >= 1.0)
+        std::snprintf(buf, sizeof buf, ": curvature x offset %.4f >= 1, the tendon would cross the backbone", worst_c);
+      else
+        std::snprintf(buf, sizeof buf,
+                      ": curvature x offset %.4f, at its geometric limit (>= %g: the models disagree whether the "
+                      "actuation is feasible)",
+                      worst_c, kTendonLimitWarn);
       sol.geometry_warnings.push_back({tendon_name(t.index) + " " + between(rt, jc) + buf, t.index, jc, worst_c});
     }
     if (jd > 0) {

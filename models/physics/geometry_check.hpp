@@ -20,13 +20,19 @@ namespace tdcr::physics {
 /// of at least this is stopped by the tendon geometry, not by the numerics.
 constexpr double kTendonLimitNear = 0.9;
 
+/// A converged answer with a tendon at curvature x offset of at least this is flagged as at its
+/// geometric limit even below 1: that close to it the models disagree whether the actuation is
+/// feasible (docs/hard-cases.md, loaded scene s1015).
+constexpr double kTendonLimitWarn = 0.99;
+
 /// The reason text for a tendon at its geometric limit: "infeasible actuation: tendon T1 (index
 /// 0) ... curvature x offset 0.99 at <where>". `tendon` is the global 0-based index.
 std::string tendon_limit_message(int tendon, double value, const std::string& where);
 
 /// Append to solution.geometry_warnings what its disk frames show that cannot be built: a tendon
-/// with curvature x offset >= 1, a tendon chord closer to the backbone chord than the backbone's
-/// outer radius, neighbouring disks (radius: the largest tendon offset) interpenetrating.
+/// with curvature x offset >= 1 (or at its limit, >= kTendonLimitWarn), a tendon chord closer to
+/// the backbone chord than the backbone's outer radius, neighbouring disks (radius: the largest
+/// tendon offset) interpenetrating.
 /// `max_curvature`: an upper bound of the backbone's curvature that the model knows (CC: its
 /// arcs), or negative if unknown; at most 1 / (2 r_max) no pair of disks can show a finding
 /// (see quiet() in the source), so the frames are not examined.

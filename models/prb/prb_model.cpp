@@ -22,10 +22,8 @@ constexpr double kPhiScale = 1e-4;
 // local minimum of |F| (configurations 14 and 15 of the case study at n = 1 end there with
 // KINSOL's automatic bound).
 constexpr double kMaxNewtonStep = 1.0;
-// Automatic formulation: banded from this many loaded subsegments on, as CCsub. Below, the
-// recursive form: from 40 on the banded one is up to 2.6x faster on tendon-only scenes, but its
-// Newton steps leave the continuity constraints under large loads and stall where the recursive
-// one converges (loaded suite s1008, s1011 at n = 20; docs/design-notes/lumped.md).
+// Automatic formulation: reduced Newton steps on the banded system from this many loaded
+// subsegments on, as CCsub (docs/design-notes/lumped.md).
 constexpr int kBandedFrom = 100;
 
 // Model-specific points of a PRB subsegment in detail::SubsegmentPose::aux.

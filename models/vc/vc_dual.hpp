@@ -151,6 +151,36 @@ struct ScalarBinaryOpTraits<double, tdcr::vc::Dual, BinOp> {
 
 namespace tdcr::vc {
 
+/// cosserat::detail::spd_block_solve in dual numbers (found by rod_rhs through ADL): one
+/// factorisation of the values, x' = K^-1 (b' - K' x) for the derivatives.
+inline void spd_block_solve(const Mat3T<Dual>& P, const Mat3T<Dual>& Q, const Mat3T<Dual>& S, const Vec3T<Dual>& b1,
+                            const Vec3T<Dual>& b2, Vec3T<Dual>& x1, Vec3T<Dual>& x2) {
+  const auto value = [](const Dual& d) { return d.v; };
+  const Mat3 Qv = Q.unaryExpr(value);
+  const cosserat::detail::SpdBlocks F(P.unaryExpr(value), Qv, S.unaryExpr(value));
+  Vec3 x1v, x2v;
+  F.solve(Qv, Vec3(b1.unaryExpr(value)), Vec3(b2.unaryExpr(value)), x1v, x2v);
+  Eigen::Matrix<double, 3, 6> r1, r2;
+  for (int i = 0; i < 3; ++i) {
+    r1.row(i) = b1[i].derivatives().transpose();
+    r2.row(i) = b2[i].derivatives().transpose();
+    for (int j = 0; j < 3; ++j) {
+      r1.row(i) -= x1v[j] * P(i, j).derivatives().transpose() + x2v[j] * Q(i, j).derivatives().transpose();
+      r2.row(i) -= x1v[j] * Q(j, i).derivatives().transpose() + x2v[j] * S(i, j).derivatives().transpose();
+    }
+  }
+  Eigen::Matrix<double, 3, 6> d1, d2;
+  F.solve(Qv, r1, r2, d1, d2);
+  for (int i = 0; i < 3; ++i) {
+    x1[i].v = x1v[i];
+    x2[i].v = x2v[i];
+    for (int k = 0; k < 6; ++k) {
+      x1[i].d[k] = d1(i, k);
+      x2[i].d[k] = d2(i, k);
+    }
+  }
+}
+
 /// The wrench just distal of a disk's kinks as a function of itself: z = (n+, m+) maps to the
 /// wrench before the kinks minus the kink wrench of the continuing tendons at the strains z gives.
 template <typename T>

@@ -76,7 +76,8 @@ bool rk4(const bvp::Rk4Integrator& integ, const cosserat::Section& S, const Segm
 }  // namespace
 
 bool has_exact_jacobian(const VcWorkspace::Impl& W) {
-  return dynamic_cast<const bvp::Rk4Integrator*>(W.shot_integrator.get()) != nullptr;
+  // Friction: the tension states and the friction fixed point are not in dual numbers.
+  return !W.friction && dynamic_cast<const bvp::Rk4Integrator*>(W.shot_integrator.get()) != nullptr;
 }
 
 bool shoot_jacobian(VcWorkspace::Impl& W, const Vec6& x, Vec6& res, Mat6& J) {

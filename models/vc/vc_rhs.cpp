@@ -68,7 +68,15 @@ void TendonRod::eval(double s, const double* y, double* dyds) const {
   }
 }
 
-void TendonRod::rhs(double s, const double* y, double* dyds) const {
+// flatten: GCC otherwise keeps the small Eigen products (outer products, 3x3 products, R^T n) and
+// tendon_tangent as calls, most of the time of a shot.
+#if defined(__GNUC__)
+#define TDCR_FLATTEN __attribute__((flatten))
+#else
+#define TDCR_FLATTEN
+#endif
+
+TDCR_FLATTEN void TendonRod::rhs(double s, const double* y, double* dyds) const {
   // The section's flags follow the bound input (gravity), hence a run-time choice per call.
   if (section_->shear_extension) {
     if (section_->gravity)

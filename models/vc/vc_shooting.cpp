@@ -10,6 +10,7 @@
 
 #include "physics/geometry_check.hpp"
 #include "physics/tendon_path.hpp"
+#include "vc/vc_friction.hpp"
 
 namespace tdcr {
 
@@ -69,6 +70,7 @@ void bind_input(VcWorkspace::Impl& W, const VcModel& model, const ModelInput& in
   const Robot& robot = model.robot();
   const TendonRouting& rt = model.routing();
   W.model = &model;
+  ++W.loads_version;
   W.loads.bind(robot, rt, input);
   W.lambda = 1.0;
   W.per_segment = input.actuation.convention == Actuation::DisplacementConvention::PerSegment;
@@ -118,7 +120,14 @@ void bind_input(VcWorkspace::Impl& W, const VcModel& model, const ModelInput& in
   W.shot_rod = std::make_unique<TendonRod>(W.section, W.segments[0], W.tendon_count, lengths_in_shots);
   W.final_rod = std::make_unique<TendonRod>(W.section, W.segments[0], W.tendon_count, true);
   W.final_rod->watch(&W.degeneracy);
-  W.y = Eigen::VectorXd::Zero(cosserat::kStateSize + W.tendon_count);
+  W.friction = model.effects().tendon_friction.on();
+  if (W.friction) {
+    const TendonFriction& f = model.effects().tendon_friction;
+    W.friction_shot_rod = std::make_unique<FrictionRod>(W.section, W.segments[0], f, W.tendon_count, lengths_in_shots);
+    W.friction_final_rod = std::make_unique<FrictionRod>(W.section, W.segments[0], f, W.tendon_count, true);
+    W.friction_final_rod->watch(&W.degeneracy);
+  }
+  W.y = Eigen::VectorXd::Zero(cosserat::kStateSize + (W.friction ? 2 : 1) * W.tendon_count);
   W.segment_lengths.assign(W.segments.size() * W.tendon_count, 0.0);
   W.single.reset();
   W.multiple.reset();
@@ -134,6 +143,7 @@ void set_load_factor(VcWorkspace::Impl& W, double lambda) {
       s.terminating[k].T = W.loads.tension(s.terminating_index[k]);
   }
   W.lambda = lambda;
+  ++W.loads_version;
 }
 
 namespace {
@@ -230,14 +240,34 @@ bool disk_point_loads(const VcWorkspace::Impl& W, int i, int j, T* y) {
 template bool disk_point_loads<double>(const VcWorkspace::Impl&, int, int, double*);
 template bool disk_point_loads<Dual>(const VcWorkspace::Impl&, int, int, Dual*);
 
-bool shoot(VcWorkspace::Impl& W, bvp::Integrator& integ, TendonRod& rod, const Vec6& x, Vec6& res,
-           const Record* rec) {
+namespace {
+
+// What a shot does besides the rod's integration, without friction (nothing) or with it
+// (vc_friction.hpp: the tension states).
+bool has_lengths(const TendonRod& rod) { return rod.dimension() > cosserat::kStateSize; }
+bool has_lengths(const FrictionRod& rod) { return rod.lengths(); }
+void begin(const VcWorkspace::Impl&, const TendonRod&, double*) {}
+void begin(const VcWorkspace::Impl& W, const FrictionRod& rod, double* y) { begin_friction_shot(W, rod, y); }
+void at_disk(VcWorkspace::Impl&, const TendonRod&, int, int, const double*) {}
+void at_disk(VcWorkspace::Impl& W, const FrictionRod& rod, int i, int j, const double* y) {
+  friction_at_disk(W, rod, i, j, y);
+}
+void end(const VcWorkspace::Impl&, const TendonRod&, const double*, const Record&) {}
+void end(const VcWorkspace::Impl& W, const FrictionRod& rod, const double* y, const Record& rec) {
+  if (rec.end_tensions) friction_end_tensions(W, rod, y, *rec.end_tensions);
+}
+
+}  // namespace
+
+template <class Rod>
+bool shoot(VcWorkspace::Impl& W, bvp::Integrator& integ, Rod& rod, const Vec6& x, Vec6& res, const Record* rec) {
   double* y = W.y.data();
   const int dim = rod.dimension();
   for (int i = 0; i < dim; ++i) y[i] = 0.0;
   cosserat::rotation(y) = Mat3::Identity();
   cosserat::force(y) = x.head<3>();
   cosserat::moment(y) = x.tail<3>();
+  begin(W, rod, y);
   const TendonRouting& rt = W.model->routing();
   if (rec) {
     rec->frames->push_back(Frame{});
@@ -251,6 +281,7 @@ bool shoot(VcWorkspace::Impl& W, bvp::Integrator& integ, TendonRod& rod, const V
     const int first = i == 0 ? 1 : rt.segment_end_disk[i - 1] + 1;
     for (int j = first; j <= last; ++j) {
       if (!integ.integrate(rod, rt.disk_s[j - 1], rt.disk_s[j], y)) return false;
+      at_disk(W, rod, i, j, y);
       if (!disk_point_loads(W, i, j, y)) return false;
       if (rec) {
         const Frame f = cosserat::frame_of(y);
@@ -258,9 +289,10 @@ bool shoot(VcWorkspace::Impl& W, bvp::Integrator& integ, TendonRod& rod, const V
         rec->samples->push_back(BackboneSample{rt.disk_s[j], f, Vec3(cosserat::force(y)), Vec3(cosserat::moment(y))});
       }
     }
-    if (rec && rec->segment_end_lengths && dim > cosserat::kStateSize)
+    if (rec && rec->segment_end_lengths && has_lengths(rod))
       for (int k = 0; k < K; ++k) (*rec->segment_end_lengths)[i * K + k] = y[cosserat::kStateSize + k];
   }
+  if (rec) end(W, rod, y, *rec);
   res.head<3>() = cosserat::force(y);
   res.tail<3>() = cosserat::moment(y);
   if (W.loads.has_tip_wrench()) {
@@ -268,6 +300,16 @@ bool shoot(VcWorkspace::Impl& W, bvp::Integrator& integ, TendonRod& rod, const V
     res.tail<3>() -= W.loads.tip_moment();
   }
   return res.allFinite();
+}
+
+template bool shoot<TendonRod>(VcWorkspace::Impl&, bvp::Integrator&, TendonRod&, const Vec6&, Vec6&, const Record*);
+template bool shoot<FrictionRod>(VcWorkspace::Impl&, bvp::Integrator&, FrictionRod&, const Vec6&, Vec6&,
+                                 const Record*);
+
+bool shoot(VcWorkspace::Impl& W, bool final, const Vec6& x, Vec6& res, const Record* rec) {
+  bvp::Integrator& integ = final ? W.final_pass_integrator() : *W.shot_integrator;
+  if (W.friction) return shoot(W, integ, final ? *W.friction_final_rod : *W.friction_shot_rod, x, res, rec);
+  return shoot(W, integ, final ? *W.final_rod : *W.shot_rod, x, res, rec);
 }
 
 bool tendon_limit(const VcWorkspace::Impl& W, std::string& why) {

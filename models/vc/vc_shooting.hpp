@@ -18,6 +18,10 @@
 
 namespace tdcr {
 
+namespace vc {
+class FrictionRod;
+}
+
 using Vec6 = Eigen::Matrix<double, 6, 1>;
 
 struct VcWorkspace::Impl {
@@ -30,6 +34,7 @@ struct VcWorkspace::Impl {
   cosserat::Section section;              ///< Backbone weight at the current load factor.
   std::vector<vc::SegmentLoads> segments;  ///< One per segment, never resized (rods point in).
   double lambda = 1.0;
+  unsigned long loads_version = 0;  ///< Changes whenever the bound loads do (memoised shots).
   bool per_segment = false;  ///< DisplacementConvention::PerSegment.
   int tendon_count = 0;
 
@@ -41,7 +46,11 @@ struct VcWorkspace::Impl {
   std::unique_ptr<vc::TendonRod> shot_rod;            ///< Lengths only with CVODE.
   std::unique_ptr<vc::TendonRod> final_rod;           ///< With lengths; watches `degeneracy`.
   vc::Degeneracy degeneracy;                          ///< Of the last final pass.
-  Eigen::VectorXd y;                                  ///< 18 + tendon_count.
+  // Tendon friction (vc_friction.hpp): these rods instead, with tension states (decided once).
+  bool friction = false;
+  std::unique_ptr<vc::FrictionRod> friction_shot_rod;
+  std::unique_ptr<vc::FrictionRod> friction_final_rod;
+  Eigen::VectorXd y;                                  ///< 18 + tendon_count (+ tendon_count: tensions).
   std::vector<double> segment_lengths;                ///< [segment * tendon_count + k] at segment ends.
 
   // The formulations, built on first use.
@@ -59,6 +68,7 @@ struct Record {
   std::vector<Frame>* frames = nullptr;
   std::vector<BackboneSample>* samples = nullptr;
   std::vector<double>* segment_end_lengths = nullptr;  ///< [segment * K + k]; needs length states.
+  std::vector<double>* end_tensions = nullptr;         ///< With friction: each tendon's at its end.
 };
 
 /// Bind the workspace to `input` and `options`: loads at load factor 1, section, integrators.
@@ -72,9 +82,11 @@ void set_load_factor(VcWorkspace::Impl& W, double lambda);
 template <typename T>
 bool disk_point_loads(const VcWorkspace::Impl& W, int i, int j, T* y);
 /// One shot from the base with unknowns x = (n(0), m(0)) through W.y: false if the integration
-/// failed, else `res` = (n(L+) - F_tip, m(L+) - M_tip).
-bool shoot(VcWorkspace::Impl& W, bvp::Integrator& integrator, TendonRod& rod, const Vec6& x, Vec6& res,
-           const Record* rec);
+/// failed, else `res` = (n(L+) - F_tip, m(L+) - M_tip). Rod: TendonRod, or FrictionRod.
+template <class Rod>
+bool shoot(VcWorkspace::Impl& W, bvp::Integrator& integrator, Rod& rod, const Vec6& x, Vec6& res, const Record* rec);
+/// `shoot` with the shot (or, `final`, the final pass's) integrator and rod, with friction or not.
+bool shoot(VcWorkspace::Impl& W, bool final, const Vec6& x, Vec6& res, const Record* rec);
 /// Whether the exact Jacobian of `shoot` is available: with RK4 (the derivative of the discrete
 /// map); CVODE's error-controlled map is differentiated by finite differences.
 bool has_exact_jacobian(const VcWorkspace::Impl& W);

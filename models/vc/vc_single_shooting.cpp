@@ -1,4 +1,6 @@
 // VC by single shooting: unknowns n(0), m(0), residual the tip wrench (vc.hpp).
+#include <cmath>
+
 #include "tdcr/bvp/newton_solver.hpp"
 #include "physics/tendon_path.hpp"
 #include "vc/vc_shooting.hpp"
@@ -14,24 +16,41 @@ namespace {
 /// equilibrium waits).
 constexpr double kMaxNewtonStep = 1.0;
 
-/// Warm-started solves (VcOptions::reuse_jacobian): the Newton iterations a Jacobian serves
-/// (modified Newton), and the iterations of the previous solve above which its Jacobian is too
-/// stale to start from (a fresh one at the warm guess then).
+/// The Newton iterations a Jacobian serves (modified Newton: KINSOL takes a fresh one earlier when
+/// the residual stops falling fast enough): a cold solve converges in about 4 shots after its one
+/// Jacobian (6 shots) instead of 2 iterations with a Jacobian each. Warm-started solves
+/// (VcOptions::reuse_jacobian) start from the previous solve's Jacobian unless that solve took more
+/// than kStaleAfterIterations iterations (a fresh one at the warm guess then).
 constexpr int kReuseSetupCalls = 10;
 constexpr int kStaleAfterIterations = 3;
 
-/// The shooting residual as Newton sees it; its parameter is the load factor.
+/// The shooting residual as Newton sees it; its parameter is the load factor. Every shot records
+/// the disk frames, backbone samples and tendon lengths (the final pass's rod, with length
+/// states), and the last shot is memoised: the solver's check of its returned point and the
+/// driver's final pass at the same unknowns and loads reuse it instead of shooting again.
 class ShootingSystem final : public bvp::ParameterizedSystem {
  public:
   explicit ShootingSystem(VcWorkspace::Impl& W) : W_(W) {}
   int size() const override { return 6; }
   bool residual(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> f) override {
     const Vec6 xx = x;
-    Vec6 r;
-    if (!shoot(W_, *W_.shot_integrator, *W_.shot_rod, xx, r, nullptr)) return false;
-    f = r;
+    if (!(valid_ && version_ == W_.loads_version && xx == x_)) {
+      frames_.clear();
+      samples_.clear();
+      W_.degeneracy.reset();
+      const Record rec{&frames_, &samples_, &W_.segment_lengths, &end_tensions_};
+      x_ = xx;
+      version_ = W_.loads_version;
+      valid_ = shoot(W_, true, xx, f_, &rec);
+    }
+    if (!valid_) return false;
+    f = f_;
     return true;
   }
+  /// What the last shot recorded.
+  const std::vector<Frame>& frames() const { return frames_; }
+  const std::vector<BackboneSample>& samples() const { return samples_; }
+  const std::vector<double>& end_tensions() const { return end_tensions_; }
   // With RK4 the exact Jacobian of the discrete shot (vc_jacobian.cpp, about one shot's cost);
   // with CVODE forward differences by the solver (6 extra shots), with increments
   // sqrt(max(eps, relative_noise)) = sqrt(rtol).
@@ -54,6 +73,14 @@ class ShootingSystem final : public bvp::ParameterizedSystem {
 
  private:
   VcWorkspace::Impl& W_;
+  // The last shot: unknowns, loads version, residual, success, records.
+  Vec6 x_ = Vec6::Zero();
+  unsigned long version_ = 0;
+  Vec6 f_ = Vec6::Zero();
+  bool valid_ = false;
+  std::vector<Frame> frames_;
+  std::vector<BackboneSample> samples_;
+  std::vector<double> end_tensions_;  ///< Friction: each tendon's tension at its end.
 };
 
 class SingleShooting final : public detail::ModelProblem {
@@ -61,7 +88,10 @@ class SingleShooting final : public detail::ModelProblem {
   explicit SingleShooting(VcWorkspace::Impl& W) : W_(W), system_(W) {}
   bvp::ParameterizedSystem* system() override { return &system_; }
   bvp::NewtonSolver& newton() override { return newton_; }
-  void adjust(bvp::NewtonOptions& options) const override { options.max_newton_step = kMaxNewtonStep; }
+  void adjust(bvp::NewtonOptions& options) const override {
+    options.max_newton_step = kMaxNewtonStep;
+    options.max_setup_calls = kReuseSetupCalls;
+  }
   void adjust_warm(bvp::NewtonOptions& options) const override {
     if (!W_.model->options().reuse_jacobian) return;
     options.reuse_jacobian = last_iterations_ <= kStaleAfterIterations;
@@ -89,16 +119,10 @@ class SingleShooting final : public detail::ModelProblem {
     }
     return false;
   }
-  // The final pass records frames, samples and tendon lengths, and its end wrench is the residual.
+  // The final pass records frames, samples and tendon lengths, and its end wrench is the residual
+  // (usually the memoised last shot of Newton).
   bool final_residual(const Eigen::VectorXd& x, Eigen::Ref<Eigen::VectorXd> f) override {
-    frames_.clear();
-    samples_.clear();
-    W_.degeneracy.reset();
-    const Record rec{&frames_, &samples_, &W_.segment_lengths};
-    Vec6 r;
-    const bool ok = shoot(W_, W_.final_pass_integrator(), *W_.final_rod, Vec6(x), r, &rec);
-    if (ok) f = r;
-    return ok;
+    return system_.residual(x, f);
   }
   void extract(const Eigen::VectorXd&, bool evaluated, Solution& sol) override {
     last_iterations_ = sol.summary.iterations;
@@ -110,11 +134,17 @@ class SingleShooting final : public detail::ModelProblem {
       }
       return;
     }
-    sol.disk_frames = frames_;
-    sol.backbone = samples_;
+    sol.disk_frames = system_.frames();
+    sol.backbone = system_.samples();
     tendon_displacements(W_, W_.segment_lengths, sol.tendon_displacements);
+    if (W_.friction) sol.tendon_end_tensions = system_.end_tensions();
   }
-  Stability stability(const Eigen::VectorXd& x) override { return conjugate_point_test(W_, Vec6(x)); }
+  Stability stability(const Eigen::VectorXd& x) override {
+    if (W_.friction)
+      return Stability{StabilityStatus::Undetermined, NAN,
+                       "tendon friction: the conjugate-point test assumes tensions independent of the shape"};
+    return conjugate_point_test(W_, Vec6(x));
+  }
   bool infeasibility(const Eigen::VectorXd&, std::string& why) override { return tendon_limit(W_, why); }
   std::string integrator_name() const override { return W_.shot_integrator->name(); }
 
@@ -196,8 +226,6 @@ class SingleShooting final : public detail::ModelProblem {
   VcWorkspace::Impl& W_;
   ShootingSystem system_;
   bvp::NewtonSolver newton_;
-  std::vector<Frame> frames_;
-  std::vector<BackboneSample> samples_;
   int last_iterations_ = 0;  ///< Newton iterations of the last solve (Jacobian reuse).
 };
 

@@ -46,6 +46,13 @@ class VcrefSystem final : public bvp::ParameterizedSystem {
   bvp::ShootingSystem& shooting_;
 };
 
+// Largest system factored densely: two disk intervals (18 unknowns).
+constexpr int kDenseSizeLimit = 18;
+// Warm starts: the Newton iterations one Jacobian serves, and the iterations of the previous
+// solve above which its Jacobian is too stale to start from.
+constexpr int kReuseSetupCalls = 10;
+constexpr int kStaleAfterIterations = 3;
+
 bool same_integrator(const SolverOptions& a, const SolverOptions& b) {
   return a.integrator == b.integrator && a.rk4_steps == b.rk4_steps && a.rk4_max_step == b.rk4_max_step &&
          a.cvode_rtol == b.cvode_rtol && a.cvode_atol == b.cvode_atol;
@@ -72,6 +79,7 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
     select_structure();
     shooting_.invalidate();
     convention_ = input.actuation.convention;
+    reuse_ = vo.reuse_jacobian;
     // Cold-start rule: external loads only (the tendon chords follow the disks).
     const physics::LoadCase& l = problem_.loads();
     const double worst = std::max(l.load_parameter() / vo.load_threshold,
@@ -92,6 +100,18 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
     // last saw (a pattern change then always changes the pointer, too).
     solved_ = shooting_.structure();
     return newton_;
+  }
+  // KLU above two intervals: the Jacobian is block tridiagonal, and a dense LU of even 66
+  // unknowns (paper robot, n = 3) costs more than the shots of a Newton iteration.
+  void adjust(bvp::NewtonOptions& options) const override { options.dense_size_limit = kDenseSizeLimit; }
+  // VcrefOptions::reuse_jacobian: a warm start begins with the previous solve's Jacobian
+  // (modified Newton, a fresh one when the residual stops falling fast): along a trajectory an
+  // iteration then costs one shot per interval instead of seven. Not after a slow solve (its
+  // Jacobian may be far from here) or a change of the Jacobian's pattern.
+  void adjust_warm(bvp::NewtonOptions& options) const override {
+    if (!reuse_) return;
+    options.reuse_jacobian = last_iterations_ <= kStaleAfterIterations && solved_ == shooting_.structure();
+    options.max_setup_calls = kReuseSetupCalls;
   }
   detail::ColdStart cold_start() const override { return cold_; }
   void cold_guess(Eigen::VectorXd& x) override { shape_guess(x, d_.arc_guess); }
@@ -125,6 +145,7 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
   void extract(const Eigen::VectorXd& x, bool evaluated, Solution& sol) override {
     const int N = d_.N;
     const TendonRouting& routing = *d_.routing;
+    last_iterations_ = sol.summary.iterations;
     sol.tensions = problem_.loads().full_tensions();
     if (!evaluated) {
       sol.disk_frames.assign(N + 1, Frame{});
@@ -232,6 +253,8 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
   };
   Structure cache_[2];  // most recently used first
   std::shared_ptr<const bvp::ShootingStructure> solved_;  // structure of the last newton() call
+  int last_iterations_ = 0;  // Newton iterations of the last solve (Jacobian reuse)
+  bool reuse_ = false;       // VcrefOptions::reuse_jacobian
 };
 
 }  // namespace

@@ -20,6 +20,7 @@ VcrefShooting::VcrefShooting(const VcrefModel::Data& d)
     : d_(d),
       tendon_at_(d.N + 1, 0),
       passes_(d.pass_through),
+      section_(d.section),
       rod_(d.section),
       rbar_(d.N, Mat3::Identity()),
       frames_(d.N + 1) {}
@@ -61,10 +62,10 @@ void VcrefShooting::set_load_factor(double lambda) {
   load_.set_load_factor(lambda);
   tension_.resize(load_.full_tensions().size());
   for (std::size_t k = 0; k < tension_.size(); ++k) tension_[k] = load_.tension(static_cast<int>(k));
-  cosserat::Section s = d_.section;
-  s.gravity = load_.has_backbone_weight();
-  s.weight = load_.backbone_weight();
-  rod_ = cosserat::FreeRod(s);
+  section_ = d_.section;
+  section_.gravity = load_.has_backbone_weight();
+  section_.weight = load_.backbone_weight();
+  rod_ = cosserat::FreeRod(section_);
 }
 
 void VcrefShooting::start_state(int k, const double* x, double* y) const {

@@ -74,6 +74,11 @@ class VcrefShooting final : public bvp::ShootingProblem {
   void unknown_scale(int k, double* s) const override;
   void block_scale(int block, double* s) const override;
   double increment(int k, int j, double value, double scale, double noise) const override;
+  // The shot's derivative (vcref_tangent.cpp): forward differences in the start wrench (6
+  // integrations), the start pose from the rod's symmetries (none). Without gravity (which breaks
+  // the rotation symmetry) and for RK4 only (CVODE's error control is not rotation invariant).
+  bool linearize_shot(int k, bvp::Integrator& integrator, const double* y0, const double* end) const override;
+  void shot_tangent(int k, const double* dy, double* dend) const override;
 
  private:
   void subtract_disk_load(int j, Vec3& F, Vec3& M) const;
@@ -86,6 +91,7 @@ class VcrefShooting final : public bvp::ShootingProblem {
   std::vector<char> tendon_at_;     // disk j receives a tendon wrench
   std::vector<char> passes_;        // an active tendon passes disk j (all routed before bind)
   std::vector<double> tension_;     // at the load factor, by global index
+  cosserat::Section section_;       // the rod's, with the weight at the load factor
   cosserat::FreeRod rod_;
   std::vector<Mat3> rbar_;          // chart references (0 unused)
   mutable std::vector<Frame> frames_;  // disk frames of one block evaluation
@@ -96,6 +102,9 @@ class VcrefShooting final : public bvp::ShootingProblem {
   double comp_scale_[4] = {1, 1, 1, 1};  // 1/L, 1, 1/F_s, 1/(F_s L)
   double fd_comp_[4] = {1, 1, 1, 1};     // finite-difference scale per component group
   double fd_rel_ = 1e-7;
+  // The last linearize_shot(): its start and end states and d(end) / d(n, m of the start).
+  mutable cosserat::State shot_start_, shot_end_;
+  mutable Eigen::Matrix<double, cosserat::kStateSize, 6> shot_d_;
 };
 
 }  // namespace tdcr

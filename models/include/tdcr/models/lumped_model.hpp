@@ -12,11 +12,13 @@
 /// of all N subsegments (zero for the straight ones), so that any Solution of the same model can
 /// warm-start another input. Cold guess: the straight robot.
 ///
-/// Two formulations of the same equations (LumpedFormulation), same solution: recursive (the
+/// Formulations of the same equations (LumpedFormulation), same solution: recursive (the
 /// subsegment unknowns only; dense Jacobian and LU, cost ~J^3, fastest for few subsegments)
 /// and banded (disk poses and internal wrenches are unknowns too; block-banded Jacobian, KLU,
-/// cost ~J). Automatic picks banded from a model-specific number of loaded subsegments on (CCsub
-/// 100, PRB 40: the measured crossover, docs/design-notes/lumped.md).
+/// cost ~J per iteration, but more iterations: its steps leave the pose constraints).
+/// Automatic: recursive below 100 loaded subsegments; from there on the recursive unknowns with
+/// reduced Newton steps, each solved on the banded system at the iterate's poses and wrenches
+/// (the iterations of the recursive form at a cost ~J each; docs/design-notes/lumped.md).
 #pragma once
 
 #include <memory>

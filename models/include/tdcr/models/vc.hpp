@@ -79,11 +79,13 @@ struct VcOptions {
   /// Single shooting with RK4: Newton's Jacobian is the exact derivative of the discrete shot
   /// (dual numbers through every RK4 stage, disk load and kink) instead of forward differences
   /// by the solver (6 extra shots; CVODE always takes these). The same Newton iterations to
-  /// within rounding; at present about 1.5x the cost of the differences
-  /// (docs/design-notes/vc.md), hence off by default.
+  /// within rounding; at present about 1.3x the cost of the differences (`bench_vc_loaded
+  /// --quick`, docs/design-notes/vc.md), hence off by default.
   bool exact_jacobian = false;
-  /// Warm-started single-shooting solves start from the previous solve's Jacobian (modified
-  /// Newton, a fresh Jacobian only when the residual stops falling fast enough).
+  /// Warm-started single-shooting solves start from the previous solve's Jacobian (unless that
+  /// solve took more than 3 iterations). Every single-shooting solve, cold or warm, is a modified
+  /// Newton: a Jacobian serves up to 10 iterations, a fresh one when the residual stops falling
+  /// fast enough; this option only decides whether the first one comes from the previous solve.
   bool reuse_jacobian = true;
 };
 

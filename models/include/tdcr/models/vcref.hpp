@@ -17,9 +17,10 @@
 /// of any angle. 6 + 12 (N - 1) unknowns. Residuals: the tip equilibrium (6), and per disk the
 /// pose continuity (p_j - p^-, vee(skew(R^-^T R_j))) and the disk equilibrium (12), where the
 /// tendon wrench reads the poses of disks j-1, j, j+1. The Jacobian is block tridiagonal
-/// (forward differences; a position perturbation needs no integration, the free rod being
-/// translation invariant: about 9 integrations per interval per Jacobian); KLU above
-/// NewtonOptions::dense_size_limit unknowns, so the cost grows linearly with N. Its pattern
+/// (forward differences; without gravity the free rod's flow commutes with translations and
+/// rotations of the whole start, so only the start wrench's 6 unknowns need an integration each;
+/// with gravity the rotations take 3 more); KLU above 18
+/// unknowns (whatever NewtonOptions::dense_size_limit says), so the cost grows linearly with N. Its pattern
 /// follows the input: disk j's equilibrium reads disk j+1's pose only where a tensioned tendon
 /// passes disk j; a workspace keeps the patterns of its last two such sets and rebuilds one only
 /// when the set changes (the model's pattern, every routed tendon, needs no build).
@@ -69,6 +70,13 @@ struct VcrefOptions {
   /// Cold solves load the robot from rest when compression_parameter() exceeds this (Euler
   /// buckling of a cantilever under a tip load: pi^2 / 4 = 2.47). Infinity: never.
   double compression_threshold = 2.0;
+  /// Warm-started solves start from the previous solve's Jacobian (modified Newton, a fresh
+  /// Jacobian only when the residual stops falling fast enough): more, much cheaper iterations
+  /// (a trajectory about 1.8x faster). A solve's answer then depends on the workspace's last
+  /// solve within the Newton tolerance, which the displacement-input solve's differences of
+  /// tension solves do not tolerate (tests/test_displacement_input.cpp, elastic helical
+  /// tendon): hence off by default.
+  bool reuse_jacobian = false;
 };
 
 /// @brief The VCref model of a robot with its effects: immutable (disks, Jacobian structure,
