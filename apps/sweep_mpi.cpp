@@ -40,13 +40,14 @@ int run(int rank, int ranks, const std::vector<std::string>& args) {
   if (rank == 0) first = tdcr::prepare_sweep_output(out, spec, {});
   MPI_Bcast(&first, 1, MPI_UNSIGNED_LONG_LONG, 0, MPI_COMM_WORLD);
   // Nothing left (a finished file): no block to solve.
-  const std::uint64_t b0 = first / tdcr::kSweepBlock;
-  const std::uint64_t b1 = first >= range.end ? b0 : (range.end + tdcr::kSweepBlock - 1) / tdcr::kSweepBlock;
+  const std::uint64_t block = tdcr::sweep_block_size(spec);
+  const std::uint64_t b0 = first / block;
+  const std::uint64_t b1 = first >= range.end ? b0 : (range.end + block - 1) / block;
   const auto owner = [&](std::uint64_t b) { return static_cast<int>((b - b0) % static_cast<std::uint64_t>(ranks)); };
   tdcr::SweepSolver solver(spec);
   const auto solve_block = [&](std::uint64_t b) {
     std::string rows;
-    solver.solve_range(b * tdcr::kSweepBlock, std::min((b + 1) * tdcr::kSweepBlock, range.end), first, rows);
+    solver.solve_range(b * block, std::min((b + 1) * block, range.end), first, rows);
     return rows;
   };
   if (rank != 0) {

@@ -2,6 +2,7 @@
 // threads, shards and interruptions.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -59,8 +60,8 @@ std::vector<std::vector<std::string>> rows_of(const std::string& path) {
   return rows;
 }
 
-/// Same samples, inputs, models and statuses; tips within 1e-9 m and 1e-9 rad.
-void expect_same_rows(const std::string& a, const std::string& b) {
+/// Same samples, inputs, models and statuses; tips within `tol` m and rad.
+void expect_same_rows(const std::string& a, const std::string& b, double tol = 1e-9) {
   const auto ra = rows_of(a), rb = rows_of(b);
   ASSERT_EQ(ra.size(), rb.size());
   ASSERT_FALSE(ra.empty());
@@ -70,7 +71,7 @@ void expect_same_rows(const std::string& a, const std::string& b) {
     // sample, 2 axes, model, status (columns 0..4) exactly; tip and rotation (n-8 .. n-3) close.
     for (std::size_t c = 0; c < 5; ++c) EXPECT_EQ(ra[r][c], rb[r][c]) << "row " << r << " column " << c;
     for (std::size_t c = n - 8; c < n - 2; ++c)
-      EXPECT_NEAR(std::stod(ra[r][c]), std::stod(rb[r][c]), 1e-9) << "row " << r << " column " << c;
+      EXPECT_NEAR(std::stod(ra[r][c]), std::stod(rb[r][c]), tol) << "row " << r << " column " << c;
   }
 }
 
@@ -118,6 +119,68 @@ TEST(SweepFile, RandomSamplesAreSeededAndInRange) {
   std::string other = text;
   other.replace(other.find("\"seed\": 7"), 9, "\"seed\": 8");
   EXPECT_NE(tdcr::parse_sweep(other).hash, a.hash);
+}
+
+/// Mean distance between consecutive samples of `order`, each axis normalised to [0, 1].
+double mean_step(const tdcr::SweepSpec& spec, const std::vector<std::uint64_t>& order) {
+  std::vector<double> a, b;
+  double sum = 0.0;
+  for (std::size_t k = 1; k < order.size(); ++k) {
+    spec.sample_values(order[k - 1], a);
+    spec.sample_values(order[k], b);
+    double d2 = 0.0;
+    for (std::size_t x = 0; x < a.size(); ++x) {
+      const double span = spec.axes[x].values.empty() ? spec.axes[x].to - spec.axes[x].from : 1.0;
+      d2 += std::pow((b[x] - a[x]) / span, 2);
+    }
+    sum += std::sqrt(d2);
+  }
+  return sum / double(order.size() - 1);
+}
+
+TEST(SweepFile, RandomSamplesAreSolvedInNeighbourOrder) {
+  const std::string head = R"({"scene": ")" + kTipForceScene + R"(", "models": ["vc"], "sampling": "random",
+    "samples": 3000, "seed": 3, )";
+  const std::string axes2 = R"("axes": [{"field": "actuation.tensions[0]", "from": 0, "to": 5},
+    {"field": "loads.tip_force[1]", "from": 0, "to": 0.5}]})";
+  const tdcr::SweepSpec spec = tdcr::parse_sweep(head + axes2);
+  const std::uint64_t block = tdcr::sweep_block_size(spec);
+  EXPECT_GT(block, tdcr::kSweepBlock);
+  // The last block is partial; its order is a permutation of its samples.
+  const std::uint64_t first = 3000 / block * block;
+  std::vector<std::uint64_t> order, natural;
+  tdcr::sweep_solve_order(spec, first, 3000, order);
+  tdcr::sweep_solve_order(tdcr::parse_sweep(head + R"("order": "sample", )" + axes2), first, 3000, natural);
+  ASSERT_EQ(order.size(), 3000 - first);
+  std::vector<std::uint64_t> sorted = order;
+  std::sort(sorted.begin(), sorted.end());
+  EXPECT_EQ(sorted, natural);  // "order": "sample" keeps sample order
+  // Along the Hilbert curve through n uniform points of the unit square a step is about
+  // 1/sqrt(n) (here about 0.04); between unsorted samples about 0.52.
+  EXPECT_GT(mean_step(spec, natural), 0.4);
+  EXPECT_LT(mean_step(spec, order), 2.0 / std::sqrt(double(order.size())));
+  // One input axis: sorted by value. A grid keeps grid order.
+  const tdcr::SweepSpec one = tdcr::parse_sweep(head + R"("axes": [{"field": "loads.tip_force[2]", "from": 0.5, "to": -0.5}]})");
+  tdcr::sweep_solve_order(one, 0, tdcr::sweep_block_size(one), order);
+  std::vector<double> a, b;
+  for (std::size_t k = 1; k < order.size(); ++k) {
+    one.sample_values(order[k - 1], a);
+    one.sample_values(order[k], b);
+    ASSERT_LE(a[0], b[0]);
+  }
+  tdcr::sweep_solve_order(grid(), 0, 32, order);
+  for (std::size_t k = 0; k < order.size(); ++k) EXPECT_EQ(order[k], k);
+  // Scene axes first: a model serves a run of equal scenes (two moduli, two runs).
+  const tdcr::SweepSpec mixed = tdcr::parse_sweep(head + R"("axes": [{"field": "actuation.tensions[1]", "from": 1, "to": 2},
+    {"field": "robot.backbone.youngs_modulus", "values": [1e11, 2e11]}]})");
+  tdcr::sweep_solve_order(mixed, 0, tdcr::sweep_block_size(mixed), order);
+  int changes = 0;
+  for (std::size_t k = 1; k < order.size(); ++k) {
+    mixed.sample_values(order[k - 1], a);
+    mixed.sample_values(order[k], b);
+    changes += a[1] != b[1];
+  }
+  EXPECT_EQ(changes, 1);
 }
 
 TEST(SweepFile, RelativeScenePathIsTakenFromTheSweepFile) {
@@ -216,6 +279,37 @@ TEST(SweepRun, ThreadsDoNotChangeTheRows) {
   const double linear = 0.5 * 1e-3 / (3 * 2.11e11 * M_PI * std::pow(0.0004, 4) / 4);
   EXPECT_LT(std::stod(rows[14][7]), linear);
   EXPECT_GT(std::stod(rows[14][7]), 0.8 * linear);
+}
+
+TEST(SweepRun, NeighbourOrderWritesTheRowsOfSampleOrder) {
+  // Random samples solved along the Hilbert curve give the rows of a run in sample order: same
+  // samples, inputs, models and statuses, in sample order. The tips agree to the Newton
+  // tolerance (scaled residual 1e-10): other warm starts stop at another point within it, up to
+  // 1.2e-9 rad apart here, so 1e-8 m and rad.
+  const std::string head = R"({"scene": ")" + kTipForceScene + R"(", "models": ["vc", "ccsub"], "sampling": "random",
+    "samples": 80, "seed": 5, )";
+  const std::string axes = R"("axes": [{"field": "actuation.tensions[0]", "from": 0, "to": 5},
+    {"field": "loads.tip_force[1]", "from": 0, "to": 0.5}]})";
+  const std::string warm = tmp("warm.csv"), plain = tmp("plain.csv"), warm2 = tmp("warm2.csv");
+  const tdcr::SweepSpec spec = tdcr::parse_sweep(head + axes);
+  std::vector<std::uint64_t> order;
+  tdcr::sweep_solve_order(spec, 0, 80, order);
+  ASSERT_FALSE(std::is_sorted(order.begin(), order.end()));  // really solved out of order
+  tdcr::SweepRunOptions o;
+  o.threads = 1;
+  tdcr::run_sweep(spec, warm, o);
+  tdcr::run_sweep(tdcr::parse_sweep(head + R"("order": "sample", )" + axes), plain, o);
+  expect_same_rows(warm, plain, 1e-8);
+  const auto rows = rows_of(warm);
+  ASSERT_EQ(rows.size(), 160u);
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    EXPECT_EQ(std::stoul(rows[r][0]), r / 2);
+    EXPECT_EQ(rows[r][4], "converged");
+  }
+  // Threads and shards do not change the rows (the order is computed per block).
+  o.threads = 2;
+  tdcr::run_sweep(spec, warm2, o);
+  expect_same_rows(warm, warm2);
 }
 
 TEST(SweepRun, MergedShardsEqualOneRun) {

@@ -191,7 +191,7 @@ SweepSpec parse_sweep(const std::string& json_text, const std::string& source, c
     throw InputError(source, "", std::string("malformed JSON: ") + e.what());
   }
   if (!doc.is_object()) throw InputError(source, "", "a sweep file is a JSON object");
-  check_keys(doc, "", {"description", "scene", "models", "axes", "sampling", "samples", "seed"});
+  check_keys(doc, "", {"description", "scene", "models", "axes", "sampling", "samples", "seed", "order"});
   SweepSpec spec;
   spec.source = source;
 
@@ -242,6 +242,12 @@ SweepSpec parse_sweep(const std::string& json_text, const std::string& source, c
   } else {
     for (const char* k : {"samples", "seed"})
       if (doc.contains(k)) throw InputError(k, text_of(doc[k]), "applies to \"sampling\": \"random\" only");
+  }
+
+  if (doc.contains("order")) {
+    if (!doc["order"].is_string() || (doc["order"] != "warm_start" && doc["order"] != "sample"))
+      throw InputError("order", text_of(doc["order"]), "must be \"warm_start\" or \"sample\"");
+    spec.warm_order = doc["order"] == "warm_start";
   }
 
   if (!doc.contains("axes") || !doc["axes"].is_array() || doc["axes"].empty())

@@ -33,8 +33,9 @@ std::string csv_columns(const SweepSpec& spec) {
   return h + ",model,status,reason,tip_x,tip_y,tip_z,rot_x,rot_y,rot_z,iterations,solve_time_s\n";
 }
 
-std::string shard_line(const SweepShard& shard) {
-  return "# shard " + std::to_string(shard.index) + "/" + std::to_string(shard.count) + "\n";
+/// The shard line names the block size: the merge checks each shard's row count with it.
+std::string shard_line(const SweepShard& shard, std::uint64_t block) {
+  return "# shard " + std::to_string(shard.index) + "/" + std::to_string(shard.count) + " block=" + std::to_string(block) + "\n";
 }
 
 std::size_t count_lines(const std::string& s, std::size_t from) {
@@ -42,20 +43,21 @@ std::size_t count_lines(const std::string& s, std::size_t from) {
 }
 
 /// First sample of shard i of `count` over n samples (shards hold whole blocks).
-std::uint64_t shard_edge(std::uint64_t n, int i, int count) {
-  const std::uint64_t blocks = (n + kSweepBlock - 1) / kSweepBlock;
-  return std::min(n, blocks * static_cast<std::uint64_t>(i) / static_cast<std::uint64_t>(count) * kSweepBlock);
+std::uint64_t shard_edge(std::uint64_t n, std::uint64_t block, int i, int count) {
+  const std::uint64_t blocks = (n + block - 1) / block;
+  return std::min(n, blocks * static_cast<std::uint64_t>(i) / static_cast<std::uint64_t>(count) * block);
 }
 
 }  // namespace
 
 SampleRange shard_samples(const SweepSpec& spec, const SweepShard& shard) {
   const std::uint64_t n = spec.sample_count();
-  return {shard_edge(n, shard.index, shard.count), shard_edge(n, shard.index + 1, shard.count)};
+  const std::uint64_t block = sweep_block_size(spec);
+  return {shard_edge(n, block, shard.index, shard.count), shard_edge(n, block, shard.index + 1, shard.count)};
 }
 
 std::string sweep_header(const SweepSpec& spec, const SweepShard& shard) {
-  return hash_line(spec) + (shard.count > 1 ? shard_line(shard) : "") + csv_columns(spec);
+  return hash_line(spec) + (shard.count > 1 ? shard_line(shard, sweep_block_size(spec)) : "") + csv_columns(spec);
 }
 
 std::uint64_t prepare_sweep_output(const std::string& path, const SweepSpec& spec, const SweepShard& shard) {
@@ -94,6 +96,7 @@ void merge_sweep_shards(const std::string& out, const std::vector<std::string>& 
   std::vector<Part> parts;
   std::string first_line, columns;
   int count = -1;
+  std::uint64_t block = 0;
   for (const std::string& path : shards) {
     const std::string text = read_all(path);
     std::istringstream in(text);
@@ -102,10 +105,13 @@ void merge_sweep_shards(const std::string& out, const std::vector<std::string>& 
     std::getline(in, l2);
     std::getline(in, l3);
     int i = -1, n = -1;
-    if (l1.rfind("# tdcr sweep ", 0) != 0 || std::sscanf(l2.c_str(), "# shard %d/%d", &i, &n) != 2 || i < 0 || n < 1 || i >= n)
+    unsigned long long b = 0;
+    if (l1.rfind("# tdcr sweep ", 0) != 0 || std::sscanf(l2.c_str(), "# shard %d/%d block=%llu", &i, &n, &b) != 3 || i < 0 ||
+        n < 1 || i >= n || b < 1)
       throw InputError(path, l2, "is not a shard file of tdcr sweep --shard i/N");
-    if (parts.empty()) first_line = l1, columns = l3, count = n;
+    if (parts.empty()) first_line = l1, columns = l3, count = n, block = b;
     if (l1 != first_line || l3 != columns) throw InputError(path, l1, "belongs to another sweep than " + parts[0].path);
+    if (b != block) throw InputError(path, l2, "has blocks of " + std::to_string(b) + " samples, the others of " + std::to_string(block));
     if (n != count) throw InputError(path, l2, "is a shard of /" + std::to_string(n) + ", the others of /" + std::to_string(count));
     for (const Part& p : parts)
       if (p.index == i) throw InputError(path, l2, "shard given twice (also " + p.path + ")");
@@ -121,7 +127,7 @@ void merge_sweep_shards(const std::string& out, const std::vector<std::string>& 
   std::sscanf(first_line.c_str(), "# tdcr sweep %*s samples=%llu", &samples);
   const std::size_t models = static_cast<std::size_t>(std::count(first_line.begin(), first_line.end(), ',')) + 1;
   for (const Part& p : parts) {
-    const std::size_t expected = (shard_edge(samples, p.index + 1, count) - shard_edge(samples, p.index, count)) * models;
+    const std::size_t expected = (shard_edge(samples, block, p.index + 1, count) - shard_edge(samples, block, p.index, count)) * models;
     const std::size_t got = count_lines(p.rows, 0);
     if (got != expected || (!p.rows.empty() && p.rows.back() != '\n'))
       throw InputError(p.path, std::to_string(got) + " of " + std::to_string(expected) + " rows",

@@ -67,7 +67,8 @@ SweepRunStats run_sweep(const SweepSpec& spec, const std::string& path, const Sw
 
   // Blocks are aligned to absolute sample numbers; a resumed block is solved from its start
   // (same warm starts as an uninterrupted run) but writes only the samples still missing.
-  const std::uint64_t b0 = stats.first_sample / kSweepBlock, b1 = (range.end + kSweepBlock - 1) / kSweepBlock;
+  const std::uint64_t block = sweep_block_size(spec);
+  const std::uint64_t b0 = stats.first_sample / block, b1 = (range.end + block - 1) / block;
   const unsigned hw = std::max(1u, std::thread::hardware_concurrency());
   const int threads = static_cast<int>(std::min<std::uint64_t>(options.threads > 0 ? options.threads : hw, b1 - b0));
   std::atomic<std::uint64_t> next{b0};
@@ -80,7 +81,7 @@ SweepRunStats run_sweep(const SweepSpec& spec, const std::string& path, const Sw
     SweepSolver solver(spec);
     for (std::uint64_t b = next++; b < b1; b = next++) {
       std::string rows;
-      solver.solve_range(std::max(b * kSweepBlock, range.begin), std::min((b + 1) * kSweepBlock, range.end),
+      solver.solve_range(std::max(b * block, range.begin), std::min((b + 1) * block, range.end),
                          stats.first_sample, rows);
       std::lock_guard<std::mutex> lock(mutex);
       done.emplace(b, std::move(rows));
@@ -101,7 +102,7 @@ SweepRunStats run_sweep(const SweepSpec& spec, const std::string& path, const Sw
       done.erase(b);
     }
     ok = ok && std::fwrite(rows.data(), 1, rows.size(), out) == rows.size() && std::fflush(out) == 0;
-    stats.samples_solved = std::min((b + 1) * kSweepBlock, range.end) - stats.first_sample;
+    stats.samples_solved = std::min((b + 1) * block, range.end) - stats.first_sample;
     progress.update(stats.samples_solved, b + 1 == b1);
   }
   for (std::thread& t : pool) t.join();

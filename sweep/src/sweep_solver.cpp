@@ -1,4 +1,5 @@
 // One thread's solver of sweep samples: models, workspaces, warm starts, CSV rows.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <exception>
@@ -42,6 +43,8 @@ struct SweepSolver::Impl {
   const SweepSpec& spec;
   std::vector<Slot> slots;
   std::vector<double> values, scene_key;
+  std::vector<std::uint64_t> order;     // the block's solve order
+  std::vector<std::string> sample_rows;  // rows of a block solved out of sample order
   Scene scene;
   std::string scene_error;  // why the current scene cannot be built (bad combination of axes)
   bool built = false;
@@ -95,31 +98,37 @@ SweepSolver::~SweepSolver() = default;
 void SweepSolver::solve_range(std::uint64_t first, std::uint64_t last, std::uint64_t emit_from, std::string& rows) {
   Impl& d = *impl_;
   for (Impl::Slot& s : d.slots) s.warm = false;
-  for (std::uint64_t i = first; i < last; ++i) {
+  sweep_solve_order(d.spec, first, last, d.order);
+  // Solved out of sample order: each sample's rows are kept until the block is done.
+  const bool sorted = std::is_sorted(d.order.begin(), d.order.end());
+  d.sample_rows.assign(sorted ? 0 : d.order.size(), std::string());
+  for (std::uint64_t i : d.order) {
     d.spec.sample_values(i, d.values);
     d.update_scene();
     const bool emit = i >= emit_from;
+    std::string& out = sorted ? rows : d.sample_rows[i - first];
     for (std::size_t m = 0; m < d.slots.size(); ++m) {
       Impl::Slot& slot = d.slots[m];
       if (!slot.model) {
-        if (emit) d.row(rows, i, m, "input_error", d.scene_error, nullptr);
+        if (emit) d.row(out, i, m, "input_error", d.scene_error, nullptr);
         continue;
       }
       try {
         const ModelInput input = d.spec.input_with(d.scene, d.values);
         Solution s = solve(*slot.model, *slot.workspace, input, d.scene.solver, slot.warm ? &slot.previous : nullptr);
-        if (emit) d.row(rows, i, m, to_string(s.summary.termination).c_str(), s.summary.message, &s);
+        if (emit) d.row(out, i, m, to_string(s.summary.termination).c_str(), s.summary.message, &s);
         slot.warm = s.converged();
         if (slot.warm) slot.previous = std::move(s);
       } catch (const InputError& e) {
         slot.warm = false;
-        if (emit) d.row(rows, i, m, "input_error", e.what(), nullptr);
+        if (emit) d.row(out, i, m, "input_error", e.what(), nullptr);
       } catch (const std::exception& e) {
         slot.warm = false;
-        if (emit) d.row(rows, i, m, "error", e.what(), nullptr);
+        if (emit) d.row(out, i, m, "error", e.what(), nullptr);
       }
     }
   }
+  for (const std::string& r : d.sample_rows) rows += r;
 }
 
 }  // namespace tdcr

@@ -12,6 +12,8 @@
 /// "sampling": "grid" (default; the Cartesian product of the axes, the last axis fastest) or
 /// "random" with "samples" and "seed" (each axis drawn uniformly from [from, to], or from its
 /// "values"); the values of sample i depend only on (seed, i, axis), never on threads or shards.
+/// "order": "warm_start" (default: random samples are solved in neighbour order, see
+/// sweep_solve_order) or "sample" (solved in sample order).
 #pragma once
 
 #include <cstdint>
@@ -55,6 +57,7 @@ struct SweepSpec {
   bool random = false;            ///< Random sampling (else grid).
   std::uint64_t random_samples = 0;  ///< Random sampling: number of samples.
   std::uint64_t seed = 0;            ///< Random sampling: the seed.
+  bool warm_order = true;  ///< "order": "warm_start" (default) or "sample" (random samples unsorted).
   std::uint64_t hash = 0;  ///< FNV-1a of the canonical sweep (axes, models, base scene): resume check.
 
   /// @brief Number of samples (grid: product of the axis sizes).

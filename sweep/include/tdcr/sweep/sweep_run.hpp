@@ -2,11 +2,12 @@
 /// @brief Running a sweep: solving samples with warm starts, the CSV output (resumable, in
 /// sample order whatever the thread count), shards for job arrays and their merge.
 ///
-/// The samples are cut into blocks of kSweepBlock consecutive samples. A block is solved in
-/// order by one thread with one model and workspace per model, each sample warm-started from the
-/// previous sample of the block if that converged; the first sample of a block starts cold. The
-/// rows therefore depend on the sweep only, not on the threads, shards or MPI ranks that
-/// solved them (the solve time column aside).
+/// The samples are cut into blocks of consecutive samples (sweep_block_size). A block is solved
+/// by one thread with one model and workspace per model, in its solve order (sweep_solve_order:
+/// grid order, or random samples sorted along a Hilbert curve), each sample warm-started from the
+/// previously solved sample of the block if that converged; the first one starts cold. The rows
+/// are written in sample order and depend on the sweep only, not on the threads, shards or MPI
+/// ranks that solved them (the solve time column aside).
 ///
 /// The output file starts with `# tdcr sweep <hash> ...` (the sweep file's hash: a rerun into a
 /// file of another sweep is refused), for a shard a `# shard i/N` line, then the CSV header
@@ -23,8 +24,21 @@
 
 namespace tdcr {
 
-/// Samples per block (the unit of work and of warm-start chains).
+/// Samples per block of a grid (the unit of work and of warm-start chains), in grid order.
 constexpr std::uint64_t kSweepBlock = 32;
+/// Samples per block of a random sweep solved in Hilbert order: enough for near neighbours
+/// (docs/sweeps.md, "Solve order"), few enough to share 1e5 samples among many threads.
+constexpr std::uint64_t kSweepRandomBlock = 2048;
+
+/// @brief The block size of `spec`: kSweepRandomBlock for random samples in warm-start order,
+/// else kSweepBlock.
+std::uint64_t sweep_block_size(const SweepSpec& spec);
+
+/// @brief The order in which samples [first, last) (one block) are solved. A grid, or a sweep
+/// with "order": "sample", keeps sample order. Random samples are sorted by the values of their
+/// scene axes (a model serves a run of equal scenes), then along a Hilbert curve through the
+/// input axes normalised to [0, 1], so that consecutive samples are near neighbours.
+void sweep_solve_order(const SweepSpec& spec, std::uint64_t first, std::uint64_t last, std::vector<std::uint64_t>& order);
 
 /// @brief Part i of N of a sweep (whole blocks; shard i of N solves the i-th contiguous part).
 struct SweepShard {
@@ -47,8 +61,8 @@ class SweepSolver {
   /// @brief A solver of `spec`'s samples (the models are built at the first sample).
   explicit SweepSolver(const SweepSpec& spec);
   ~SweepSolver();  ///< Frees the models and workspaces.
-  /// @brief Solves samples [first, last) in order (cold at `first`) and appends the CSV rows of
-  /// samples >= emit_from to `rows`. A sample that fails or whose input is refused is a row
+  /// @brief Solves the block [first, last) in its solve order (cold at its first sample) and
+  /// appends the CSV rows of samples >= emit_from to `rows`, in sample order. A sample that fails or whose input is refused is a row
   /// with its status and reason, never an exception.
   void solve_range(std::uint64_t first, std::uint64_t last, std::uint64_t emit_from, std::string& rows);
 
