@@ -370,7 +370,7 @@ void effects(const Settings& cfg) {
                                  for (auto& g : s.robot.segments) g.disk_mass = 2e-4; }},
       {"no_shear_extension", [](Scene& s) { s.effects.shear_extension = false; }},
       {"disk_normal_force_kept", [](Scene& s) { s.effects.disk_normal_force = DiskNormalForce::Kept; }},
-      {"tendon_friction", [](Scene& s) { s.effects.tendon_friction.coefficient = 0.1; }},  // VC refuses it
+      {"tendon_friction", [](Scene& s) { s.effects.tendon_friction.coefficient = 0.1; }},
   };
   for (ModelKind kind : {ModelKind::CCsub, ModelKind::PRB, ModelKind::VC, ModelKind::VCref}) {
     for (const Variant& v : variants) {

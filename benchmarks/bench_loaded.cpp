@@ -180,6 +180,14 @@ std::vector<Candidate> candidates(ModelKind k) {
         o.rk4_max_step = h;
         c.push_back({"rk4 " + std::to_string(steps) + "/interval h<=" + (std::isinf(h) ? "inf" : fmt(h * 1e3) + "mm"), o});
       }
+    if (k == ModelKind::VCref)  // VCref's 1e-8 m lies between the 1 mm and 0.5 mm bounds
+      for (int steps : {1, 2})
+        for (double h : {8e-4, 7e-4, 6e-4}) {
+          SolverOptions o;
+          o.rk4_steps = steps;
+          o.rk4_max_step = h;
+          c.push_back({"rk4 " + std::to_string(steps) + "/interval h<=" + fmt(h * 1e3) + "mm", o});
+        }
     for (double rtol : {1e-6, 1e-8}) {
       SolverOptions o;
       o.integrator = IntegratorKind::Cvode;

@@ -3,12 +3,13 @@
 narrative template benchmarks/report_template.md, so that every number in the page comes from a
 measured table and none is copied by hand.
 
-usage: make_report.py RESULTS_DIR TEMPLATE OUTPUT
+usage: make_report.py RESULTS_DIR TEMPLATE OUTPUT [--readme README.md]
 """
 import csv
 import math
 import os
 import sys
+import textwrap
 
 res, template, output = sys.argv[1:4]
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -209,14 +210,18 @@ for r in loaded_opt:
                     f"{metres(r['max_tip_err_ref_m'])} | {time_us(r['median_us'])} | "
                     f"{'yes' if r['within_tol'] == '1' else 'no'} | {'**yes**' if r['chosen'] == '1' else ''} |")
 tables["loaded_options"] = "\n".join(rows)
+# The largest tip error of a trajectory's 4 checked steps (nan, shown as "-", if a check failed).
+def traj_error(r):
+    errs = [float(r[k]) for k in ("tip_err_quarter_m", "tip_err_half_m", "tip_err_three_quarter_m", "tip_err_end_m")]
+    return float("nan") if any(math.isnan(e) for e in errs) else max(errs)
+
+
 rows = ["| model | options | steps | rate | per step | Newton iterations per step (max) | failed | "
         "max tip error vs tight reference (4 steps) |", "| --- " * 8 + "|"]
 for r in traj:
-    errs = [float(r[k]) for k in ("tip_err_quarter_m", "tip_err_half_m", "tip_err_three_quarter_m", "tip_err_end_m")]
-    errs = [float("nan")] if any(math.isnan(e) for e in errs) else errs  # a failed check shows as "-"
     rows.append(f"| {LABEL[r['model']]} | {r['options']} | {r['steps']} | {f(r['rate_hz'])} Hz | "
                 f"{time_us(r['mean_us_per_step'])} | {f(r['mean_iterations'])} ({r['max_iterations']}) | {r['failed']} | "
-                f"{metres(max(errs))} |")
+                f"{metres(traj_error(r))} |")
 tables["trajectory"] = "\n".join(rows)
 stamp = ""
 if os.path.exists(os.path.join(res, "loaded_summary.csv")):
@@ -224,8 +229,71 @@ if os.path.exists(os.path.join(res, "loaded_summary.csv")):
         stamp = fh.readline().lstrip("# ").rstrip()
 tables["loaded_machine"] = stamp
 
+# Soft robots under tip forces (bench_soft); left empty if the results hold no soft.csv.
+tables["soft_summary"] = tables["soft_table"] = tables["soft_machine"] = ""
+if os.path.exists(os.path.join(res, "soft.csv")):
+    soft = read("soft.csv")
+    with open(os.path.join(res, "soft.csv")) as fh:
+        tables["soft_machine"] = "Run: " + fh.readline().lstrip("# ").rstrip() + "."
+    rows = ["| model | converged / scenes | ratio to the fastest: median | max | soft scenes (E < 1): median CPU time | max |",
+            "| --- " * 6 + "|"]
+    for m in ["ccsub", "prb", "vc", "vcref"]:
+        mine = [r for r in soft if r["model"] == m]
+        ok = [r for r in mine if r["status"] == "converged"]
+        ratios = sorted(float(r["ratio_to_fastest"]) for r in ok)
+        cpu = sorted(float(r["median_cpu_us"]) for r in mine if float(r["e_factor"]) < 1 and r["status"] == "converged")
+        med = lambda v: v[len(v) // 2] if len(v) % 2 else 0.5 * (v[len(v) // 2 - 1] + v[len(v) // 2])
+        rows.append(f"| {LABEL[m]} | {len(ok)} / {len(mine)} | {f(med(ratios)) if ratios else '-'}x | "
+                    f"{f(ratios[-1]) if ratios else '-'}x | {time_us(med(cpu)) if cpu else '-'} | "
+                    f"{time_us(cpu[-1]) if cpu else '-'} |")
+    tables["soft_summary"] = "\n".join(rows)
+    rows = ["| scene | force | model | status | continuation steps | iterations | median time (CPU) | "
+            "ratio to the fastest | tip distance to VCref |", "| --- " * 9 + "|"]
+    for r in soft:
+        dist = float(r["tip_dist_vcref_m"]) if r["tip_dist_vcref_m"] not in ("", "nan") else float("nan")
+        rows.append(f"| {r['scene']} | {float(r['force_n']):.2f} N | {LABEL[r['model']]} | {r['status']} | "
+                    f"{r['continuation_steps']} | {r['iterations']} | {time_us(r['median_cpu_us'])} | "
+                    f"{f(r['ratio_to_fastest'])}x | {'-' if r['model'] == 'vcref' else metres(dist)} |")
+    tables["soft_table"] = "\n".join(rows)
+
 with open(os.path.join(res, "machine.txt")) as fh:
     tables["machine"] = "; ".join(line.lstrip("# ").rstrip() for line in fh if line.strip())
+
+# README's speed sentence (issue 13): unloaded and loaded speed-ups side by side, from the same
+# tables, written between the markers of README.md when --readme is given.
+def readme_speed():
+    parts = []
+    for m in ["ccsub", "prb", "vc", "vcref"]:
+        r = s1_row(10, m)
+        ls = [x for x in loaded_sum if x["model"] == m]
+        if not r or not ls:
+            return None
+        # The fastest options within the tip tolerance: "matched" if the benchmark chose one, else default.
+        chosen = [x for x in loaded_opt if x["model"] == m and x["chosen"] == "1"]
+        pick = [x for x in ls if chosen and x["options"] == chosen[0]["options"]] or ls[:1]
+        t = [x for x in traj if x["model"] == m and x["options"] == pick[0]["options"]]
+        parts.append(f"{LABEL[m]} {f(r['speedup'])}x unloaded, {f(pick[0]['speedup_median'])}x median / "
+                     f"{f(pick[0]['speedup_min'])}x min loaded ({pick[0]['options']}"
+                     + (f"; trajectory {f(t[0]['rate_hz'])} Hz at tip error {metres(traj_error(t[0]))}" if t else "")
+                     + ")")
+    text = ("Speed-ups against the paper's own code, generated from the tables of docs/benchmarks.md "
+            "(unloaded: n = 10, configuration (T_M, 0, 0, 0); loaded: its 60 random cases with tip forces, "
+            "n = 3-20, median and minimum over the cases at tip error <= 1e-8 m; trajectory: n = 10, "
+            "0.05 N tip force, 1000 warm-started steps): " + "; ".join(parts) + ".")
+    return textwrap.fill(text, width=100, initial_indent="  ", subsequent_indent="  ", break_on_hyphens=False)
+
+
+if "--readme" in sys.argv:
+    readme = sys.argv[sys.argv.index("--readme") + 1]
+    sentence = readme_speed()
+    body = open(readme).read()
+    begin, end = "<!-- speed:begin (benchmarks/make_report.py) -->", "<!-- speed:end -->"
+    if sentence and begin in body and end in body:
+        head, rest = body.split(begin, 1)
+        body = head + begin + "\n" + sentence + "\n" + end + rest.split(end, 1)[1]
+        with open(readme, "w") as fh:
+            fh.write(body)
+        print(f"updated {readme}")
 
 text = open(template).read()
 for k, v in tables.items():

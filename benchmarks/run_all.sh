@@ -22,8 +22,9 @@ py=/usr/bin/python3; [ -x "$py" ] || py=python3
 "$build/bin/bench_vc" $quick | tee "$out/bench_vc.txt"
 "$build/bin/bench_lumped" $quick | tee "$out/bench_lumped.txt"
 "$build/bin/bench_loaded" $quick --out "$out"
+"$build/bin/bench_soft" $quick --out "$out" | tee "$out/bench_soft.txt"
 "$py" benchmarks/plot_results.py "$out" "$out"
 if [ "$out" = docs/benchmark-results ]; then
-  "$py" benchmarks/make_report.py "$out" benchmarks/report_template.md docs/benchmarks.md
+  "$py" benchmarks/make_report.py "$out" benchmarks/report_template.md docs/benchmarks.md --readme README.md
 fi
 echo "results and figures in $out"
