@@ -175,6 +175,40 @@ TEST(BvpArclength, SnapAtFoldLandsOnTheUpperBranch) {
     EXPECT_TRUE(p.value <= -1.0 / std::sqrt(3.0) + 1e-6 || p.value >= 2.0 / std::sqrt(3.0)) << p.value;
 }
 
+// The same path with a fold_limit that names the fold a limit of the system: no snap is tried,
+// the run stalls at the fold (returning the last point before it, on the lower branch) and the
+// message carries the hook's reason. The hook sees the fold point itself (x^3 - x = lambda, x at
+// -1/sqrt(3)).
+TEST(BvpArclength, FoldNamedALimitIsNotSnapped) {
+  FnSystem s = s_curve();
+  Vec x = Vec::Constant(1, -1.2);
+  ArclengthOptions o = s_curve_path(FoldAction::Snap);
+  int calls = 0;
+  double x_fold = 0.0, lambda_fold = 0.0;
+  o.fold_limit = [&](const Vec& xf, double lambda) {
+    ++calls;
+    x_fold = xf[0];
+    lambda_fold = lambda;
+    return std::string("the test's limit");
+  };
+  const ArclengthResult r = follow(s, x, o);
+  EXPECT_EQ(r.status, ArclengthStatus::Stalled);
+  EXPECT_EQ(calls, 1);
+  EXPECT_NEAR(x_fold, -1.0 / std::sqrt(3.0), 1e-4);
+  EXPECT_NEAR(lambda_fold, kFold, 1e-6);
+  EXPECT_NE(r.message.find("the test's limit"), std::string::npos) << r.message;
+  for (const auto& e : r.events) EXPECT_NE(e.type, ArclengthEventType::Snap);
+  EXPECT_LE(x[0], -1.0 / std::sqrt(3.0) + 1e-6);  // still on the lower branch
+  EXPECT_LT(r.parameter, kFold + 1e-9);
+
+  // A hook that returns "" lets the snap happen as before.
+  Vec x2 = Vec::Constant(1, -1.2);
+  o.fold_limit = [](const Vec&, double) { return std::string(); };
+  const ArclengthResult r2 = follow(s, x2, o);
+  ASSERT_TRUE(r2.converged()) << r2.message;
+  EXPECT_NEAR(x2[0], kPlastic, 1e-10);
+}
+
 // A fold beyond which the curve never comes back: (x^2 + lambda)(x - 3) = 0 from x = -1 at
 // lambda = -1 towards lambda = 1. Followed around the fold at (0, 0) the path heads back down
 // the branch x = sqrt(-lambda) and leaves the parameter window (stalled, never reached); with
@@ -410,6 +444,8 @@ TEST(BvpArclength, OptionsValidationNamesTheField) {
   EXPECT_EQ(field_of([](ArclengthOptions& o) { o.snap_perturbation = 0.0; }), "arclength.snap_perturbation");
   EXPECT_EQ(field_of([](ArclengthOptions& o) { o.snap_tries = 0; }), "arclength.snap_tries");
   EXPECT_EQ(field_of([](ArclengthOptions& o) { o.snap_max_iterations = 0; }), "arclength.snap_max_iterations");
+  EXPECT_EQ(field_of([](ArclengthOptions& o) { o.corrector_max_iterations = 0; }),
+            "arclength.corrector_max_iterations");
 
   // arclength_continuation() validates too, before touching x.
   FnSystem s = s_curve();

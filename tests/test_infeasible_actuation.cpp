@@ -97,6 +97,9 @@ TEST(InfeasibleActuation, VcNamesTheArcLengthOfLargestCurvature) {
   const std::string& msg = sol.summary.message;
   ASSERT_EQ(sol.summary.termination, TerminationType::Infeasible) << msg;
   EXPECT_NE(msg.find("tendon T1 (index 0)"), std::string::npos) << msg;
+  // The path folds where the tendon reaches its limit: named there, with no snap tried.
+  EXPECT_NE(msg.find("no snap tried at the fold: infeasible actuation"), std::string::npos) << msg;
+  for (const PathEvent& e : sol.path_events) EXPECT_NE(e.type, PathEvent::Type::Snap) << msg;
   const auto at = msg.find("at s = ");
   ASSERT_NE(at, std::string::npos) << msg;
   double s_rep = NAN;

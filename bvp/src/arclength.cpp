@@ -46,6 +46,7 @@ void ArclengthOptions::validate() const {
   positive("snap_perturbation", snap_perturbation);
   if (snap_tries < 1) fail("snap_tries", snap_tries, "must be at least 1");
   if (snap_max_iterations < 1) fail("snap_max_iterations", snap_max_iterations, "must be at least 1");
+  if (corrector_max_iterations < 1) fail("corrector_max_iterations", corrector_max_iterations, "must be at least 1");
 }
 
 std::string to_string(ArclengthEventType t) {
@@ -94,6 +95,7 @@ class Run {
       : newton_(newton), sys_(system), nopt_(newton_options), opt_(options), res_(result),
         n_(system.size()), span_(options.target - options.start), dir_(span_ > 0.0 ? 1.0 : -1.0),
         bordered_(system, std::abs(span_)), w_(bordered_.weights()) {
+    corrector_.max_iterations = std::min(nopt_.max_iterations, opt_.corrector_max_iterations);
     for (Point* p : {&prev_, &cur_, &probe_, &best_, &fold_, &bif_, &a_, &b_}) p->resize(n_ + 1);
     y_pred_.resize(n_ + 1);
     guess_.resize(n_ + 1);
@@ -137,6 +139,7 @@ class Run {
   NewtonSolver& newton_;
   ParameterizedSystem& sys_;
   const NewtonOptions& nopt_;
+  NewtonOptions corrector_ = nopt_;  // nopt_ with ArclengthOptions::corrector_max_iterations
   const ArclengthOptions& opt_;
   ArclengthResult& res_;
   const int n_;
@@ -171,7 +174,7 @@ bool Run::correct(const Point& from, double sigma, const Eigen::VectorXd& guess,
   y_pred_ = from.y + sigma * from.t.cwiseQuotient(w_);
   bordered_.set_border(from.t, y_pred_);
   out.y = guess;
-  count(newton_.solve(bordered_, out.y, nopt_), false);
+  count(newton_.solve(bordered_, out.y, corrector_), false);
   out.s = from.s + sigma;
   return res_.last.converged() && out.y.allFinite() && tangent(out, from.t);
 }
@@ -309,6 +312,13 @@ bool Run::snap(const Point& fold) {
     return false;
   }
   phi_ /= norm;
+  if (opt_.fold_limit) {
+    const std::string limit = opt_.fold_limit(fold.y.head(n_), lambda(fold));
+    if (!limit.empty()) {
+      stall("no snap tried at the fold: " + limit);
+      return false;
+    }
+  }
   NewtonOptions attempt = nopt_;
   attempt.max_iterations = std::min(nopt_.max_iterations, opt_.snap_max_iterations);
   for (double overshoot = opt_.snap_overshoot; overshoot <= std::max(0.1 + 1e-12, opt_.snap_overshoot); overshoot *= 10.0) {

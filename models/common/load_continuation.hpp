@@ -33,7 +33,11 @@ class ModelProblem;
 ///        positions of ModelProblem::tip_position()).
 /// @param first_step First step (0: the arclength default), in scaled arclength.
 /// @param purpose Why the path is followed, for the message.
-bvp::ArclengthResult follow_loading_path(ModelProblem& P, bvp::ParameterizedSystem& system, Eigen::VectorXd& x,
+/// @param routing The robot's tendons: a fold where a tensioned tendon is at its geometric limit
+///        (curvature x offset >= physics::kTendonLimitWarn) is not snapped; the path stops there
+///        and the driver names the actuation infeasible.
+bvp::ArclengthResult follow_loading_path(ModelProblem& P, const TendonRouting& routing,
+                                         bvp::ParameterizedSystem& system, Eigen::VectorXd& x,
                                          const bvp::NewtonOptions& newton_options, const SolverOptions& options,
                                          SolverSummary& sum, std::vector<PathEvent>& events, double first_step,
                                          const std::string& purpose);

@@ -72,10 +72,13 @@ class ModelProblem {
   }
   /// Called when loading from rest stopped short of full load, after extract() at x, the
   /// equilibrium at the load factor reached (the system's parameter): true and a one-line reason
-  /// if the stop is a physical limit (a tendon at its geometric limit) rather than a numerical
-  /// failure. Default: no model-specific test (the driver still checks the extracted disk frames).
-  virtual bool infeasibility(const Eigen::VectorXd& x, std::string& why) {
+  /// if the stop is a physical limit (a tendon with curvature x offset >= threshold, see
+  /// physics/geometry_check.hpp) rather than a numerical failure. Also called at a fold of the
+  /// loading path, after extract() there, to tell a tendon-limit fold (no snap is tried) from a
+  /// snap. Default: no model-specific test (the driver still checks the extracted disk frames).
+  virtual bool infeasibility(const Eigen::VectorXd& x, double threshold, std::string& why) {
     (void)x;
+    (void)threshold;
     (void)why;
     return false;
   }

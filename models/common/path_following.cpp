@@ -5,6 +5,7 @@
 
 #include "common/load_continuation.hpp"
 #include "common/model_problem.hpp"
+#include "physics/geometry_check.hpp"
 
 namespace tdcr::detail {
 
@@ -21,7 +22,8 @@ PathEvent::Type event_type(bvp::ArclengthEventType t) {
 
 }  // namespace
 
-bvp::ArclengthResult follow_loading_path(ModelProblem& P, bvp::ParameterizedSystem& system, Eigen::VectorXd& x,
+bvp::ArclengthResult follow_loading_path(ModelProblem& P, const TendonRouting& routing,
+                                         bvp::ParameterizedSystem& system, Eigen::VectorXd& x,
                                          const bvp::NewtonOptions& newton_options, const SolverOptions& options,
                                          SolverSummary& sum, std::vector<PathEvent>& events, double first_step,
                                          const std::string& purpose) {
@@ -36,6 +38,20 @@ bvp::ArclengthResult follow_loading_path(ModelProblem& P, bvp::ParameterizedSyst
     system.set_parameter(lambda);
     Vec3 tip;
     return P.tip_position(xe, tip) ? Eigen::VectorXd(tip) : Eigen::VectorXd();
+  };
+  // A fold where a tendon reaches its geometric limit is where the actuation becomes infeasible
+  // (the curvature the tension asks for puts the tendon at the centre of curvature): there is
+  // no branch to snap to, and the snap attempts near the singular geometry would cost hundreds
+  // of Newton iterations (tests/test_infeasible_actuation.cpp).
+  a.fold_limit = [&P, &routing, &system](const Eigen::VectorXd& xf, double lambda) {
+    system.set_parameter(lambda);
+    Eigen::VectorXd f(xf.size());
+    Solution at_fold;
+    P.extract(xf, P.final_residual(xf, f), at_fold);
+    std::string why;
+    if (!P.infeasibility(xf, physics::kTendonLimitWarn, why))
+      physics::tendon_limit(routing, at_fold, physics::kTendonLimitWarn, why);
+    return why;
   };
   system.set_parameter(0.0);
   P.rest_state(x);

@@ -75,7 +75,9 @@ bool final_check(detail::ModelProblem& P, bvp::ParameterizedSystem& sys, const E
 void name_infeasibility(detail::ModelProblem& P, const TendonRouting& routing, const Eigen::VectorXd& x,
                         double reached, Solution& sol) {
   std::string why;
-  if (!P.infeasibility(x, why) && !physics::tendon_limit(routing, sol, why)) return;
+  if (!P.infeasibility(x, physics::kTendonLimitNear, why) &&
+      !physics::tendon_limit(routing, sol, physics::kTendonLimitNear, why))
+    return;
   char buf[64];
   std::snprintf(buf, sizeof buf, ", reached at %.1f %% of the load; ", 100.0 * reached);
   sol.summary.termination = TerminationType::Infeasible;
@@ -143,7 +145,7 @@ double solve_on_loading_path(const StaticModel& model, const ModelInput& input, 
   const detail::ColdStart cold = P.cold_start();
   const std::string reason = warm ? "" : path_reason(model, input, cold);
   if (!reason.empty() && options.continuation)
-    return detail::follow_loading_path(P, sys, x, nopt, options, sum, sol.path_events, cold.first_step, reason)
+    return detail::follow_loading_path(P, model.routing(), sys, x, nopt, options, sum, sol.path_events, cold.first_step, reason)
         .parameter;
   const bool input_path = warm && options.continuation && has_previous_input(*warm_start, input);
   if (!warm) P.cold_guess(x);
@@ -167,7 +169,7 @@ double solve_on_loading_path(const StaticModel& model, const ModelInput& input, 
     x = guess;
     why += "; then the input path from the warm start failed: " + sum.message;
   }
-  return detail::follow_loading_path(P, sys, x, nopt, options, sum, sol.path_events, cold.first_step, why).parameter;
+  return detail::follow_loading_path(P, model.routing(), sys, x, nopt, options, sum, sol.path_events, cold.first_step, why).parameter;
 }
 
 // Solution::tip_jacobian and tip_compliance of a converged answer at unknowns x.

@@ -175,11 +175,11 @@ void check_geometry(const Robot& robot, const TendonRouting& rt, Solution& sol, 
   }
 }
 
-bool tendon_limit(const TendonRouting& rt, const Solution& sol, std::string& why) {
+bool tendon_limit(const TendonRouting& rt, const Solution& sol, double threshold, std::string& why) {
   const std::vector<Frame>& f = sol.disk_frames;
   if (static_cast<int>(f.size()) != rt.disk_count()) return false;
   int k = -1, jw = -1;
-  double worst = kTendonLimitNear;
+  double worst = threshold;
   for (const RoutedTendon& t : rt.tendons) {
     if (t.index >= static_cast<int>(sol.tensions.size()) || !(sol.tensions[t.index] > 0.0)) continue;
     for (int j = 1; j <= t.end_disk; ++j) {

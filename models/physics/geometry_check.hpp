@@ -40,7 +40,8 @@ void check_geometry(const Robot& robot, const TendonRouting& routing, Solution& 
                     double max_curvature = -1.0);
 
 /// For the equilibrium where a loading path stopped (solution's disk frames): true and the reason
-/// in `why` if a tensioned tendon (solution.tensions) has curvature x offset >= kTendonLimitNear.
-bool tendon_limit(const TendonRouting& routing, const Solution& solution, std::string& why);
+/// in `why` if a tensioned tendon (solution.tensions) has curvature x offset >= threshold
+/// (kTendonLimitNear where a path stopped; kTendonLimitWarn at a fold, where a path would snap).
+bool tendon_limit(const TendonRouting& routing, const Solution& solution, double threshold, std::string& why);
 
 }  // namespace tdcr::physics

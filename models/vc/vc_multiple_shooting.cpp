@@ -173,7 +173,9 @@ class MultipleShooting final : public detail::ModelProblem {
   }
   // Node 0 holds the base wrench (states 12..17).
   Stability stability(const Eigen::VectorXd& x) override { return conjugate_point_test(W_, Vec6(x.segment<6>(12))); }
-  bool infeasibility(const Eigen::VectorXd&, std::string& why) override { return tendon_limit(W_, why); }
+  bool infeasibility(const Eigen::VectorXd&, double threshold, std::string& why) override {
+    return tendon_limit(W_, threshold, why);
+  }
   std::string integrator_name() const override { return W_.shot_integrator->name(); }
 
  private:

@@ -312,9 +312,9 @@ bool shoot(VcWorkspace::Impl& W, bool final, const Vec6& x, Vec6& res, const Rec
   return shoot(W, integ, final ? *W.final_rod : *W.shot_rod, x, res, rec);
 }
 
-bool tendon_limit(const VcWorkspace::Impl& W, std::string& why) {
+bool tendon_limit(const VcWorkspace::Impl& W, double threshold, std::string& why) {
   const Degeneracy& d = W.degeneracy;
-  if (d.tendon < 0 || !(d.value >= physics::kTendonLimitNear)) return false;
+  if (d.tendon < 0 || !(d.value >= threshold)) return false;
   char where[48];
   std::snprintf(where, sizeof where, "at s = %.4g m", d.s);
   why = physics::tendon_limit_message(d.tendon, d.value, where);

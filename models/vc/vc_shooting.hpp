@@ -95,7 +95,7 @@ bool has_exact_jacobian(const VcWorkspace::Impl& W);
 bool shoot_jacobian(VcWorkspace::Impl& W, const Vec6& x, Vec6& res, Mat6& J);
 /// Whether the last final pass (at the load factor where a loading path stopped) had a tensioned
 /// tendon at its geometric limit (curvature x offset >= physics::kTendonLimitNear): the reason.
-bool tendon_limit(const VcWorkspace::Impl& W, std::string& why);
+bool tendon_limit(const VcWorkspace::Impl& W, double threshold, std::string& why);
 /// Tendon displacements (Eq. 56) from the tendon lengths at every segment end.
 void tendon_displacements(const VcWorkspace::Impl& W, const std::vector<double>& segment_lengths,
                           std::vector<double>& displacements);

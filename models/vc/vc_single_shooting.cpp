@@ -145,7 +145,9 @@ class SingleShooting final : public detail::ModelProblem {
                        "tendon friction: the conjugate-point test assumes tensions independent of the shape"};
     return conjugate_point_test(W_, Vec6(x));
   }
-  bool infeasibility(const Eigen::VectorXd&, std::string& why) override { return tendon_limit(W_, why); }
+  bool infeasibility(const Eigen::VectorXd&, double threshold, std::string& why) override {
+    return tendon_limit(W_, threshold, why);
+  }
   std::string integrator_name() const override { return W_.shot_integrator->name(); }
 
  private:

@@ -69,6 +69,10 @@ struct ArclengthOptions {
   /// Bound on corrector solves of the path (accepted or not), so total work is bounded. Event
   /// refinement, snaps and the final solve at the target have their own bounds below.
   int max_steps = 400;
+  /// Newton iteration limit of a corrector (capped by the Newton options' own limit). A step too
+  /// long for its corrector is rejected and shortened; near a singular point such a corrector
+  /// can otherwise run 150 iterations before it fails (VC at a tendon's geometric limit).
+  int corrector_max_iterations = 30;
   /// The path stops (stalled) when lambda leaves [start - window (target - start),
   /// target + window (target - start)] (for start < target; mirrored otherwise): a curve that
   /// turned back for good would otherwise run until max_steps.
@@ -91,6 +95,11 @@ struct ArclengthOptions {
   /// Snap: Newton iteration limit of each attempt (capped by the Newton options' own limit); an
   /// attempt that starts in the basin of the vanished equilibrium only creeps, so cut it short.
   int snap_max_iterations = 30;
+  /// Snap: a test of the fold point (x, lambda), called before any snap is tried. A non-empty
+  /// return names a limit of the system there (no other branch is sought: the run stalls at the
+  /// fold with that reason, instead of spending up to 8 x 2 x 4 attempts of snap_max_iterations
+  /// each). Empty function: every fold is snapped.
+  std::function<std::string(const Eigen::VectorXd&, double)> fold_limit;
   /// The scalar stored per path point, from (x, lambda); empty = the 2-norm of x.
   std::function<double(const Eigen::VectorXd&, double)> output;
   /// Outputs stored per event (ArclengthEvent::output), from (x, lambda) at the event point,
