@@ -420,6 +420,30 @@ TEST(Vcref, WarmStart) {
   EXPECT_LT((r2.tip().p - c2.tip().p).norm(), 1e-10);
 }
 
+// Jacobian reuse is VCref's default; SolverOptions::reuse_jacobian = false turns it off for the
+// solve (every model): the warm start then takes a fresh Jacobian at its first iteration. Both
+// land on the same answer within the Newton tolerance.
+TEST(Vcref, SolverOptionTurnsJacobianReuseOff) {
+  Scene s = loaded_scene(10);
+  VcrefModel model(s.robot, s.effects);
+  ASSERT_TRUE(model.options().reuse_jacobian);
+  auto ws = model.make_workspace();
+  const Solution cold = tdcr::solve(model, *ws, s.input(), s.solver);
+  ASSERT_TRUE(cold.converged()) << cold.summary.message;
+  Scene s2 = s;
+  s2.actuation.values[0] *= 1.02;
+  const Solution reused = tdcr::solve(model, *ws, s2.input(), s2.solver, &cold);
+  ASSERT_TRUE(reused.converged()) << reused.summary.message;
+  SolverOptions fresh = s2.solver;
+  fresh.reuse_jacobian = false;
+  tdcr::solve(model, *ws, s.input(), s.solver);  // the same workspace history as before `reused`
+  const Solution own = tdcr::solve(model, *ws, s2.input(), fresh, &cold);
+  ASSERT_TRUE(own.converged()) << own.summary.message;
+  EXPECT_GE(own.summary.jacobian_evaluations, 1);
+  EXPECT_LT(reused.summary.jacobian_evaluations, own.summary.jacobian_evaluations);
+  EXPECT_LT((reused.tip().p - own.tip().p).norm(), 1e-10);
+}
+
 // The Jacobian pattern follows the tensioned tendons: configuration 2 (T1 only, ending at the
 // first segment's tip) drops the pass-through rows of the other tendons (the count of the pattern
 // before the port onto bvp's shooting: 5796 at n = 10); with every tendon tensioned the model's

@@ -398,6 +398,11 @@ const Schema<SolverOptions>& solver_schema() {
                      "the conjugate-point test, CCsub and PRB by the reduced stiffness; VCref and CC: "
                      "undetermined",
                      "VC, CCsub, PRB"}),
+      boolean_field("reuse_jacobian", &S::reuse_jacobian,
+                    {"", nullptr,
+                     "a warm start may begin from the previous solve's Jacobian (modified Newton): faster "
+                     "trajectories; the answer then depends on the last solve within function_tolerance",
+                     "CCsub, PRB, VC, VCref"}),
       boolean_field("differential_kinematics", &S::differential_kinematics,
                     {"", nullptr,
                      "compute the tip Jacobian (6 x m, with respect to the actuation values) and the tip "

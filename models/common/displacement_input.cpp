@@ -72,6 +72,9 @@ class Outer {
     inner_.actuation.kinds.clear();
     options_.differential_kinematics = false;  // with respect to tensions: not this input's
     options_.stability = false;                // only at the answer
+    // The outer Jacobian differences warm-started tension solves: their answers must not depend
+    // on the workspace's last solve (SolverOptions::reuse_jacobian), only on T.
+    options_.reuse_jacobian = false;
   }
 
   int size() const { return static_cast<int>(tendons_.size()); }

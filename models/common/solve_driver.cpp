@@ -215,7 +215,7 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
     P.adjust(nopt);
     sys->set_parameter(1.0);
     const bool warm = warm_start && P.warm_guess(*warm_start, x);
-    if (warm) P.adjust_warm(nopt);
+    if (warm && options.reuse_jacobian) P.adjust_warm(nopt);
     if (sys->size() == 0) {
       x.resize(0);
       sum.termination = TerminationType::Converged;

@@ -61,6 +61,13 @@ struct SolverOptions {
   /// Solution::tip_compliance) by the implicit function theorem on the converged system: no
   /// extra full solves (docs/models.md, "Differential kinematics").
   bool differential_kinematics = false;
+  /// A warm-started solve may begin from the previous solve's Jacobian, where the model keeps it
+  /// (CCsub, PRB, VC, VCref; modified Newton, a fresh Jacobian when the residual stops falling
+  /// fast, and none after a slow solve): more, much cheaper iterations along a trajectory. The
+  /// answer then depends on the workspace's last solve within function_tolerance. False: every
+  /// solve starts with a fresh Jacobian (the displacement-input solve does this for its inner
+  /// tension solves, whose differences must not carry that history).
+  bool reuse_jacobian = true;
 
   /// @brief Throws InputError (field `solver.<name>`) on a tolerance that is not a positive
   /// finite number, or an iteration, RK4 step or continuation step count below 1.

@@ -73,10 +73,9 @@ struct VcrefOptions {
   /// Warm-started solves start from the previous solve's Jacobian (modified Newton, a fresh
   /// Jacobian only when the residual stops falling fast enough): more, much cheaper iterations
   /// (a trajectory about 1.8x faster). A solve's answer then depends on the workspace's last
-  /// solve within the Newton tolerance, which the displacement-input solve's differences of
-  /// tension solves do not tolerate (tests/test_displacement_input.cpp, elastic helical
-  /// tendon): hence off by default.
-  bool reuse_jacobian = false;
+  /// solve within the Newton tolerance; SolverOptions::reuse_jacobian false turns it off for
+  /// every model (the displacement-input solve does so for its inner tension solves).
+  bool reuse_jacobian = true;
 };
 
 /// @brief The VCref model of a robot with its effects: immutable (disks, Jacobian structure,
