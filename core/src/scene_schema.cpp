@@ -403,6 +403,11 @@ const Schema<SolverOptions>& solver_schema() {
                      "a warm start may begin from the previous solve's Jacobian (modified Newton): faster "
                      "trajectories; the answer then depends on the last solve within function_tolerance",
                      "CCsub, PRB, VC, VCref"}),
+      boolean_field("extrapolate_warm_starts", &S::extrapolate_warm_starts,
+                    {"", nullptr,
+                     "a warm start from the workspace's last answer starts from the secant through its last "
+                     "two answers when the input moves on along the same line (trajectories)",
+                     "CCsub, PRB, VC, VCref"}),
       boolean_field("differential_kinematics", &S::differential_kinematics,
                     {"", nullptr,
                      "compute the tip Jacobian (6 x m, with respect to the actuation values) and the tip "

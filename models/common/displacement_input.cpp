@@ -73,8 +73,10 @@ class Outer {
     options_.differential_kinematics = false;  // with respect to tensions: not this input's
     options_.stability = false;                // only at the answer
     // The outer Jacobian differences warm-started tension solves: their answers must not depend
-    // on the workspace's last solve (SolverOptions::reuse_jacobian), only on T.
+    // on the workspace's last solves (SolverOptions::reuse_jacobian, extrapolate_warm_starts),
+    // only on T.
     options_.reuse_jacobian = false;
+    options_.extrapolate_warm_starts = false;
   }
 
   int size() const { return static_cast<int>(tendons_.size()); }

@@ -139,7 +139,7 @@ bool large_change(const StaticModel& model, const Loads& from, const Loads& to) 
 double solve_on_loading_path(const StaticModel& model, const ModelInput& input, detail::ModelProblem& P,
                              bvp::ParameterizedSystem& sys, const bvp::NewtonOptions& nopt, const SolverOptions& options,
                              const Solution* warm_start, const detail::Rebind& rebind, Eigen::VectorXd& x,
-                             Solution& sol) {
+                             const Eigen::VectorXd* unpredicted, Solution& sol) {
   SolverSummary& sum = sol.summary;
   const bool warm = warm_start != nullptr;
   const detail::ColdStart cold = P.cold_start();
@@ -150,8 +150,15 @@ double solve_on_loading_path(const StaticModel& model, const ModelInput& input, 
   const bool input_path = warm && options.continuation && has_previous_input(*warm_start, input);
   if (!warm) P.cold_guess(x);
   const bool skip_direct = input_path && large_change(model, warm_start->loads, input.loads);
+  if (skip_direct && unpredicted) x = *unpredicted;
   if (!skip_direct) {
     direct_solve(P, sys, nopt, warm, x, sum);
+    if (!sum.converged() && unpredicted) {  // the secant prediction failed: from the last answer
+      const std::string first = sum.message;
+      x = *unpredicted;
+      direct_solve(P, sys, nopt, warm, x, sum);
+      sum.message += " (retry from the previous answer; from the secant prediction: " + first + ")";
+    }
     if (sum.converged() || !options.continuation) return 1.0;
   }
   std::string why = skip_direct ? "the warm start's tip force differs by L^2 |dF| / EI > " + format_value(kDirectLoadParameter)
@@ -170,6 +177,50 @@ double solve_on_loading_path(const StaticModel& model, const ModelInput& input, 
     why += "; then the input path from the warm start failed: " + sum.message;
   }
   return detail::follow_loading_path(P, model.routing(), sys, x, nopt, options, sum, sol.path_events, cold.first_step, why).parameter;
+}
+
+// --- The secant predictor of warm starts (SolverOptions::extrapolate_warm_starts). ---
+
+// An input as one vector: actuation values, tip force, tip moment, gravity.
+void input_vector(const std::vector<double>& values, const Loads& loads, Eigen::VectorXd& u) {
+  const auto m = static_cast<Eigen::Index>(values.size());
+  u.resize(m + 9);
+  for (Eigen::Index i = 0; i < m; ++i) u[i] = values[static_cast<std::size_t>(i)];
+  u.segment<3>(m) = loads.tip_force;
+  u.segment<3>(m + 3) = loads.tip_moment;
+  u.segment<3>(m + 6) = loads.gravity;
+}
+
+// The last solve went from the input h.from (its warm start's) to h.input, its Newton from the
+// model's warm guess h.guess to the answer h.unknowns. If this solve starts from that answer
+// (`from` = h.input) and its input u moves on along the same line, u - h.input = alpha (h.input
+// - h.from) + e with 0 < alpha <= 2 and |e| <= 0.1 |u - h.input|, the correction Newton made
+// last time, scaled by alpha, is added to this solve's warm guess x: x + alpha (h.unknowns -
+// h.guess). Where the warm guess is the previous answer itself (CCsub, PRB) that is the secant
+// x1 + alpha (x1 - x0); VC's warm guess re-balances the base wrench for the new input, VCref's
+// re-centres the disk rotations on the previous frames, and the last correction predicts what
+// those guesses miss. True if x was changed.
+bool extrapolate(const detail::SolveHistory& h, const Eigen::VectorXd& from, const Eigen::VectorXd& u,
+                 Eigen::VectorXd& x) {
+  if (!h.valid || x.size() == 0 || h.from.size() != u.size() || h.input.size() != u.size() ||
+      from.size() != u.size() || x.size() != h.unknowns.size() || x.size() != h.guess.size() || from != h.input)
+    return false;
+  double d11 = 0.0, d12 = 0.0, d22 = 0.0;
+  for (Eigen::Index i = 0; i < u.size(); ++i) {
+    const double a = h.input[i] - h.from[i], b = u[i] - h.input[i];
+    d11 += a * a;
+    d12 += a * b;
+    d22 += b * b;
+  }
+  if (!(d11 > 0.0 && d22 > 0.0)) return false;
+  const double alpha = d12 / d11;
+  const double off_line = d22 - d12 * d12 / d11;  // |e|^2
+  if (!(alpha > 0.0 && alpha <= 2.0 && off_line <= 0.01 * d22)) return false;
+  const Eigen::VectorXd guess = x;
+  x += alpha * (h.unknowns - h.guess);
+  if (x.allFinite()) return true;
+  x = guess;
+  return false;
 }
 
 // Solution::tip_jacobian and tip_compliance of a converged answer at unknowns x.
@@ -216,6 +267,16 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
     sys->set_parameter(1.0);
     const bool warm = warm_start && P.warm_guess(*warm_start, x);
     if (warm && options.reuse_jacobian) P.adjust_warm(nopt);
+    // The secant predictor: this solve's input, its warm start's, and the model's warm guess.
+    detail::SolveHistory& history = workspace.history_;
+    Eigen::VectorXd u, from, unpredicted;
+    bool predicted = false;
+    if (warm) {
+      input_vector(input.actuation.values, input.loads, u);
+      input_vector(warm_start->tensions, warm_start->loads, from);
+      unpredicted = x;
+      if (options.extrapolate_warm_starts) predicted = extrapolate(history, from, u, x);
+    }
     if (sys->size() == 0) {
       x.resize(0);
       sum.termination = TerminationType::Converged;
@@ -225,12 +286,22 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
       const detail::Rebind rebind = [&](const ModelInput& in) -> detail::ModelProblem& {
         return model.bind(workspace, in, options);
       };
-      reached = solve_on_loading_path(model, input, P, *sys, nopt, options, warm ? warm_start : nullptr, rebind, x, sol);
+      reached = solve_on_loading_path(model, input, P, *sys, nopt, options, warm ? warm_start : nullptr, rebind, x,
+                                      predicted ? &unpredicted : nullptr, sol);
     }
     if (sum.converged()) reached = 1.0;
     const bool evaluated = final_check(P, *sys, x, reached, options.function_tolerance, sum);
     sol.unknowns = x;
     P.extract(x, evaluated, sol);
+    // Remembered for the next solve's predictor: a converged warm solve (a cold one has no
+    // warm guess to correct); anything else clears it.
+    history.valid = warm && sum.converged() && x.size() > 0;
+    if (history.valid) {
+      history.from.swap(from);
+      history.input.swap(u);
+      history.guess.swap(unpredicted);
+      history.unknowns = x;
+    }
     if (sum.converged() && options.stability) sol.stability = P.stability(x);
   }
   if (sol.converged() && options.differential_kinematics)

@@ -328,6 +328,7 @@ void bind_effects(py::module_& m) {
       .def_readwrite("stability", &tdcr::SolverOptions::stability)
       .def_readwrite("differential_kinematics", &tdcr::SolverOptions::differential_kinematics)
       .def_readwrite("reuse_jacobian", &tdcr::SolverOptions::reuse_jacobian)
+      .def_readwrite("extrapolate_warm_starts", &tdcr::SolverOptions::extrapolate_warm_starts)
       .def("validate", &tdcr::SolverOptions::validate);
   enum_property(opt, "integrator", &tdcr::SolverOptions::integrator, kIntegrator, "solver.integrator",
                 "'rk4' or 'cvode'");

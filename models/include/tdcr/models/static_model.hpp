@@ -24,6 +24,8 @@
 #include <memory>
 #include <string>
 
+#include <Eigen/Core>
+
 #include "tdcr/core/robot.hpp"
 #include "tdcr/core/scene.hpp"
 #include "tdcr/core/solution.hpp"
@@ -50,6 +52,15 @@ class StaticModel;
 
 namespace detail {
 class ModelProblem;
+
+/// The last warm-started solve of a workspace, for the secant predictor of the next warm start
+/// (SolverOptions::extrapolate_warm_starts): its warm start's input and its own (each as one
+/// vector: actuation values, tip force, tip moment, gravity), the model's warm guess its Newton
+/// started from, and the answer. Kept by tdcr::solve().
+struct SolveHistory {
+  Eigen::VectorXd from, input, guess, unknowns;
+  bool valid = false;  ///< A converged warm solve is held (anything else clears it).
+};
 }  // namespace detail
 
 /// @brief Mutable memory of one model's solves. Made by StaticModel::make_workspace(), it
@@ -68,7 +79,10 @@ class ModelWorkspace {
   explicit ModelWorkspace(const StaticModel& owner);
 
  private:
+  friend Solution solve(const StaticModel&, ModelWorkspace&, const ModelInput&, const SolverOptions&,
+                        const Solution*);
   std::weak_ptr<const int> owner_;
+  detail::SolveHistory history_;
 };
 
 /// @brief An immutable model of a robot with the effects it simulates.
