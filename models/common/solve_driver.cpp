@@ -199,7 +199,7 @@ void input_vector(const std::vector<double>& values, const Loads& loads, Eigen::
 // h.guess). Where the warm guess is the previous answer itself (CCsub, PRB) that is the secant
 // x1 + alpha (x1 - x0); VC's warm guess re-balances the base wrench for the new input, VCref's
 // re-centres the disk rotations on the previous frames, and the last correction predicts what
-// those guesses miss. True if x was changed.
+// those guesses miss. x is the model's warm guess; true if it was changed (else left as is).
 bool extrapolate(const detail::SolveHistory& h, const Eigen::VectorXd& from, const Eigen::VectorXd& u,
                  Eigen::VectorXd& x) {
   if (!h.valid || x.size() == 0 || h.from.size() != u.size() || h.input.size() != u.size() ||
@@ -216,11 +216,9 @@ bool extrapolate(const detail::SolveHistory& h, const Eigen::VectorXd& from, con
   const double alpha = d12 / d11;
   const double off_line = d22 - d12 * d12 / d11;  // |e|^2
   if (!(alpha > 0.0 && alpha <= 2.0 && off_line <= 0.01 * d22)) return false;
-  const Eigen::VectorXd guess = x;
+  if (!(alpha * (h.unknowns - h.guess)).allFinite()) return false;
   x += alpha * (h.unknowns - h.guess);
-  if (x.allFinite()) return true;
-  x = guess;
-  return false;
+  return true;
 }
 
 // Solution::tip_jacobian and tip_compliance of a converged answer at unknowns x.

@@ -85,7 +85,8 @@ struct VcOptions {
   /// Warm-started single-shooting solves start from the previous solve's Jacobian (unless that
   /// solve took more than 3 iterations). Every single-shooting solve, cold or warm, is a modified
   /// Newton: a Jacobian serves up to 10 iterations, a fresh one when the residual stops falling
-  /// fast enough; this option only decides whether the first one comes from the previous solve.
+  /// fast enough; this option only decides whether the first one comes from the previous solve
+  /// (and SolverOptions::reuse_jacobian = false turns it off for one solve).
   bool reuse_jacobian = true;
 };
 
