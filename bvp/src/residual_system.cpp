@@ -26,28 +26,33 @@ SparsityPattern SparsityPattern::from_triplets(int rows, int cols,
                                                const std::vector<std::pair<int, int>>& entries) {
   if (rows < 0 || cols < 0)
     throw std::invalid_argument("SparsityPattern::from_triplets: negative size");
-  // Sort by (col, row) and drop duplicates: that is CSC order.
-  std::vector<std::pair<int, int>> cr;
-  cr.reserve(entries.size());
-  for (const auto& [r, c] : entries) {
+  // Bucket the entries by column (counting sort, linear in nnz), then sort and deduplicate the
+  // rows of each column: CSC order. A global sort of the pairs cost 20 % of a first CCsub solve
+  // with 3000 banded unknowns.
+  for (const auto& [r, c] : entries)
     if (r < 0 || r >= rows || c < 0 || c >= cols)
       throw std::invalid_argument("SparsityPattern::from_triplets: entry (" + std::to_string(r) +
                                   ", " + std::to_string(c) + ") outside " +
                                   std::to_string(rows) + "x" + std::to_string(cols));
-    cr.emplace_back(c, r);
+  std::vector<int> start(static_cast<size_t>(cols) + 1, 0);
+  for (const auto& e : entries) ++start[e.second + 1];
+  for (int j = 0; j < cols; ++j) start[j + 1] += start[j];
+  std::vector<int> rows_by_col(entries.size());
+  {
+    std::vector<int> next(start.begin(), start.end() - 1);
+    for (const auto& [r, c] : entries) rows_by_col[next[c]++] = r;
   }
-  std::sort(cr.begin(), cr.end());
-  cr.erase(std::unique(cr.begin(), cr.end()), cr.end());
   SparsityPattern p;
   p.rows = rows;
   p.cols = cols;
   p.col_ptr.assign(static_cast<size_t>(cols) + 1, 0);
-  p.row_idx.resize(cr.size());
-  for (size_t k = 0; k < cr.size(); ++k) {
-    ++p.col_ptr[cr[k].first + 1];
-    p.row_idx[k] = cr[k].second;
+  p.row_idx.reserve(entries.size());
+  for (int j = 0; j < cols; ++j) {
+    const auto first = rows_by_col.begin() + start[j], last = rows_by_col.begin() + start[j + 1];
+    std::sort(first, last);
+    p.row_idx.insert(p.row_idx.end(), first, std::unique(first, last));
+    p.col_ptr[j + 1] = static_cast<int>(p.row_idx.size());
   }
-  for (int j = 0; j < cols; ++j) p.col_ptr[j + 1] += p.col_ptr[j];
   return p;
 }
 

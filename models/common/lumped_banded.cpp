@@ -189,22 +189,14 @@ bool LumpedProblem::setup_newton_step(const Eigen::Ref<const Eigen::VectorXd>& x
   lift_banded(x_, y_);
   fy_.resize(N);
   if (!banded_residual(y_.data(), fy_.data())) return false;
-  if (lu_J_ != active()) {
+  if (fd_pattern_J_ != active()) {
     fd_.prepare(pattern_);
-    std::vector<Eigen::Triplet<double>> t;
-    for (int c = 0; c < N; ++c)
-      for (int k = pattern_.col_ptr[c]; k < pattern_.col_ptr[c + 1]; ++k) t.emplace_back(pattern_.row_idx[k], c, 1.0);
-    A_.resize(N, N);
-    A_.setFromTriplets(t.begin(), t.end());
-    A_.makeCompressed();
-    lu_.analyzePattern(A_);
+    jacobian_.resize(pattern_.nnz());
     rhs_.resize(N);
-    lu_J_ = active();
+    fd_pattern_J_ = active();
   }
-  // The pattern's CSC order is that of the compressed matrix (sorted rows per column).
-  if (!bvp::finite_difference_sparse_jacobian(view_, y_, fy_, pattern_, A_.valuePtr(), &fd_)) return false;
-  lu_.factorize(A_);
-  return lu_.info() == Eigen::Success;
+  if (!bvp::finite_difference_sparse_jacobian(view_, y_, fy_, pattern_, jacobian_.data(), &fd_)) return false;
+  return lu_.factorize(pattern_, jacobian_.data()) == bvp::SparseLu::Status::Success;
 }
 
 bool LumpedProblem::solve_newton_step(Eigen::Ref<Eigen::VectorXd> b) {
@@ -213,9 +205,8 @@ bool LumpedProblem::solve_newton_step(Eigen::Ref<Eigen::VectorXd> b) {
   // lifted iterate satisfy the other rows exactly.
   rhs_.setZero();
   for (int j = 0; j < active(); ++j) rhs_.segment(K * j, m) = b.segment(m * j, m);
-  fy_ = lu_.solve(rhs_);
-  if (lu_.info() != Eigen::Success) return false;
-  for (int j = 0; j < active(); ++j) b.segment(m * j, m) = fy_.segment(K * j, m);
+  if (!lu_.solve(rhs_.data())) return false;
+  for (int j = 0; j < active(); ++j) b.segment(m * j, m) = rhs_.segment(K * j, m);
   return true;
 }
 

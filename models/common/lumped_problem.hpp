@@ -20,11 +20,10 @@
 #include <vector>
 
 #include <Eigen/Core>
-#include <Eigen/SparseCore>
-#include <Eigen/SparseLU>
 
 #include "common/model_problem.hpp"
 #include "common/subsegment_statics.hpp"
+#include "tdcr/bvp/sparse_lu.hpp"
 #include "tdcr/models/lumped_model.hpp"
 
 namespace tdcr::detail {
@@ -184,9 +183,13 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   BandedView view_{*this};
   bvp::FiniteDifferenceWorkspace fd_;
   Eigen::VectorXd y_, fy_, rhs_;
-  Eigen::SparseMatrix<double> A_;
-  Eigen::SparseLU<Eigen::SparseMatrix<double>> lu_;
-  int lu_J_ = -1;
+  std::vector<double> jacobian_;  // banded Jacobian values in pattern_'s CSC order
+  // KLU: analysed once per pattern, refactorised per step. The solve gives a Newton direction,
+  // judged afterwards on the recursive residual, so a refactorisation that may lose up to three
+  // digits is kept (KINSOL's own systems keep two): PRB's pivots shift by a few 1e-3 between
+  // iterations, and a fresh pivoting factorisation costs about 3 refactorisations.
+  bvp::SparseLu lu_{1e-3};
+  int fd_pattern_J_ = -1;         // J that fd_, jacobian_ and rhs_ are sized for
   bvp::SparsityPattern pattern_;
   int pattern_J_ = -1;
   Eigen::VectorXd x_;  // x_j of the loaded subsegments (guesses, lifting)
