@@ -43,13 +43,14 @@ Eigen::Matrix<double, 6, 1> pose_difference(const Frame& a, const Frame& b) {
   return d;
 }
 
-// dF/dx at x: the system's analytic Jacobian, else central differences with the increment
+// dF/dx at x: the system's own Jacobian unless it is a forward difference, else central differences with the increment
 // h_rel max(|x_j|, min(typical magnitude, 1)). Not the Newton solver's forward differences: their
 // O(h) error reaches 5e-5 relative in PRB's tip compliance, whose bending-plane angle has a
 // deliberately large increment (1.5e-4 rad, PrbProblem::x_scale).
 bool system_jacobian(bvp::ResidualSystem& sys, const Eigen::VectorXd& x, const Eigen::VectorXd& f, double h_rel,
                      Eigen::MatrixXd& J) {
-  if (sys.has_jacobian() && bvp::analytic_jacobian_dense(sys, x, f, J)) return true;
+  if (sys.has_jacobian() && !sys.jacobian_is_forward_difference() && bvp::analytic_jacobian_dense(sys, x, f, J))
+    return true;
   const int n = sys.size();
   Eigen::VectorXd uscale(n), xp = x, fp(n), fm(n);
   sys.unknown_scale(uscale);

@@ -10,15 +10,9 @@ namespace tdcr {
 
 namespace detail {
 
-namespace {
-
-class LumpedWorkspace final : public ModelWorkspace {
- public:
-  LumpedWorkspace(const StaticModel& owner, const LumpedBody& body) : ModelWorkspace(owner), problem(body.make_problem()) {}
-  std::unique_ptr<LumpedProblem> problem;
-};
-
-}  // namespace
+LumpedWorkspace::LumpedWorkspace(const StaticModel& owner, const LumpedBody& body)
+    : ModelWorkspace(owner), problem(body.make_problem()) {}
+LumpedWorkspace::~LumpedWorkspace() = default;
 
 LumpedBody::LumpedBody(const Robot& robot, const TendonRouting& routing, const Effects& effects, int per_subsegment,
                        LumpedFormulation formulation, int banded_from)
@@ -46,10 +40,14 @@ bool LumpedBody::reduced(int J) const {
   return formulation == LumpedFormulation::Automatic && J >= banded_from && !statics.friction();
 }
 
-void LumpedBody::compute_frames(const double* x, int J, Frame* frames, SubsegmentPose* poses, Vec3* centroids) const {
-  frames[0] = Frame{};
+void LumpedBody::compute_frames(const double* x, int J, Frame* frames, SubsegmentPose* poses, Vec3* centroids,
+                                int from) const {
+  if (from <= 1) {
+    frames[0] = Frame{};
+    from = 1;
+  }
   SubsegmentPose tmp;
-  for (int j = 1; j <= N; ++j) {
+  for (int j = from; j <= N; ++j) {
     const double l = statics.length(j);
     const Frame& prev = frames[j - 1];
     Frame& f = frames[j];
@@ -150,6 +148,41 @@ bool LumpedProblem::residual(const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::
 
 bool LumpedProblem::recursive_residual(const double* x, double* f) {
   evaluate(x);
+  constitutive_all(x, f);
+  return true;
+}
+
+void LumpedProblem::evaluate_from(const double* x, int k) {
+  body_.compute_frames(x, active(), frames_.data(), poses_.data(), backbone_weight_on() ? centroids_.data() : nullptr, k);
+  body_.statics.disk_loads(loads_, frames_.data(), disk_f_.data(), disk_m_.data(), k - 1);
+  body_.statics.distal_wrenches(loads_, frames_.data(), centroids_.data(), disk_f_.data(), disk_m_.data(), F_.data(),
+                                M_.data());
+}
+
+bool LumpedProblem::jacobian(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& f,
+                             Eigen::Ref<Eigen::MatrixXd> Jm) {
+  const int m = body_.per_subsegment, n = size();
+  jac_x_ = x;
+  jac_f_.resize(n);
+  jac_uscale_.resize(n);
+  unknown_scale(jac_uscale_);
+  const double noise = relative_noise();
+  evaluate_from(x.data(), 1);
+  for (int k = active(); k >= 1; --k)
+    for (int i = 0; i < m; ++i) {
+      const int c = m * (k - 1) + i;
+      const double h = bvp::finite_difference_step(x[c], jac_uscale_[c], noise);
+      jac_x_[c] = x[c] + h;
+      evaluate_from(jac_x_.data(), k);
+      constitutive_all(jac_x_.data(), jac_f_.data());
+      jac_x_[c] = x[c];
+      if (!jac_f_.allFinite()) return false;
+      Jm.col(c) = (jac_f_ - f) / h;
+    }
+  return true;
+}
+
+void LumpedProblem::constitutive_all(const double* x, double* f) {
   const int m = body_.per_subsegment;
   const bool bb = backbone_weight_on();
   for (int j = 1; j <= active(); ++j) {
@@ -157,7 +190,6 @@ bool LumpedProblem::recursive_residual(const double* x, double* f) {
     const Vec3 W = bb ? Vec3(Rt * backbone_weight(j)) : Vec3::Zero();
     constitutive(j, x + m * (j - 1), poses_[j], Rt * F_[j], Rt * M_[j], W, f + m * (j - 1));
   }
-  return true;
 }
 
 void LumpedProblem::extract(const Eigen::VectorXd& y, bool evaluated, Solution& solution) {

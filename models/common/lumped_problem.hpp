@@ -52,8 +52,10 @@ class LumpedBody {
   /// Disk frames 0..N (base disk first) from the unknowns of subsegments 1..J (x holds at least
   /// per_subsegment J values); subsegments beyond J are straight. Poses (if given, index 1..J)
   /// and centroids (if given, base frame, index 1..N) receive the subsegment geometry.
+  /// With from > 1, frames 0..from-1 (and poses, centroids below from) are taken as they are and
+  /// only frames from..N are computed.
   void compute_frames(const double* x, int J, Frame* frames, SubsegmentPose* poses = nullptr,
-                      Vec3* centroids = nullptr) const;
+                      Vec3* centroids = nullptr, int from = 1) const;
   /// Disk frames for a full unknown vector (per_subsegment N values; InputError otherwise).
   std::vector<Frame> disk_frames(const Eigen::VectorXd& x) const;
   /// True if solved in the banded formulation (LumpedFormulation::Banded).
@@ -117,6 +119,14 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   // poses and wrenches follow from the recursion at every iterate, so the iterations are those
   // of the recursive form at a cost linear in J.
   bool has_newton_step() const final { return reduced_; }
+  // Recursive form without friction: the dense Jacobian by the same forward differences (same
+  // steps, same numbers) as bvp::finite_difference_jacobian, but a change of x_k leaves the
+  // frames below disk k and the loads of the disks below k - 1 as they are: the columns are
+  // taken from the tip down and each re-evaluates from subsegment k on (about half the work).
+  bool has_jacobian() const final { return !banded_ && !reduced_ && !body_.statics.friction(); }
+  bool jacobian_is_forward_difference() const final { return true; }
+  bool jacobian(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& f,
+                Eigen::Ref<Eigen::MatrixXd> J) final;
   bool setup_newton_step(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& f) final;
   bool solve_newton_step(Eigen::Ref<Eigen::VectorXd> b) final;
 
@@ -156,6 +166,11 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
  private:
   int stride() const { return banded_ ? body_.per_subsegment + 12 : body_.per_subsegment; }
   bool recursive_residual(const double* x, double* f);
+  // Frames from subsegment k on, the loads of disks k-1.. (kept in disk_f_, disk_m_) and all
+  // distal wrenches; the state below comes from the previous evaluate_from (no friction).
+  void evaluate_from(const double* x, int k);
+  // The constitutive residuals of every loaded subsegment at the evaluated state.
+  void constitutive_all(const double* x, double* f);
   // lumped_banded.cpp
   bool banded_residual(const double* y, double* f);
   void lift(const Eigen::VectorXd& x, Eigen::VectorXd& y);
@@ -195,6 +210,16 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   Eigen::VectorXd x_;  // x_j of the loaded subsegments (guesses, lifting)
   std::vector<Vec3> disk_f_, disk_m_;  // disk loads of the banded residual
   int last_iterations_ = 0;  // Newton iterations of the last solve (adjust_warm)
+  Eigen::VectorXd jac_x_, jac_f_, jac_uscale_;  // jacobian(): perturbed x, its residual, scales
+};
+
+/// The workspace of CCsub and PRB: one problem (its state, Newton memory, buffers). Declared
+/// here (not in lumped_model.cpp) so that tests can reach the residual system of a workspace.
+class LumpedWorkspace final : public ModelWorkspace {
+ public:
+  LumpedWorkspace(const StaticModel& owner, const LumpedBody& body);
+  ~LumpedWorkspace() override;
+  std::unique_ptr<LumpedProblem> problem;
 };
 
 }  // namespace tdcr::detail

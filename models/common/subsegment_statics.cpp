@@ -44,11 +44,12 @@ void SubsegmentStatics::update_friction(SubsegmentLoads& b, const Frame* frames)
   tendon::friction_tensions(frames, *routing_, b.tensions.data(), friction_, b.chord.data());
 }
 
-void SubsegmentStatics::disk_loads(SubsegmentLoads& b, const Frame* frames, Vec3* f, Vec3* m) const {
+void SubsegmentStatics::disk_loads(SubsegmentLoads& b, const Frame* frames, Vec3* f, Vec3* m, int first) const {
   const int J = b.active;
   const int D = routing_->disk_count();
   const double* s = routing_->disk_s.data();
-  for (int j = 1; j <= J; ++j) f[j] = m[j] = Vec3::Zero();
+  first = std::max(first, 1);
+  for (int j = first; j <= J; ++j) f[j] = m[j] = Vec3::Zero();
   // Eq. 30-33 (+ Eq. 58) as tendon::disk_wrench, tendon by tendon in the same order and with
   // the same operations (the pull towards disk j+1 is minus the chord towards disk j).
   for (const RoutedTendon& t : routing_->tendons) {
@@ -59,13 +60,15 @@ void SubsegmentStatics::disk_loads(SubsegmentLoads& b, const Frame* frames, Vec3
     Vec3* H = b.holes.data() + t.index * D;
     Vec3* C = b.chords.data() + t.index * D;
     const int last = std::min(t.end_disk, J + 1);
-    H[0] = physics::hole_position(frames[0], t, s[0]);
-    for (int c = 1; c <= last; ++c) {
+    // Disks j >= first read the chords c >= first, i.e. the holes c >= first - 1.
+    const int c0 = first - 1;
+    H[c0] = physics::hole_position(frames[c0], t, s[c0]);
+    for (int c = c0 + 1; c <= last; ++c) {
       H[c] = physics::hole_position(frames[c], t, s[c]);
       C[c] = (H[c - 1] - H[c]).normalized();
     }
     const int end = std::min(t.end_disk, J);
-    for (int j = 1; j <= end; ++j) {
+    for (int j = first; j <= end; ++j) {
       const double T = tension(j);
       if (T == 0.0) continue;
       Vec3 F = T * C[j];
@@ -82,7 +85,7 @@ void SubsegmentStatics::disk_loads(SubsegmentLoads& b, const Frame* frames, Vec3
   }
   const physics::LoadCase& L = b.loads;
   if (L.has_disk_weight())
-    for (int j = 1; j <= J; ++j) f[j] += L.disk_weight(j);
+    for (int j = first; j <= J; ++j) f[j] += L.disk_weight(j);
   if (J == n_ && L.has_tip_wrench()) {  // Eq. 44-45: the external tip wrench acts at O_n.
     f[J] += L.tip_force();
     m[J] += L.tip_moment();
@@ -91,9 +94,23 @@ void SubsegmentStatics::disk_loads(SubsegmentLoads& b, const Frame* frames, Vec3
 
 void SubsegmentStatics::distal_wrenches(SubsegmentLoads& b, const Frame* frames, const Vec3* backbone_centroid,
                                         Vec3* F, Vec3* M) const {
+  disk_loads(b, frames, F, M);
+  accumulate_distal(b, frames, backbone_centroid, F, M);
+}
+
+void SubsegmentStatics::distal_wrenches(const SubsegmentLoads& b, const Frame* frames, const Vec3* backbone_centroid,
+                                        const Vec3* disk_f, const Vec3* disk_m, Vec3* F, Vec3* M) const {
+  for (int j = 1; j <= b.active; ++j) {
+    F[j] = disk_f[j];
+    M[j] = disk_m[j];
+  }
+  accumulate_distal(b, frames, backbone_centroid, F, M);
+}
+
+void SubsegmentStatics::accumulate_distal(const SubsegmentLoads& b, const Frame* frames, const Vec3* backbone_centroid,
+                                          Vec3* F, Vec3* M) const {
   const int J = b.active;
   const bool bb = b.loads.has_backbone_weight();
-  disk_loads(b, frames, F, M);
   for (int j = J - 1; j >= 1; --j) {
     // Eq. 46-47: propagate the wrench of the distal subsegments from O_{j+1} to O_j.
     const Vec3& pj = frames[j].p;

@@ -68,7 +68,11 @@ class SubsegmentStatics {
   /// @brief The loads on disks 1..J alone at the current load factor (f, m index 1..J): their
   /// tendon forces (Eq. 30-33, 58, as tendon::disk_wrench), weights and, at the tip disk, the
   /// tip wrench; m[j] about O_j. Every hole position and chord direction is computed once.
-  void disk_loads(SubsegmentLoads& b, const Frame* frames, Vec3* f, Vec3* m) const;
+  /// With first > 1 only disks first..J are computed (their hole positions and chords from disk
+  /// first - 1 on), f and m below first are left as they are: the loads of disks below first
+  /// depend on frames 0..first only, so after a change of frames >= first + 1 this gives the same
+  /// numbers as a full evaluation (the structured finite differences of LumpedProblem).
+  void disk_loads(SubsegmentLoads& b, const Frame* frames, Vec3* f, Vec3* m, int first = 1) const;
   /// @brief The recursive balance (Eq. 44-47) for subsegments 1..J at the current load factor.
   ///
   /// @param frames Disk frames 0..N (base disk first).
@@ -80,8 +84,16 @@ class SubsegmentStatics {
   /// @param M Out, index 1..J: the moment of the same loads about the centre O_j of disk j.
   void distal_wrenches(SubsegmentLoads& b, const Frame* frames, const Vec3* backbone_centroid, Vec3* F,
                        Vec3* M) const;
+  /// @brief The same from disk loads computed by disk_loads (disk_f, disk_m, index 1..J), which
+  /// are kept: F, M must be other arrays.
+  void distal_wrenches(const SubsegmentLoads& b, const Frame* frames, const Vec3* backbone_centroid,
+                       const Vec3* disk_f, const Vec3* disk_m, Vec3* F, Vec3* M) const;
 
  private:
+  // Eq. 46-47 in place: F, M hold the disk loads on entry, the distal wrenches on return.
+  void accumulate_distal(const SubsegmentLoads& b, const Frame* frames, const Vec3* backbone_centroid, Vec3* F,
+                         Vec3* M) const;
+
   const Robot* robot_;
   const TendonRouting* routing_;
   std::vector<double> length_;  // index 1..N

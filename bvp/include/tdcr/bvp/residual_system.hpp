@@ -87,8 +87,14 @@ class ResidualSystem {
   virtual const SparsityPattern* sparsity() const { return nullptr; }
 
   /// @brief True if jacobian() (no sparsity) or sparse_jacobian() (with sparsity) is
-  /// implemented analytically; otherwise the solver uses finite differences.
+  /// implemented by the system: analytically, or by differences that exploit its structure (see
+  /// jacobian_is_forward_difference); otherwise the solver uses finite differences.
   virtual bool has_jacobian() const { return false; }
+  /// @brief True if jacobian() is a forward-difference approximation with the solver's own
+  /// steps (finite_difference_step), only cheaper than finite_difference_jacobian: accurate to
+  /// O(sqrt(eps)), enough for Newton. A consumer that needs more (central differences for
+  /// differential kinematics) differences the residual itself.
+  virtual bool jacobian_is_forward_difference() const { return false; }
 
   /// @brief Analytic dense Jacobian dF/dx at x, where f = F(x) is supplied for reuse. Override
   /// this when sparsity() returns nullptr.
