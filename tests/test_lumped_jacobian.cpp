@@ -4,6 +4,8 @@
 // operations), for CCsub and PRB, with tendons alone, a tip wrench, gravity with disk masses and
 // only the first segment loaded, at the solution and off it. Exact equality: the reused frames and
 // disk loads must be bit-identical to recomputed ones, or the optimisation changed the physics.
+#include <algorithm>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -82,4 +84,42 @@ TEST(LumpedJacobian, PrbStructuredDifferencesEqualPlainDifferences) {
       SCOPED_TRACE(c.name + ", n = " + std::to_string(n));
       check<PrbModel>(c);
     }
+}
+
+// The reduced Newton steps colour the banded Jacobian's columns periodically instead of by the
+// greedy search: valid (no two columns of a group share a row) for every J, and no more groups
+// than the greedy colouring needs.
+TEST(LumpedJacobian, BandedColouringIsValidAndAsSmallAsGreedy) {
+  for (int n : {1, 2, 3, 5, 50}) {  // up to 100 nodes, past the period search from 9 on
+    Scene s = paper::scene(n, 5, "ccsub");
+    s.loads.tip_force = Vec3(0.1, 0.0, 0.0);
+    for (bool prb : {false, true}) {
+      SCOPED_TRACE(std::string(prb ? "prb" : "ccsub") + ", n = " + std::to_string(n));
+      std::unique_ptr<StaticModel> model;
+      if (prb) model = std::make_unique<PrbModel>(s.robot, s.effects, LumpedFormulation::Banded);
+      else model = std::make_unique<CcsubModel>(s.robot, s.effects, LumpedFormulation::Banded);
+      auto ws = model->make_workspace();
+      detail::LumpedProblem& P = *static_cast<detail::LumpedWorkspace&>(*ws).problem;
+      P.bind(s.input());
+      const bvp::SparsityPattern& p = P.banded_pattern();
+      const std::vector<int>& g = P.banded_groups();
+      ASSERT_EQ(static_cast<int>(g.size()), p.cols);
+      EXPECT_TRUE(bvp::valid_column_groups(p, g));
+      int greedy = 0;
+      bvp::column_groups(p, &greedy);
+      EXPECT_LE(*std::max_element(g.begin(), g.end()) + 1, greedy);
+      // Colourings that join two columns sharing a row are caught: two unknowns of one
+      // subsegment (its constitutive rows), and the disk positions of nodes 1 and 2 (the
+      // balance rows of disk 1 read the tendon chords to disks 0, 1 and 2).
+      const int m = prb ? 5 : 3, K = m + 12;
+      std::vector<int> bad = g;
+      bad[1] = bad[0];
+      EXPECT_FALSE(bvp::valid_column_groups(p, bad));
+      if (p.cols > K + m) {
+        bad = g;
+        bad[K + m] = bad[m];
+        EXPECT_FALSE(bvp::valid_column_groups(p, bad));
+      }
+    }
+  }
 }

@@ -116,6 +116,21 @@ std::vector<int> column_groups(const SparsityPattern& pattern, int* num_groups) 
   return group;
 }
 
+bool valid_column_groups(const SparsityPattern& pattern, const std::vector<int>& groups) {
+  if (!pattern.valid() || groups.size() != static_cast<size_t>(pattern.cols)) return false;
+  // owner[r * G + g]: would need G per row; instead mark, per row, the groups seen.
+  std::vector<std::vector<int>> seen(static_cast<size_t>(pattern.rows));
+  for (int j = 0; j < pattern.cols; ++j) {
+    if (groups[j] < 0) return false;
+    for (int k = pattern.col_ptr[j]; k < pattern.col_ptr[j + 1]; ++k) {
+      std::vector<int>& row = seen[pattern.row_idx[k]];
+      if (std::find(row.begin(), row.end(), groups[j]) != row.end()) return false;
+      row.push_back(groups[j]);
+    }
+  }
+  return true;
+}
+
 double ResidualSystem::relative_noise() const { return std::numeric_limits<double>::epsilon(); }
 
 void FiniteDifferenceWorkspace::prepare(int n) {
@@ -128,8 +143,14 @@ void FiniteDifferenceWorkspace::prepare(int n) {
 }
 
 void FiniteDifferenceWorkspace::prepare(const SparsityPattern& pattern) {
+  prepare(pattern, column_groups(pattern));
+}
+
+void FiniteDifferenceWorkspace::prepare(const SparsityPattern& pattern, const std::vector<int>& g) {
+  if (g.size() != static_cast<size_t>(pattern.cols))
+    throw std::invalid_argument("FiniteDifferenceWorkspace::prepare: one group per column expected");
   prepare(pattern.cols);
-  const std::vector<int> g = column_groups(pattern, &num_groups);
+  num_groups = g.empty() ? 0 : *std::max_element(g.begin(), g.end()) + 1;
   group_ptr.assign(static_cast<size_t>(num_groups) + 1, 0);
   for (int id : g) ++group_ptr[id + 1];
   for (int k = 0; k < num_groups; ++k) group_ptr[k + 1] += group_ptr[k];

@@ -28,10 +28,12 @@ struct ArcCoefficients {
 };
 
 // Automatic formulation: reduced Newton steps on the banded system (KLU) from this many loaded
-// subsegments on; the crossover with the recursive form's dense LU (docs/design-notes/lumped.md:
-// at J = 40 the reduced steps are 14 % slower under tendons alone, 25 % faster with a tip force;
-// at J = 60 2x faster).
-constexpr int kBandedFrom = 40;
+// subsegments on. Crossover with the recursive form (dense LU, structured differences), paper
+// robot configuration 5 (docs/design-notes/lumped.md): at J = 60 the reduced steps take half the
+// time of repeated solves in one workspace and, in a fresh workspace (KLU's analysis and first
+// pivoting factorisation, the colouring), 27 % more under tendons alone and 9 % less with a tip
+// force; at J = 80 less in both; at J = 40 a fresh workspace costs 2.5x.
+constexpr int kBandedFrom = 60;
 
 class CcsubBody final : public detail::LumpedBody {
  public:

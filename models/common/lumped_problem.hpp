@@ -129,6 +129,10 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
                 Eigen::Ref<Eigen::MatrixXd> J) final;
   bool setup_newton_step(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& f) final;
   bool solve_newton_step(Eigen::Ref<Eigen::VectorXd> b) final;
+  /// The banded system's pattern and the column colouring of its grouped differences, for the
+  /// loaded subsegments of the last bind (built only for the banded or reduced forms; tests).
+  const bvp::SparsityPattern& banded_pattern() const { return pattern_; }
+  const std::vector<int>& banded_groups() const { return groups_; }
 
  protected:
   /// Constitutive residuals (per_subsegment values) of subsegment j with geometry g: F, M
@@ -206,6 +210,7 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   bvp::SparseLu lu_{1e-3};
   int fd_pattern_J_ = -1;         // J that fd_, jacobian_ and rhs_ are sized for
   bvp::SparsityPattern pattern_;
+  std::vector<int> groups_;  // column colouring of pattern_ for the grouped differences
   int pattern_J_ = -1;
   Eigen::VectorXd x_;  // x_j of the loaded subsegments (guesses, lifting)
   std::vector<Vec3> disk_f_, disk_m_;  // disk loads of the banded residual

@@ -23,9 +23,10 @@ constexpr double kPhiScale = 1e-4;
 // KINSOL's automatic bound).
 constexpr double kMaxNewtonStep = 1.0;
 // Automatic formulation: reduced Newton steps on the banded system (KLU) from this many loaded
-// subsegments on, as CCsub (docs/design-notes/lumped.md: at J = 20 the reduced steps are 10 %
-// slower under tendons alone, 27 % faster with a tip force; at J = 40 2x faster).
-constexpr int kBandedFrom = 30;
+// subsegments on, as CCsub (docs/design-notes/lumped.md): at J = 40 faster than the recursive
+// form both in a fresh workspace (15-24 %) and in repeated solves (2x); at J = 30 a fresh
+// workspace costs 45 % more under tendons alone.
+constexpr int kBandedFrom = 40;
 
 // Model-specific points of a PRB subsegment in detail::SubsegmentPose::aux.
 constexpr int kJoint = 0;  // joint centres P_1..P_3: aux[0..2]

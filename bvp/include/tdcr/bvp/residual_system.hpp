@@ -174,9 +174,19 @@ struct FiniteDifferenceWorkspace {
 
   /// @brief Size the vectors for n unknowns (no-op if already sized).
   void prepare(int n);
-  /// @brief Size the vectors and compute the column groups of a pattern.
+  /// @brief Size the vectors and compute the column groups of a pattern (column_groups).
   void prepare(const SparsityPattern& pattern);
+  /// @brief Size the vectors and take the column groups as given: groups[j] is the 0-based
+  /// group of column j, and no two columns of one group may share a row of the pattern (not
+  /// checked here; see valid_column_groups). A structured system knows such a colouring (e.g.
+  /// by node index modulo the coupling width of a block-banded pattern) and saves the greedy
+  /// search, which costs more than a Newton iteration of a large banded system.
+  void prepare(const SparsityPattern& pattern, const std::vector<int>& groups);
 };
+
+/// @brief True if groups (one 0-based id per column of pattern) is a valid grouping for
+/// finite_difference_sparse_jacobian: no two columns of a group share a row.
+bool valid_column_groups(const SparsityPattern& pattern, const std::vector<int>& groups);
 
 /// @brief The forward-difference increment used throughout bvp for an unknown of value x and
 /// unknown scale uscale: sqrt(max(eps, relative_noise)) * max(|x|, 1/uscale), rounded so that
