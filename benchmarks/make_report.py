@@ -281,7 +281,8 @@ def readme_speed():
         parts.append(f"{LABEL[m]} {f(r['speedup'])}x unloaded, {f(pick[0]['speedup_median'])}x median / "
                      f"{f(pick[0]['speedup_min'])}x min loaded ({pick[0]['options']}"
                      + (f"; trajectory {f(t[0]['rate_hz'])} Hz at tip error {metres(traj_error(t[0]))}"
-                        + (f" with {t[0]['options'].split(': ', 1)[1]}" if ": " in t[0]["options"] else "") if t else "")
+                        + (f" with {t[0]['options'].split(': ', 1)[1].replace('default', 'the defaults')}"
+                           if ": " in t[0]["options"] else "") if t else "")
                      + ")")
     text = ("Speed-ups against the paper's own code, generated from the tables of docs/benchmarks.md "
             "(unloaded: n = 10, configuration (T_M, 0, 0, 0); loaded: its 60 random cases with tip forces, "
