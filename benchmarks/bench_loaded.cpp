@@ -23,7 +23,9 @@
 //   T1(k) = T_M (1 - cos(2 pi k / N)) / 2 for k = 1..N (one period: 0 -> T_M -> 0), T2 = T3 = T4 = 0,
 //   N = 1000 steps (--steps), each warm-started from the previous Solution, one model and one
 //   workspace; rate, Newton iterations per step, and tip error against the tight reference at
-//   20 evenly spaced steps (max_tip_err_m; also listed at k = N/4, N/2, 3N/4, N). Rows: the defaults, the loaded cases' matched options, and the
+//   20 evenly spaced steps (max_tip_err_m; also listed at k = N/4, N/2, 3N/4, N; the references
+//   are solved once per model, from the default run's answers). Rows: the defaults, the loaded
+//   cases' matched options, and the
 //   trajectory's own calibration: every candidate except CVODE run over the whole trajectory, the
 //   fastest without failures whose largest tip error at those steps is at most --traj-tol (default
 //   1e-9 m, the issue-13 trajectory target), labelled "fastest within ... m: <candidate>".
@@ -402,8 +404,10 @@ void trajectory(const Settings& cfg, const std::map<ModelKind, Candidate>& match
     }
   };
   // The whole trajectory with one model and one workspace (only the input changes), then the
-  // tip error at the check steps against the tight reference warm-started from the step's answer.
-  auto run = [&](ModelKind kind, const SolverOptions& options) {
+  // tip error at the check steps against the tight reference. The references of a model are
+  // solved once, warm-started from the answers of its first run (the defaults), and shared by
+  // its other runs: a candidate that lands on another branch shows as a large error.
+  auto run = [&](ModelKind kind, const SolverOptions& options, std::map<int, Solution>& refs) {
     auto model = make_model(kind, robot);
     auto ws = model->make_workspace();
     std::optional<Solution> prev;
@@ -422,8 +426,8 @@ void trajectory(const Settings& cfg, const std::map<ModelKind, Candidate>& match
     auto ref_ws = model->make_workspace();
     for (int k : checks) {
       const Solution& s = kept.at(k);
-      const Solution ref = solve(*model, *ref_ws, input(k), tight_options(kind), s.converged() ? &s : nullptr);
-      r.err[k] = tip_error(s, ref);
+      if (!refs.count(k)) refs[k] = solve(*model, *ref_ws, input(k), tight_options(kind), s.converged() ? &s : nullptr);
+      r.err[k] = tip_error(s, refs.at(k));
     }
     return r;
   };
@@ -440,7 +444,8 @@ void trajectory(const Settings& cfg, const std::map<ModelKind, Candidate>& match
   for (ModelKind kind : kModels) {
     std::vector<Candidate> variants{candidates(kind).front()};
     if (matched.count(kind) && matched.at(kind).label != "default") variants.push_back(matched.at(kind));
-    for (const Candidate& v : variants) report(kind, v.label, run(kind, v.options));
+    std::map<int, Solution> refs;
+    for (const Candidate& v : variants) report(kind, v.label, run(kind, v.options, refs));
     // The trajectory's own calibration: every candidate but CVODE (never the fastest) run over
     // the whole trajectory once; the fastest without failures whose largest tip error at the
     // checked steps is at most --traj-tol is reported with its label and the tolerance.
@@ -448,7 +453,7 @@ void trajectory(const Settings& cfg, const std::map<ModelKind, Candidate>& match
     std::string best_label;
     for (const Candidate& v : candidates(kind)) {
       if (v.options.integrator == IntegratorKind::Cvode) continue;
-      const Run r = run(kind, v.options);
+      const Run r = run(kind, v.options, refs);
       if (r.failed == 0 && r.worst() <= cfg.traj_tol && (!best || r.total_ms < best->total_ms)) {
         best = r;
         best_label = v.label;
