@@ -15,7 +15,8 @@
 //   tip of VC without the kink forces at disks (VcOptions::kink_forces off, the paper code's
 //   formulation), solved tightly, against the paper code's.
 //   Options: the defaults, and per model the "matched" options: the candidate (RK4 steps per
-//   interval and longest step, CVODE tolerance, Newton tolerance) with the least total time
+//   interval and longest step, accuracy-driven RK4 with a tip tolerance from a coarse mesh, CVODE
+//   tolerance, Newton tolerance) with the least total time
 //   (minimum of 3 solves per case) whose tip error is at most --tip-tol (default 1e-8 m, the
 //   paper code's own error at n >= 10) on every case the reference solves. Every candidate's
 //   cost and worst error go to loaded_options.csv.
@@ -194,6 +195,16 @@ std::vector<Candidate> candidates(ModelKind k) {
           o.rk4_max_step = h;
           c.push_back({"rk4 " + std::to_string(steps) + "/interval h<=" + fmt(h * 1e3) + "mm", o});
         }
+    // Accuracy-driven RK4 (SolverOptions::rk4_tip_tolerance) from a coarse mesh: each case refines
+    // until its own tip error estimate meets the tolerance.
+    for (double tol : {1e-8, 5e-9, 1e-9})
+      for (double h0 : {8e-3, 4e-3}) {
+        SolverOptions o;
+        o.rk4_steps = 1;
+        o.rk4_max_step = h0;
+        o.rk4_tip_tolerance = tol;
+        c.push_back({"rk4 tip tol " + fmt(tol) + " m from 1/interval h<=" + fmt(h0 * 1e3) + "mm", o});
+      }
     for (double rtol : {1e-6, 1e-8}) {
       SolverOptions o;
       o.integrator = IntegratorKind::Cvode;
@@ -288,7 +299,7 @@ void loaded(const Settings& cfg, std::map<ModelKind, Candidate>& matched, const 
   bench::Csv csv(cfg.out + "/loaded.csv",
                  stamp + "case_id,model,options,n,tdcr_median_us,tdcr_min_us,paper_median_us,paper_min_us,speedup,"
                          "iterations,continuation_steps,status,converged,paper_converged,paper_residual,tip_x,tip_y,"
-                         "tip_z,tip_err_ref_m,tip_diff_paper_m,paper_form_tip_diff_paper_m");
+                         "tip_z,tip_err_ref_m,tip_diff_paper_m,paper_form_tip_diff_paper_m,tip_error_estimate_m");
   bench::Csv sum(cfg.out + "/loaded_summary.csv",
                  stamp + "model,options,cases,converged,failed,paper_failed,both_converged,median_us,speedup_median,"
                          "speedup_min,max_tip_err_ref_m,reference_failed,max_tip_diff_paper_m,tip_diff_paper_over_1e-6");
@@ -352,7 +363,7 @@ void loaded(const Settings& cfg, std::map<ModelKind, Candidate>& matched, const 
         csv.row(c.id, to_string(kind), v.label, c.n, tm.median_us, tm.min_us, p.median_us, p.min_us,
                 speedup, s.summary.iterations, s.summary.continuation_steps, to_string(s.summary.termination),
                 s.converged() ? 1 : 0, p.converged ? 1 : 0, p.residual, s.tip().p.x(), s.tip().p.y(), s.tip().p.z(),
-                err, diff, (cm[i].paper_form_tip - p.tip).norm());
+                err, diff, (cm[i].paper_form_tip - p.tip).norm(), s.summary.tip_error_estimate);
         bench::progress("loaded cases: " + to_string(kind) + " " + v.label, static_cast<int>(i + 1),
                         static_cast<int>(cases.size()));
       }

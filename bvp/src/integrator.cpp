@@ -56,9 +56,13 @@ double Integrator::relative_noise() const { return std::numeric_limits<double>::
 // ---------------------------------------------------------------------------------------------
 // RK4
 
-Rk4Integrator::Rk4Integrator(int steps, double max_step) : steps_(steps), max_step_(max_step) {
+Rk4Integrator::Rk4Integrator(int steps, double max_step) { set_mesh(steps, max_step); }
+
+void Rk4Integrator::set_mesh(int steps, double max_step) {
   if (steps < 1) throw InputError("solver.rk4_steps", std::to_string(steps), "must be >= 1");
   if (!(max_step > 0.0)) throw InputError("solver.rk4_max_step", format_value(max_step), "must be positive");
+  steps_ = steps;
+  max_step_ = max_step;
 }
 
 void Rk4Integrator::ensure_size(int n) {

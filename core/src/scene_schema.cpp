@@ -375,6 +375,11 @@ const Schema<SolverOptions>& solver_schema() {
                    {"m", nullptr,
                     "> 0; longest RK4 step: a disk interval longer than `rk4_steps` times this takes more steps",
                     kRk4}),
+      number_field("rk4_tip_tolerance", &S::rk4_tip_tolerance,
+                   {"m", nullptr,
+                    ">= 0; accuracy-driven RK4: refine the mesh from `rk4_steps` / `rk4_max_step` until the "
+                    "estimated tip error is at most this (0: off)",
+                    kRk4}),
       number_field("cvode_rtol", &S::cvode_rtol, {"", nullptr, "> 0", kCvode}),
       number_field("cvode_atol", &S::cvode_atol, {"state units", nullptr, "> 0", kCvode}),
       number_field("function_tolerance", &S::function_tolerance,

@@ -38,6 +38,8 @@ ojson summary_json(const SolverSummary& s) {
                {"continuation_steps", s.continuation_steps},
                {"linear_solver", s.linear_solver},
                {"integrator", s.integrator},
+               {"tip_error_estimate", number(s.tip_error_estimate)},
+               {"rk4_refinements", s.rk4_refinements},
                {"solve_time_s", number(s.solve_time_s)}};
 }
 

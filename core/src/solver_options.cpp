@@ -17,6 +17,9 @@ void SolverOptions::validate() const {
   positive("cvode_atol", cvode_atol);
   if (!(rk4_max_step > 0.0))  // +infinity allowed: exactly rk4_steps steps per interval
     throw InputError("solver.rk4_max_step", format_value(rk4_max_step), "must be positive");
+  if (!(std::isfinite(rk4_tip_tolerance) && rk4_tip_tolerance >= 0.0))
+    throw InputError("solver.rk4_tip_tolerance", format_value(rk4_tip_tolerance),
+                     "must be a non-negative number (0: fixed RK4 steps)");
   if (max_iterations < 1)
     throw InputError("solver.max_iterations", std::to_string(max_iterations), "must be at least 1");
   if (rk4_steps < 1) throw InputError("solver.rk4_steps", std::to_string(rk4_steps), "must be at least 1");

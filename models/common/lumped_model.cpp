@@ -96,12 +96,12 @@ void LumpedProblem::adjust(bvp::NewtonOptions& options) const {
   options.linear_solver = banded_ ? LinearSolverKind::SparseKLU : LinearSolverKind::Dense;
 }
 
-void LumpedProblem::adjust_warm(bvp::NewtonOptions& options) const {
+void LumpedProblem::adjust_warm(bvp::NewtonOptions& options, bool same_input) const {
   // Iterations one Jacobian serves (modified Newton), and the iterations of the previous solve
   // above which its Jacobian is too stale to start from.
   constexpr int kReuseSetupCalls = 10;
   constexpr int kStaleAfterIterations = 3;
-  options.reuse_jacobian = last_iterations_ <= kStaleAfterIterations;
+  options.reuse_jacobian = same_input || last_iterations_ <= kStaleAfterIterations;
   options.max_setup_calls = kReuseSetupCalls;
 }
 

@@ -100,7 +100,7 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   void adjust(bvp::NewtonOptions& options) const override;
   /// Warm starts: modified Newton from the previous solve's Jacobian, unless that solve needed
   /// many iterations (its Jacobian is then too far from this one's).
-  void adjust_warm(bvp::NewtonOptions& options) const override;
+  void adjust_warm(bvp::NewtonOptions& options, bool same_input) const override;
   /// The straight robot (straight_x), lifted to the formulation's unknowns.
   void cold_guess(Eigen::VectorXd& y) final;
   void rest_state(Eigen::VectorXd& y) final;

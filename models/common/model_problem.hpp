@@ -41,7 +41,13 @@ class ModelProblem {
   /// Model-specific Newton settings on top of the options (e.g. a bounded step).
   virtual void adjust(bvp::NewtonOptions& options) const { (void)options; }
   /// Newton settings for a warm-started solve, after adjust() (e.g. Jacobian reuse).
-  virtual void adjust_warm(bvp::NewtonOptions& options) const { (void)options; }
+  /// `same_input`: the warm start is an answer of this very input (a re-solve on a refined RK4
+  /// mesh, SolverOptions::rk4_tip_tolerance): the last Jacobian is then worth reusing however many
+  /// iterations the last solve took.
+  virtual void adjust_warm(bvp::NewtonOptions& options, bool same_input) const {
+    (void)options;
+    (void)same_input;
+  }
   /// The cold-start rule for the bound input.
   virtual ColdStart cold_start() const { return {}; }
   /// Cold guess at load factor 1 (system parameter already 1).

@@ -229,12 +229,101 @@ void add_differential_kinematics(const StaticModel& model, const detail::Rebind&
   detail::differential_kinematics(rebind, input, load.force_scale(), load.moment_scale(), tolerance, x, sol);
 }
 
+// --- Accuracy-driven RK4 (SolverOptions::rk4_tip_tolerance). ---
+
+// RK4 steps of one integration over `length` (bvp::Rk4Integrator's rule).
+int rk4_steps_over(double length, int steps, double max_step) {
+  if (!std::isfinite(max_step)) return steps;
+  return std::max(steps, static_cast<int>(std::ceil(length / max_step - 1e-9)));
+}
+
+// The smallest ratio of steps per disk interval between the mesh (f steps, max_step / f) and
+// (steps, max_step), f = 2^halvings: ceil() makes it less than f on some intervals (1.5 for
+// f = 2 at worst), and the Richardson factor must use the worst one.
+double refinement_ratio(const Robot& robot, int steps, double max_step, int factor) {
+  double r = factor;
+  for (const Segment& seg : robot.segments) {
+    const double len = seg.length / seg.disks;
+    r = std::min(r, static_cast<double>(rk4_steps_over(len, factor * steps, max_step / factor)) /
+                        rk4_steps_over(len, steps, max_step));
+  }
+  return r;
+}
+
+void add_work(const SolverSummary& from, SolverSummary& to) {
+  to.iterations += from.iterations;
+  to.residual_evaluations += from.residual_evaluations;
+  to.jacobian_evaluations += from.jacobian_evaluations;
+  to.continuation_steps += from.continuation_steps;
+}
+
+// Solve on the options' mesh, then on finer meshes, each warm-started from the last, until the
+// Richardson estimate of the tip error is within the tolerance. RK4's error goes like h^4, so
+// the finer answer's error is about |tip_fine - tip_coarse| / (r^4 - 1) for a step ratio r. The
+// first refinement halves the steps; later ones jump by as many halvings as the last estimate
+// says are needed (its error / 16 per halving), so that a tight tolerance does not solve every
+// mesh on the way.
+Solution solve_refined(const StaticModel& model, ModelWorkspace& workspace, const ModelInput& input,
+                       const SolverOptions& options, const Solution* warm_start) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const double tol = options.rk4_tip_tolerance;
+  SolverOptions o = options;
+  o.rk4_tip_tolerance = 0.0;
+  Solution coarse = tdcr::solve(model, workspace, input, o, warm_start);
+  if (!coarse.converged() || coarse.summary.integrator != "rk4" || coarse.disk_frames.empty()) return coarse;
+  SolverSummary work = coarse.summary;
+  const std::vector<PathEvent> events = coarse.path_events;
+  int halvings = 0, solves = 0, next = 1;
+  for (;;) {
+    const int factor = 1 << next;
+    const double r = refinement_ratio(model.robot(), o.rk4_steps, o.rk4_max_step, factor);
+    o.rk4_steps *= factor;
+    o.rk4_max_step /= factor;
+    halvings += next;
+    ++solves;
+    Solution fine = tdcr::solve(model, workspace, input, o, &coarse);
+    add_work(fine.summary, work);
+    SolverSummary& sum = fine.summary;
+    sum.iterations = work.iterations;
+    sum.residual_evaluations = work.residual_evaluations;
+    sum.jacobian_evaluations = work.jacobian_evaluations;
+    sum.continuation_steps = work.continuation_steps;
+    sum.rk4_refinements = solves;
+    if (fine.path_events.empty()) fine.path_events = events;
+    const auto finish = [&]() {
+      sum.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      return fine;
+    };
+    const std::string mesh = std::to_string(o.rk4_steps) + " steps per interval at least, h <= " +
+                             format_value(o.rk4_max_step) + " m";
+    if (!fine.converged()) {
+      sum.message = "accuracy-driven RK4: the solve on the refined mesh (" + mesh + ") failed: " + sum.message;
+      return finish();
+    }
+    sum.tip_error_estimate = (fine.tip().p - coarse.tip().p).norm() / (std::pow(r, 4) - 1.0);
+    if (sum.tip_error_estimate <= tol) return finish();
+    if (halvings >= SolverOptions::kMaxRk4Halvings) {
+      sum.termination = TerminationType::NoConvergence;
+      sum.message = "accuracy-driven RK4: tip error estimate " + format_value(sum.tip_error_estimate) +
+                    " m above solver.rk4_tip_tolerance " + format_value(tol) + " m on the finest mesh allowed (" +
+                    mesh + ", " + std::to_string(1 << halvings) + " times the first)";
+      return finish();
+    }
+    next = static_cast<int>(std::ceil(std::log(sum.tip_error_estimate / tol) / std::log(16.0)));
+    next = std::clamp(next, 1, SolverOptions::kMaxRk4Halvings - halvings);
+    coarse = std::move(fine);
+  }
+}
+
 }  // namespace
 
 Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelInput& input,
                const SolverOptions& options, const Solution* warm_start) {
   const auto t0 = std::chrono::steady_clock::now();
   options.validate();
+  if (options.rk4_tip_tolerance > 0.0 && options.integrator == IntegratorKind::FixedStepRK4 &&
+      (model.kind() == ModelKind::VC || model.kind() == ModelKind::VCref))
+    return solve_refined(model, workspace, input, options, warm_start);
   input.validate(model.robot());
   model.check_input(input);
   if (!workspace.belongs_to(model))
@@ -264,7 +353,6 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
     P.adjust(nopt);
     sys->set_parameter(1.0);
     const bool warm = warm_start && P.warm_guess(*warm_start, x);
-    if (warm && options.reuse_jacobian) P.adjust_warm(nopt);
     // The secant predictor: this solve's input, its warm start's, and the model's warm guess.
     detail::SolveHistory& history = workspace.history_;
     Eigen::VectorXd u, from, unpredicted;
@@ -272,6 +360,7 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
     if (warm) {
       input_vector(input.actuation.values, input.loads, u);
       input_vector(warm_start->tensions, warm_start->loads, from);
+      if (options.reuse_jacobian) P.adjust_warm(nopt, from == u);
       unpredicted = x;
       if (options.extrapolate_warm_starts) predicted = extrapolate(history, from, u, x);
     }

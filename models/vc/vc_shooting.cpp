@@ -110,6 +110,17 @@ void bind_input(VcWorkspace::Impl& W, const VcModel& model, const ModelInput& in
   }
 
   if (W.shot_integrator && same_integration(W.integration, options)) return;
+  if (W.shot_integrator && W.integration.integrator == IntegratorKind::FixedStepRK4 &&
+      options.integrator == IntegratorKind::FixedStepRK4) {
+    // Only the RK4 mesh changes (e.g. an accuracy-driven refinement, SolverOptions::
+    // rk4_tip_tolerance): refine the integrators in place, so that the formulations, and the
+    // Jacobian their Newton solver holds factored, survive for the warm-started re-solve.
+    static_cast<bvp::Rk4Integrator&>(*W.shot_integrator).set_mesh(options.rk4_steps, options.rk4_max_step);
+    static_cast<bvp::Rk4Integrator&>(*W.final_integrator).set_mesh(options.rk4_steps, options.rk4_max_step);
+    W.integration = options;
+    ++W.loads_version;  // the memoised last shot belongs to the old mesh
+    return;
+  }
   // New integration settings: new integrators, and the rods and formulations that use them.
   if (W.shot_integrator) W.retired_rhs += W.shot_integrator->rhs_evaluations();
   if (W.final_integrator) W.retired_rhs += W.final_integrator->rhs_evaluations();

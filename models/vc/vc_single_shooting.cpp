@@ -92,9 +92,9 @@ class SingleShooting final : public detail::ModelProblem {
     options.max_newton_step = kMaxNewtonStep;
     options.max_setup_calls = kReuseSetupCalls;
   }
-  void adjust_warm(bvp::NewtonOptions& options) const override {
+  void adjust_warm(bvp::NewtonOptions& options, bool same_input) const override {
     if (!W_.model->options().reuse_jacobian) return;
-    options.reuse_jacobian = last_iterations_ <= kStaleAfterIterations;
+    options.reuse_jacobian = same_input || last_iterations_ <= kStaleAfterIterations;
     options.max_setup_calls = kReuseSetupCalls;
   }
   void cold_guess(Eigen::VectorXd& x) override { x = guess(W_.model->options().initial_guess); }

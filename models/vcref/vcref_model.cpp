@@ -108,9 +108,10 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
   // (modified Newton, a fresh one when the residual stops falling fast): along a trajectory an
   // iteration then costs one shot per interval instead of seven. Not after a slow solve (its
   // Jacobian may be far from here) or a change of the Jacobian's pattern.
-  void adjust_warm(bvp::NewtonOptions& options) const override {
+  void adjust_warm(bvp::NewtonOptions& options, bool same_input) const override {
     if (!reuse_) return;
-    options.reuse_jacobian = last_iterations_ <= kStaleAfterIterations && solved_ == shooting_.structure();
+    options.reuse_jacobian =
+        (same_input || last_iterations_ <= kStaleAfterIterations) && solved_ == shooting_.structure();
     options.max_setup_calls = kReuseSetupCalls;
   }
   detail::ColdStart cold_start() const override { return cold_; }

@@ -321,6 +321,7 @@ void bind_effects(py::module_& m) {
       .def_readwrite("max_iterations", &tdcr::SolverOptions::max_iterations)
       .def_readwrite("rk4_steps", &tdcr::SolverOptions::rk4_steps)
       .def_readwrite("rk4_max_step", &tdcr::SolverOptions::rk4_max_step)
+      .def_readwrite("rk4_tip_tolerance", &tdcr::SolverOptions::rk4_tip_tolerance)
       .def_readwrite("cvode_rtol", &tdcr::SolverOptions::cvode_rtol)
       .def_readwrite("cvode_atol", &tdcr::SolverOptions::cvode_atol)
       .def_readwrite("continuation", &tdcr::SolverOptions::continuation)

@@ -82,6 +82,8 @@ void bind_solution_parts(py::module_& m) {
       .def_readonly("continuation_steps", &tdcr::SolverSummary::continuation_steps)
       .def_readonly("linear_solver", &tdcr::SolverSummary::linear_solver)
       .def_readonly("integrator", &tdcr::SolverSummary::integrator)
+      .def_readonly("tip_error_estimate", &tdcr::SolverSummary::tip_error_estimate)
+      .def_readonly("rk4_refinements", &tdcr::SolverSummary::rk4_refinements)
       .def_readonly("solve_time_s", &tdcr::SolverSummary::solve_time_s)
       .def_property_readonly("converged", &tdcr::SolverSummary::converged)
       .def("brief_report", &tdcr::SolverSummary::brief_report)

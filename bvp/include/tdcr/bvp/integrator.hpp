@@ -75,6 +75,9 @@ class Rk4Integrator : public Integrator {
   int steps() const { return steps_; }
   /// @brief Longest step.
   double max_step() const { return max_step_; }
+  /// @brief A new mesh for later integrate() calls (same checks as the constructor): lets a
+  /// caller refine the steps without rebuilding what holds this integrator.
+  void set_mesh(int steps, double max_step);
 
  private:
   void ensure_size(int n);

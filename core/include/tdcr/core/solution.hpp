@@ -47,6 +47,10 @@ struct SolverSummary {
   int continuation_steps = 0;    ///< Load steps used by continuation (0: direct solve).
   std::string linear_solver;     ///< "dense", "klu", "system" (the model's own Newton steps), or "none" (closed form).
   std::string integrator;        ///< "rk4", "cvode", or "none".
+  /// Accuracy-driven RK4 (SolverOptions::rk4_tip_tolerance): Richardson estimate of the tip
+  /// position error of the answer (m), from its mesh and the next coarser one; NaN otherwise.
+  double tip_error_estimate = std::numeric_limits<double>::quiet_NaN();
+  int rk4_refinements = 0;       ///< Accuracy-driven RK4: solves on refined meshes (0 otherwise).
   double solve_time_s = 0.0;     ///< Wall time of the solve (s).
 
   /// @brief True only if termination is Converged: the returned shape is an equilibrium within

@@ -38,6 +38,20 @@ struct SolverOptions {
   /// the paper robot (configuration 8) is within 5e-8 m of CVODE at rtol 1e-12 for n = 1, 7e-9 m
   /// for n = 2 and 7e-10 m for n = 10 (was 3.3e-5 m for n = 1 with 8 steps per interval alone).
   double rk4_max_step = 1e-3;
+  /// Accuracy-driven RK4 (m; 0: off, the fixed steps above). With a positive tolerance a VC or
+  /// VCref solve with RK4 starts on the mesh of rk4_steps and rk4_max_step and refines it
+  /// (steps per interval doubled and the longest step halved, once or as often as the last
+  /// estimate asks for) until the Richardson estimate of its tip position error, from the last
+  /// two meshes, is at most this; each finer solve is warm-started from the coarser answer and
+  /// its Jacobian. SolverSummary::tip_error_estimate and rk4_refinements report it; a solve that
+  /// cannot meet the tolerance within kMaxRk4Halvings halvings of the first mesh's steps is
+  /// reported as not converged. Start coarse: e.g.
+  /// rk4_steps 1 and rk4_max_step 8e-3 on the paper robot (docs/design-notes/vc.md). CVODE and
+  /// the models that integrate nothing ignore it.
+  double rk4_tip_tolerance = 0.0;
+  /// Most halvings of the first mesh's steps in an accuracy-driven RK4 solve (rk4_tip_tolerance):
+  /// the finest mesh has 64 times its steps.
+  static constexpr int kMaxRk4Halvings = 6;
   double cvode_rtol = 1e-8;   ///< CVODE relative tolerance.
   double cvode_atol = 1e-10;  ///< CVODE absolute tolerance.
   /// Linear solver inside Newton (VC, VCref; CCsub and PRB always use dense LU, CC solves no
@@ -77,7 +91,8 @@ struct SolverOptions {
   bool extrapolate_warm_starts = true;
 
   /// @brief Throws InputError (field `solver.<name>`) on a tolerance that is not a positive
-  /// finite number, or an iteration, RK4 step or continuation step count below 1.
+  /// finite number, or an iteration, RK4 step or continuation step count below 1, or an RK4 tip
+  /// tolerance that is negative or not finite.
   void validate() const;
 };
 
