@@ -566,3 +566,70 @@ TEST(BvpNewton, KluPatternChangeTriggersANewAnalysis) {
   EXPECT_EQ(analyses, 3);
   EXPECT_EQ(solver.rebuilds(), 1);  // a new pattern re-sizes the matrix, nothing else
 }
+
+// A well-conditioned nonlinear system with the root r = (1, 0.5, -0.3): f_i(x) = g_i(x) - g_i(r),
+// g_i = x_i^3 + x_i + 0.5 sin(x_{i+1}) (cyclic); Jacobian 1 + 3 x_i^2 on the diagonal.
+class Cubic3 : public tdcr::bvp::ResidualSystem {
+ public:
+  int size() const override { return 3; }
+  static double g(const Eigen::Ref<const Eigen::VectorXd>& x, int i) {
+    return x[i] * x[i] * x[i] + x[i] + 0.5 * std::sin(x[(i + 1) % 3]);
+  }
+  bool residual(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> f) override {
+    const Eigen::Vector3d r = root();
+    for (int i = 0; i < 3; ++i) f[i] = g(x, i) - g(r, i);
+    return true;
+  }
+  static Eigen::Vector3d root() { return Eigen::Vector3d(1.0, 0.5, -0.3); }
+};
+
+// NewtonOptions::freeze_jacobian_below: exact Newton down to the threshold, then modified Newton
+// from the last Jacobian. From a far start: the same root, fewer Jacobians, a residual below the
+// full tolerance.
+TEST(BvpNewton, FrozenJacobianBelowAThresholdSavesJacobiansAndReachesTheSameRoot) {
+  Cubic3 sys;
+  NewtonSolver exact_solver, frozen_solver;
+  const Eigen::VectorXd start = Eigen::Vector3d(3.0, -2.0, 2.5);
+  Eigen::VectorXd xe = start, xf = start;
+  NewtonOptions o;
+  const auto exact = exact_solver.solve(sys, xe, o);
+  o.freeze_jacobian_below = 1e-3;
+  const auto frozen = frozen_solver.solve(sys, xf, o);
+  ASSERT_TRUE(exact.converged() && frozen.converged()) << exact.message << " / " << frozen.message;
+  EXPECT_LT(frozen.jacobian_evaluations, exact.jacobian_evaluations);
+  EXPECT_GT(frozen.iterations, exact.iterations);  // cheap iterations instead of Jacobians
+  EXPECT_EQ(frozen.message.find("exact Newton after"), std::string::npos) << frozen.message;
+  EXPECT_LE(frozen.residual_norm, 1e-10);
+  EXPECT_LE((xe - Cubic3::root()).norm(), 1e-10);
+  EXPECT_LE((xf - Cubic3::root()).norm(), 1e-10);
+  // Freezing at a threshold the first residual already meets: KINSOL's own initial-guess test
+  // (0.01 x tolerance) still decides, so a start 1e-9 off is iterated to the root, not kept.
+  Eigen::VectorXd near = Cubic3::root() + Eigen::Vector3d(0.0, 0.0, 1e-9);
+  const auto r = frozen_solver.solve(sys, near, o);
+  ASSERT_TRUE(r.converged()) << r.message;
+  EXPECT_LE((near - Cubic3::root()).norm(), 1e-12);
+  // Validation: 0 (off) or above the tolerance.
+  NewtonOptions bad;
+  bad.freeze_jacobian_below = 1e-12;  // below function_tolerance
+  EXPECT_THROW(bad.validate(), tdcr::InputError);
+  bad.freeze_jacobian_below = -1.0;
+  EXPECT_THROW(bad.validate(), tdcr::InputError);
+  bad.freeze_jacobian_below = std::nan("");
+  EXPECT_THROW(bad.validate(), tdcr::InputError);
+}
+
+// A frozen Jacobian that contracts too slowly (Dense3 has a nearly singular root: exact Newton
+// itself needs 20 iterations from zero) hands the solve back to exact Newton, which converges.
+TEST(BvpNewton, FrozenJacobianThatStallsFallsBackToExactNewton) {
+  Dense3 sys;
+  NewtonSolver solver;
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(3);
+  NewtonOptions o;
+  o.freeze_jacobian_below = 1e-2;
+  const auto r = solver.solve(sys, x, o);
+  ASSERT_TRUE(r.converged()) << r.message;
+  EXPECT_NE(r.message.find("exact Newton after"), std::string::npos) << r.message;
+  Eigen::VectorXd f(3);
+  sys.residual(x, f);
+  EXPECT_LE(f.cwiseAbs().maxCoeff(), 1e-10);
+}

@@ -31,6 +31,10 @@ void NewtonOptions::validate() const {
                      "must be >= 0 (0 = automatic)");
   if (max_setup_calls < 1)
     throw InputError("newton.max_setup_calls", std::to_string(max_setup_calls), "must be >= 1");
+  if (!(freeze_jacobian_below >= 0.0) || !std::isfinite(freeze_jacobian_below) ||
+      (freeze_jacobian_below > 0.0 && freeze_jacobian_below <= function_tolerance))
+    throw InputError("newton.freeze_jacobian_below", format_value(freeze_jacobian_below),
+                     "must be 0 (off) or above function_tolerance");
   if (dense_size_limit < 0)
     throw InputError("newton.dense_size_limit", std::to_string(dense_size_limit),
                      "must be >= 0");

@@ -304,6 +304,55 @@ SparseLuStatistics NewtonSolver::sparse_lu_statistics() const { return impl_->lu
 NewtonResult NewtonSolver::solve(ResidualSystem& system, Eigen::VectorXd& x,
                                  const NewtonOptions& options) {
   options.validate();
+  if (options.freeze_jacobian_below > 0.0 && !options.reuse_jacobian) {
+    // Exact Newton to the freezing threshold, then modified Newton from its last Jacobian.
+    NewtonOptions exact = options;
+    exact.freeze_jacobian_below = 0.0;
+    exact.function_tolerance = options.freeze_jacobian_below;
+    exact.max_setup_calls = 1;
+    NewtonResult first = solve(system, x, exact);
+    // Done if it met the full tolerance as KINSOL judges it: after an iteration, or at the
+    // initial guess with KINSOL's margin of 0.01.
+    const double done = first.iterations > 0 ? options.function_tolerance : 0.01 * options.function_tolerance;
+    if (!first.converged() || first.residual_norm <= done || first.iterations >= options.max_iterations)
+      return first;
+    // Modified Newton converges linearly and stops just below its tolerance, where exact
+    // Newton's last step lands far below it: ask it for kFrozenTighter times more, and accept
+    // function_tolerance if round-off stops it first.
+    constexpr double kFrozenTighter = 1e-2;
+    constexpr int kFrozenMaxIterations = 30;
+    NewtonOptions frozen = options;
+    frozen.freeze_jacobian_below = 0.0;
+    frozen.reuse_jacobian = true;
+    frozen.max_setup_calls = 10;
+    frozen.function_tolerance = options.function_tolerance * kFrozenTighter;
+    frozen.max_iterations = std::min(kFrozenMaxIterations, options.max_iterations - first.iterations);
+    const Eigen::VectorXd x_first = x;
+    NewtonResult r = solve(system, x, frozen);
+    const auto add = [](NewtonResult& to, const NewtonResult& from) {
+      to.iterations += from.iterations;
+      to.residual_evaluations += from.residual_evaluations;
+      to.jacobian_evaluations += from.jacobian_evaluations;
+      to.fd_residual_evaluations += from.fd_residual_evaluations;
+    };
+    add(r, first);
+    if (r.converged()) return r;
+    if (std::isfinite(r.residual_norm) && r.residual_norm <= options.function_tolerance && x.allFinite()) {
+      r.termination = TerminationType::Converged;
+      r.message += " (within function_tolerance; the tighter target of the modified Newton iterations was not reached)";
+      return r;
+    }
+    // The frozen Jacobian contracted too slowly: exact Newton finishes, from the better point.
+    if (!(std::isfinite(r.residual_norm) && r.residual_norm <= first.residual_norm && x.allFinite())) x = x_first;
+    NewtonOptions rest = exact;
+    rest.function_tolerance = options.function_tolerance;
+    rest.max_iterations = std::max(1, options.max_iterations - r.iterations);
+    NewtonResult last = solve(system, x, rest);
+    add(last, r);
+    last.message += " (exact Newton after " + std::to_string(frozen.max_iterations) +
+                    " modified Newton iterations did not converge)";
+    return last;
+  }
   Impl& s = *impl_;
   const int n = system.size();
   if (n < 0) throw std::invalid_argument("NewtonSolver::solve: negative system size");

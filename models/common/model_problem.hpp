@@ -48,6 +48,10 @@ class ModelProblem {
     (void)options;
     (void)same_input;
   }
+  /// Cold direct solves: exact Newton down to this scaled residual, then modified Newton from
+  /// its last Jacobian (bvp::NewtonOptions::freeze_jacobian_below); 0: exact Newton throughout.
+  /// Only for unknowns without a chart or gauge that a stale Jacobian could wander along.
+  virtual double cold_freeze_jacobian_below() const { return 0.0; }
   /// The cold-start rule for the bound input.
   virtual ColdStart cold_start() const { return {}; }
   /// Cold guess at load factor 1 (system parameter already 1).

@@ -29,9 +29,14 @@ void check_warm_start(const StaticModel& model, const Solution& warm) {
                      "a warm start must come from the same model of the same robot (StaticModel::fingerprint)");
 }
 
-// Direct Newton solve from x, with one retry from the problem's alternative cold guess.
-void direct_solve(detail::ModelProblem& P, bvp::ParameterizedSystem& sys, const bvp::NewtonOptions& nopt,
-                  bool warm, Eigen::VectorXd& x, SolverSummary& sum) {
+// Direct Newton solve from x, with one retry from the problem's alternative cold guess. A cold
+// solve freezes the Jacobian near the solution where the problem allows it (and the options
+// allow Jacobian reuse at all).
+void direct_solve(detail::ModelProblem& P, bvp::ParameterizedSystem& sys, const bvp::NewtonOptions& options,
+                  bool warm, bool allow_reuse, Eigen::VectorXd& x, SolverSummary& sum) {
+  bvp::NewtonOptions nopt = options;
+  const double freeze = P.cold_freeze_jacobian_below();
+  if (!warm && allow_reuse && freeze > nopt.function_tolerance) nopt.freeze_jacobian_below = freeze;
   bvp::NewtonResult res = P.newton().solve(sys, x, nopt);
   detail::copy_newton_result(res, sum);
   if (res.converged() || warm || nopt.max_iterations <= sum.iterations) return;
@@ -152,11 +157,11 @@ double solve_on_loading_path(const StaticModel& model, const ModelInput& input, 
   const bool skip_direct = input_path && large_change(model, warm_start->loads, input.loads);
   if (skip_direct && unpredicted) x = *unpredicted;
   if (!skip_direct) {
-    direct_solve(P, sys, nopt, warm, x, sum);
+    direct_solve(P, sys, nopt, warm, options.reuse_jacobian, x, sum);
     if (!sum.converged() && unpredicted) {  // the secant prediction failed: from the last answer
       const std::string first = sum.message;
       x = *unpredicted;
-      direct_solve(P, sys, nopt, warm, x, sum);
+      direct_solve(P, sys, nopt, warm, options.reuse_jacobian, x, sum);
       sum.message += " (retry from the previous answer; from the secant prediction: " + first + ")";
     }
     if (sum.converged() || !options.continuation) return 1.0;
@@ -167,7 +172,7 @@ double solve_on_loading_path(const StaticModel& model, const ModelInput& input, 
     const Eigen::VectorXd guess = x;
     if (detail::follow_input_path(rebind, previous_input(*warm_start, input), input, *warm_start, nopt, x, sum)) {
       const std::string path = sum.message;
-      direct_solve(P, sys, nopt, true, x, sum);  // at the path's end: converged in 0-1 iterations
+      direct_solve(P, sys, nopt, true, options.reuse_jacobian, x, sum);  // at the path's end: converged in 0-1 iterations
       if (sum.converged()) {
         sum.message = path + "; " + sum.message;
         return 1.0;

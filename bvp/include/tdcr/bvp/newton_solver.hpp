@@ -35,6 +35,12 @@ struct NewtonOptions {
   /// trajectory. KINSOL evaluates a fresh Jacobian after max_setup_calls iterations, when the
   /// residual stops decreasing fast enough with the old one, or when a line search fails with it.
   bool reuse_jacobian = false;
+  /// Exact Newton until the scaled residual max-norm falls below this, then modified Newton
+  /// from the last Jacobian (reuse_jacobian, max_setup_calls 10) down to function_tolerance;
+  /// 0 = off (also off when reuse_jacobian is set). The iterates far from the solution, which
+  /// decide the branch it lands on, are exact Newton's; the last ones cost a residual each
+  /// instead of a Jacobian. Must be 0 or above function_tolerance.
+  double freeze_jacobian_below = 0.0;
   /// Backtracking line search (KIN_LINESEARCH); false = full Newton steps (KIN_NONE).
   bool line_search = true;
   /// Linear solver inside Newton.
