@@ -465,3 +465,41 @@ TEST(BvpArclength, NamesOfStatusesAndEvents) {
   EXPECT_EQ(tdcr::bvp::to_string(ArclengthEventType::Bifurcation), "bifurcation");
   EXPECT_EQ(tdcr::bvp::to_string(ArclengthEventType::Snap), "snap");
 }
+
+// ArclengthOptions::corrector_freeze_jacobian_below: correctors that freeze their Jacobian near
+// the solution find the same path (Bratu up to lambda = 3, its fold at 3.51 and the folds of the
+// coupled S-curve to 1e-6) with fewer Jacobians than exact-Newton correctors.
+TEST(BvpArclength, FrozenCorrectorJacobiansFindTheSamePathWithFewerJacobians) {
+  int jacobians[2] = {0, 0};
+  Vec end[2];
+  double fold[2] = {0.0, 0.0};
+  for (int frozen = 0; frozen < 2; ++frozen) {
+    SCOPED_TRACE(frozen);
+    ArclengthOptions o;
+    o.corrector_freeze_jacobian_below = frozen ? 1e-3 : 0.0;
+    BratuPath s(20, false);
+    Vec u = Vec::Zero(20);
+    o.target = 3.0;
+    const ArclengthResult r = follow(s, u, o);
+    ASSERT_TRUE(r.converged()) << r.message;
+    jacobians[frozen] = r.jacobian_evaluations;
+    end[frozen] = u;
+    BratuPath b(20, false);
+    Vec v = Vec::Zero(20);
+    o.target = 5.0;
+    o.max_steps = 60;
+    const ArclengthResult rf = follow(b, v, o);
+    ASSERT_EQ(rf.count(ArclengthEventType::Fold), 1) << rf.message;
+    fold[frozen] = rf.events[0].lambda;
+  }
+  EXPECT_LT(jacobians[1], jacobians[0]);
+  EXPECT_LE((end[1] - end[0]).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_NEAR(fold[1], fold[0], 1e-6);
+  ArclengthOptions bad;
+  bad.corrector_freeze_jacobian_below = -1.0;
+  EXPECT_THROW(bad.validate(), tdcr::InputError);
+  tdcr::SolverOptions no_reuse;
+  no_reuse.reuse_jacobian = false;
+  EXPECT_EQ(ArclengthOptions::from(no_reuse).corrector_freeze_jacobian_below, 0.0);
+  EXPECT_GT(ArclengthOptions::from(tdcr::SolverOptions()).corrector_freeze_jacobian_below, 0.0);
+}

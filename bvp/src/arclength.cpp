@@ -16,6 +16,7 @@ namespace tdcr::bvp {
 ArclengthOptions ArclengthOptions::from(const SolverOptions& options) {
   ArclengthOptions a;
   a.max_steps = options.max_continuation_steps;
+  if (!options.reuse_jacobian) a.corrector_freeze_jacobian_below = 0.0;  // no Jacobian history
   return a;
 }
 
@@ -47,6 +48,8 @@ void ArclengthOptions::validate() const {
   if (snap_tries < 1) fail("snap_tries", snap_tries, "must be at least 1");
   if (snap_max_iterations < 1) fail("snap_max_iterations", snap_max_iterations, "must be at least 1");
   if (corrector_max_iterations < 1) fail("corrector_max_iterations", corrector_max_iterations, "must be at least 1");
+  if (!(corrector_freeze_jacobian_below >= 0.0 && std::isfinite(corrector_freeze_jacobian_below)))
+    fail("corrector_freeze_jacobian_below", corrector_freeze_jacobian_below, "must be >= 0 and finite");
 }
 
 std::string to_string(ArclengthEventType t) {
@@ -96,6 +99,8 @@ class Run {
         n_(system.size()), span_(options.target - options.start), dir_(span_ > 0.0 ? 1.0 : -1.0),
         bordered_(system, std::abs(span_)), w_(bordered_.weights()) {
     corrector_.max_iterations = std::min(nopt_.max_iterations, opt_.corrector_max_iterations);
+    if (opt_.corrector_freeze_jacobian_below > corrector_.function_tolerance && !corrector_.reuse_jacobian)
+      corrector_.freeze_jacobian_below = opt_.corrector_freeze_jacobian_below;
     for (Point* p : {&prev_, &cur_, &probe_, &best_, &fold_, &bif_, &a_, &b_}) p->resize(n_ + 1);
     y_pred_.resize(n_ + 1);
     guess_.resize(n_ + 1);

@@ -73,6 +73,12 @@ struct ArclengthOptions {
   /// long for its corrector is rejected and shortened; near a singular point such a corrector
   /// can otherwise run 150 iterations before it fails (VC at a tendon's geometric limit).
   int corrector_max_iterations = 30;
+  /// Correctors freeze their Jacobian below this scaled residual (NewtonOptions::
+  /// freeze_jacobian_below; 0 or not above the function tolerance: exact Newton). A corrector
+  /// starting below it reuses the last corrector's Jacobian. Soft robots under tip forces
+  /// (bench_soft, docs/design-notes/arclength.md): PRB's median solve 86 -> 39 ms.
+  /// ArclengthOptions::from() sets 0 when SolverOptions::reuse_jacobian is false.
+  double corrector_freeze_jacobian_below = 1e-3;
   /// The path stops (stalled) when lambda leaves [start - window (target - start),
   /// target + window (target - start)] (for start < target; mirrored otherwise): a curve that
   /// turned back for good would otherwise run until max_steps.
