@@ -234,14 +234,14 @@ tables["loaded_machine"] = stamp
 
 # Soft robots under tip forces (bench_soft); left empty if the results hold no soft.csv.
 tables["soft_summary"] = tables["soft_table"] = tables["soft_machine"] = ""
-if os.path.exists(os.path.join(res, "soft.csv")):
-    soft = read("soft.csv")
-    with open(os.path.join(res, "soft.csv")) as fh:
-        tables["soft_machine"] = "Run: " + fh.readline().lstrip("# ").rstrip() + "."
+tables["soft_tol_summary"] = tables["soft_tol_machine"] = ""
+
+
+def soft_summary(rows_in):
     rows = ["| model | converged / scenes | ratio to the fastest: median | max | soft scenes (E < 1): median CPU time | max |",
             "| --- " * 6 + "|"]
     for m in ["ccsub", "prb", "vc", "vcref"]:
-        mine = [r for r in soft if r["model"] == m]
+        mine = [r for r in rows_in if r["model"] == m]
         ok = [r for r in mine if r["status"] == "converged"]
         ratios = sorted(float(r["ratio_to_fastest"]) for r in ok)
         cpu = sorted(float(r["median_cpu_us"]) for r in mine if float(r["e_factor"]) < 1 and r["status"] == "converged")
@@ -249,7 +249,18 @@ if os.path.exists(os.path.join(res, "soft.csv")):
         rows.append(f"| {LABEL[m]} | {len(ok)} / {len(mine)} | {f(med(ratios)) if ratios else '-'}x | "
                     f"{f(ratios[-1]) if ratios else '-'}x | {time_us(med(cpu)) if cpu else '-'} | "
                     f"{time_us(cpu[-1]) if cpu else '-'} |")
-    tables["soft_summary"] = "\n".join(rows)
+    return "\n".join(rows)
+
+
+if os.path.exists(os.path.join(res, "soft_tol.csv")):
+    with open(os.path.join(res, "soft_tol.csv")) as fh:
+        tables["soft_tol_machine"] = "Run: " + fh.readline().lstrip("# ").rstrip() + "."
+    tables["soft_tol_summary"] = soft_summary(read("soft_tol.csv"))
+if os.path.exists(os.path.join(res, "soft.csv")):
+    soft = read("soft.csv")
+    with open(os.path.join(res, "soft.csv")) as fh:
+        tables["soft_machine"] = "Run: " + fh.readline().lstrip("# ").rstrip() + "."
+    tables["soft_summary"] = soft_summary(soft)
     rows = ["| scene | force | model | status | continuation steps | iterations | median time (CPU) | "
             "ratio to the fastest | tip distance to VCref |", "| --- " * 9 + "|"]
     for r in soft:

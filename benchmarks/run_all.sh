@@ -23,6 +23,7 @@ py=/usr/bin/python3; [ -x "$py" ] || py=python3
 "$build/bin/bench_lumped" $quick | tee "$out/bench_lumped.txt"
 "$build/bin/bench_loaded" $quick --out "$out"
 "$build/bin/bench_soft" $quick --out "$out" | tee "$out/bench_soft.txt"
+"$build/bin/bench_soft" $quick --out "$out" --rk4-tip-tol 1e-8 | tee "$out/bench_soft_tol.txt"
 "$py" benchmarks/plot_results.py "$out" "$out"
 if [ "$out" = docs/benchmark-results ]; then
   "$py" benchmarks/make_report.py "$out" benchmarks/report_template.md docs/benchmarks.md --readme README.md
