@@ -39,6 +39,9 @@ constexpr int kBandedFrom = 60;
 // Jacobian instead of 3-4 (the recursive form's Jacobian costs about n/2 residuals), the same
 // answers within the tolerance.
 constexpr double kColdFreezeJacobianBelow = 1e-3;
+// ... and without external loads only from this many unknowns (bench_lumped, configuration 2:
+// n = 10 per segment, 30 unknowns, 56 -> 63 us with freezing; n = 20, 60 unknowns, 204 -> 184 us).
+constexpr int kColdFreezeFromUnknowns = 60;
 
 class CcsubBody final : public detail::LumpedBody {
  public:
@@ -77,7 +80,14 @@ class CcsubProblem final : public detail::LumpedProblem {
   // bending-plane angle has one: with a frozen Jacobian it drifted by 5 pi on configuration 7 of
   // the case study and landed on the other chart of the same shape, where the stability test
   // reads the wrong sign). Measured in docs/design-notes/lumped.md.
-  double cold_freeze_jacobian_below() const override { return kColdFreezeJacobianBelow; }
+  // Exact Newton's 2 iterations from the cold guess of a tendon-only scene (the case study's
+  // configurations) beat one Jacobian and 3-4 frozen iterations below 60 unknowns (the second
+  // Newton call's overhead): freeze there only under external loads, where exact Newton takes 3-4.
+  double cold_freeze_jacobian_below() const override {
+    const physics::LoadCase& l = loads_.loads;
+    const bool external = l.has_tip_wrench() || l.has_gravity();
+    return external || size() >= kColdFreezeFromUnknowns ? kColdFreezeJacobianBelow : 0.0;
+  }
 
  private:
   void constitutive(int j, const double* xj, const detail::SubsegmentPose& g, const Vec3& F, const Vec3& M,

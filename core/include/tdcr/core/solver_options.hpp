@@ -78,9 +78,11 @@ struct SolverOptions {
   /// A warm-started solve may begin from the previous solve's Jacobian, where the model keeps it
   /// (CCsub, PRB, VC, VCref; modified Newton, a fresh Jacobian when the residual stops falling
   /// fast, and none after a slow solve): more, much cheaper iterations along a trajectory. The
-  /// answer then depends on the workspace's last solve within function_tolerance. False: every
-  /// solve starts with a fresh Jacobian (the displacement-input solve does this for its inner
-  /// tension solves, whose differences must not carry that history).
+  /// answer then depends on the workspace's last solve within function_tolerance. It also lets
+  /// Newton freeze its Jacobian near the solution (bvp::NewtonOptions::freeze_jacobian_below):
+  /// CCsub's cold direct solves and every continuation corrector. False: every solve starts with
+  /// a fresh Jacobian and iterates exact Newton throughout (the displacement-input solve does
+  /// this for its inner tension solves, whose differences must not carry that history).
   bool reuse_jacobian = true;
   /// A warm start from the workspace's last answer starts from the secant through its last two
   /// answers when the input moves on along (within 10 % of) the line of the last input step, by
