@@ -45,7 +45,8 @@ struct SolverOptions {
   /// two meshes, is at most this; each finer solve is warm-started from the coarser answer and
   /// its Jacobian. SolverSummary::tip_error_estimate and rk4_refinements report it; a solve that
   /// cannot meet the tolerance within kMaxRk4Halvings halvings of the first mesh's steps is
-  /// reported as not converged. Start coarse: e.g.
+  /// reported as not converged. The estimate is an estimate, not a bound: on the 60 loaded cases
+  /// of bench_loaded it was 0.90-1.15 times the true tip error. Start coarse: e.g.
   /// rk4_steps 1 and rk4_max_step 8e-3 on the paper robot (docs/design-notes/vc.md). CVODE and
   /// the models that integrate nothing ignore it.
   double rk4_tip_tolerance = 0.0;
