@@ -2,6 +2,7 @@
 // or better tip accuracy, per model (VC, CCsub, VCref, PRB).
 //
 //   bench_loaded [--quick] [--out DIR] [--cases N] [--repeat R] [--steps N] [--tip-tol M] [--traj-tol M]
+//                [--models LIST]
 //
 // Part 1, loaded cases: the 60 random cases of benchmarks/data/paper_code_cases_inputs.csv (paper
 // robot, n = 3, 5, 10, 20, tensions U[0, 1.5 T_M], tip force |F| <= 0.5 N in any direction, base
@@ -32,7 +33,8 @@
 //   1e-9 m, the issue-13 trajectory target), labelled "fastest within ... m: <candidate>".
 // Writes DIR/loaded.csv (per case, model, options), loaded_summary.csv (per model and options),
 // loaded_options.csv (the candidates), trajectory.csv. Failures of tdcr or of the paper's code are
-// kept and counted, never dropped. --cases N takes the first N cases. --quick = --cases 2 --repeat 1 --steps 20 (the ctest smoke run).
+// kept and counted, never dropped. --cases N takes the first N cases; --models a comma-separated
+// subset of vc, ccsub, vcref, prb (for focused runs; benchmarks/run_all.sh runs all four). --quick = --cases 2 --repeat 1 --steps 20 (the ctest smoke run).
 #include <chrono>
 #include <cmath>
 #include <ctime>
@@ -57,7 +59,8 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
-const std::vector<ModelKind> kModels = {ModelKind::VC, ModelKind::CCsub, ModelKind::VCref, ModelKind::PRB};
+// The models benchmarked (--models narrows them; the report needs all four).
+std::vector<ModelKind> kModels = {ModelKind::VC, ModelKind::CCsub, ModelKind::VCref, ModelKind::PRB};
 
 struct Settings {
   std::string out = "benchmark-results";
@@ -518,6 +521,10 @@ int main(int argc, char** argv) {
         cfg.tip_tol = number(i);
       } else if (a == "--traj-tol") {
         cfg.traj_tol = number(i);
+      } else if (a == "--models" && i + 1 < argc) {
+        kModels.clear();
+        std::stringstream list(argv[++i]);
+        for (std::string name; std::getline(list, name, ',');) kModels.push_back(parse_model_kind(name));
       } else {
         throw std::invalid_argument(a);
       }
@@ -525,7 +532,7 @@ int main(int argc, char** argv) {
     if (cfg.cases < 1 || cfg.repeat < 1 || cfg.steps < 4 || !(cfg.tip_tol > 0) || !(cfg.traj_tol > 0)) throw std::invalid_argument("range");
   } catch (const std::exception&) {
     std::cerr << "usage: bench_loaded [--quick] [--out DIR] [--cases N>=1] [--repeat R>=1] [--steps N>=4] "
-                 "[--tip-tol M>0] [--traj-tol M>0]\n";
+                 "[--tip-tol M>0] [--traj-tol M>0] [--models vc,ccsub,vcref,prb]\n";
     return 2;
   }
   std::filesystem::create_directories(cfg.out);

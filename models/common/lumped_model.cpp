@@ -159,27 +159,178 @@ void LumpedProblem::evaluate_from(const double* x, int k) {
                                 M_.data());
 }
 
+namespace {
+
+// eps : (G Q), i.e. sum_e r_e x (Q^T f_e) for G = sum_e r_e f_e^T.
+Vec3 axial_contraction(const Mat3& G, const Mat3& Q) {
+  const Mat3 X = G * Q;
+  return Vec3(X(1, 2) - X(2, 1), X(2, 0) - X(0, 2), X(0, 1) - X(1, 0));
+}
+
+}  // namespace
+
+void LumpedProblem::split_external_loads() {
+  // The distal wrenches F_, M_ split into a part carried by the body (tendon forces: it moves
+  // with the frames) and the external part (tip wrench, weights: fixed in the base frame, acting
+  // at points that move with the frames). For the external part also
+  // G_j = sum_e (p_e - O_j) f_e^T over its distal point loads and the distal pure moment, so that
+  // after a rigid motion Q of everything distal of disk j its moment about O_j is
+  // Q (eps : (G_j Q)) + m_pure (see jacobian()).
+  const int J = active();
+  const physics::LoadCase& L = loads_.loads;
+  const bool bb = backbone_weight_on(), dw = L.has_disk_weight();
+  const bool tip = J == body_.N && L.has_tip_wrench();
+  jac_external_ = bb || dw || tip;
+  if (!jac_external_) {
+    for (int j = 1; j <= J; ++j) {
+      jac_FT_[j] = F_[j];
+      jac_MT_[j] = M_[j];
+    }
+    return;
+  }
+  Vec3 FE = Vec3::Zero(), ME = Vec3::Zero(), pure = Vec3::Zero();
+  Mat3 P = Mat3::Zero();  // sum_e p_e f_e^T
+  for (int j = J; j >= 1; --j) {
+    const Vec3& o = frames_[j].p;
+    Vec3 fj = dw ? L.disk_weight(j) : Vec3::Zero();
+    if (tip && j == J) {
+      fj += L.tip_force();
+      pure = L.tip_moment();
+    }
+    if (j < J) {
+      // Shift the distal external wrench from O_{j+1} to O_j, and add W_{j+1} at its centroid.
+      ME += (frames_[j + 1].p - o).cross(FE);
+      if (bb) {
+        const Vec3 W = backbone_weight(j + 1);
+        FE += W;
+        ME += (centroids_[j + 1] - o).cross(W);
+        P += centroids_[j + 1] * W.transpose();
+      }
+    }
+    FE += fj;
+    P += o * fj.transpose();
+    if (j == J) ME += pure;
+    jac_FE_[j] = FE;
+    jac_G_[j] = P - o * FE.transpose();
+    jac_pure_[j] = pure;
+    jac_FT_[j] = F_[j] - FE;
+    jac_MT_[j] = M_[j] - ME;
+  }
+}
+
 bool LumpedProblem::jacobian(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& f,
                              Eigen::Ref<Eigen::MatrixXd> Jm) {
-  const int m = body_.per_subsegment, n = size();
+  // Forward differences that exploit the chain's structure. A change of x_k moves every frame
+  // distal of disk k-1 by one rigid motion (Q, t); the loads of the disks k-1 and k (whose chords
+  // reach across disk k) change otherwise and are recomputed. Distal of disk k every tendon
+  // force moves with the frames, so in the frame of disk j-1 (j > k) it is unchanged and only
+  // the external loads (fixed in the base frame) turn by Q^T; proximal of disk k-1 the distal
+  // wrench changes by one wrench, shifted from O_{k-1}. So a column costs one subsegment's
+  // kinematics, two disks' tendon forces and O(J) small products, instead of re-evaluating the
+  // chain from k on (tests/test_lumped_jacobian.cpp compares it with plain differences).
+  const int m = body_.per_subsegment, n = size(), J = active();
+  const bool bb = backbone_weight_on();
   jac_x_ = x;
-  jac_f_.resize(n);
+  jac_f_.resize(m);
   jac_uscale_.resize(n);
   unknown_scale(jac_uscale_);
   const double noise = relative_noise();
-  evaluate_from(x.data(), 1);
-  for (int k = active(); k >= 1; --k)
+  evaluate_from(x.data(), 1);  // frames_, poses_, centroids_, disk loads, F_, M_ at x
+  if (static_cast<int>(jac_FT_.size()) < J + 2) {
+    const std::size_t sz = static_cast<std::size_t>(body_.N) + 2;
+    jac_FT_.resize(sz);
+    jac_MT_.resize(sz);
+    jac_FE_.resize(sz);
+    jac_pure_.resize(sz);
+    jac_G_.resize(sz);
+    jac_df_.resize(sz);
+    jac_dm_.resize(sz);
+  }
+  split_external_loads();
+  SubsegmentPose g;
+  for (int k = 1; k <= J; ++k) {
+    const Frame& prev = frames_[k - 1];
+    const Frame base_k = frames_[k];
+    const bool has_next = k + 1 <= body_.N;
+    const Frame base_k1 = has_next ? frames_[k + 1] : Frame{};
     for (int i = 0; i < m; ++i) {
       const int c = m * (k - 1) + i;
       const double h = bvp::finite_difference_step(x[c], jac_uscale_[c], noise);
       jac_x_[c] = x[c] + h;
-      evaluate_from(jac_x_.data(), k);
-      constitutive_all(jac_x_.data(), jac_f_.data());
+      const double* xk = jac_x_.data() + m * (k - 1);
+      body_.local(k, xk, g);
+      // The perturbed frame k, the rigid motion (Q, t) of everything distal of it, frame k+1.
+      Frame& fk = frames_[k];
+      fk.R = prev.R * g.R;
+      fk.p = prev.p + prev.R * g.p;
+      const Mat3 Q = fk.R * base_k.R.transpose();
+      const Vec3 t = fk.p - Q * base_k.p;
+      if (has_next) {
+        frames_[k + 1].R = Q * base_k1.R;
+        frames_[k + 1].p = Q * base_k1.p + t;
+      }
+      body_.statics.disk_loads(loads_, frames_.data(), jac_df_.data(), jac_dm_.data(), k - 1, k);
+      // Distal wrench at disk k (about O_k', base frame).
+      Vec3 Fk = jac_df_[k], Mk = jac_dm_[k];
+      if (k < J) {
+        Vec3 F1 = Q * jac_FT_[k + 1], M1 = Q * jac_MT_[k + 1];
+        if (jac_external_) {
+          F1 += jac_FE_[k + 1];
+          M1 += Q * axial_contraction(jac_G_[k + 1], Q) + jac_pure_[k + 1];
+        }
+        Fk += F1;
+        Mk += M1 + (Q * (base_k1.p - base_k.p)).cross(F1);
+        if (bb) {
+          const Vec3 W = backbone_weight(k + 1);
+          Fk += W;
+          Mk += (Q * (centroids_[k + 1] - base_k.p)).cross(W);
+        }
+      }
+      // Residual of subsegment k.
+      const Mat3 Rt = prev.R.transpose();
+      const Vec3 Wk = bb ? Vec3(Rt * backbone_weight(k)) : Vec3::Zero();
+      constitutive(k, xk, g, Rt * Fk, Rt * Mk, Wk, jac_f_.data());
+      for (int r = 0; r < m; ++r) Jm(m * (k - 1) + r, c) = (jac_f_[r] - f[m * (k - 1) + r]) / h;
+      // Proximal subsegments: the distal wrench at disk k-1 changes by (dF, dM about O_{k-1}).
+      if (k >= 2) {
+        Vec3 Fp = jac_df_[k - 1] + Fk, Mp = jac_dm_[k - 1] + Mk + (fk.p - prev.p).cross(Fk);
+        if (bb) {
+          const Vec3 W = backbone_weight(k);
+          const Vec3 ck = prev.p + prev.R * g.c;
+          Fp += W;
+          Mp += (ck - prev.p).cross(W);
+        }
+        const Vec3 dF = Fp - F_[k - 1], dM = Mp - M_[k - 1];
+        for (int j = k - 1; j >= 1; --j) {
+          const Vec3 Fj = F_[j] + dF;
+          const Vec3 Mj = M_[j] + dM + (prev.p - frames_[j].p).cross(dF);
+          const Mat3 Rj = frames_[j - 1].R.transpose();
+          const Vec3 Wj = bb ? Vec3(Rj * backbone_weight(j)) : Vec3::Zero();
+          constitutive(j, x.data() + m * (j - 1), poses_[j], Rj * Fj, Rj * Mj, Wj, jac_f_.data());
+          for (int r = 0; r < m; ++r) Jm(m * (j - 1) + r, c) = (jac_f_[r] - f[m * (j - 1) + r]) / h;
+        }
+      }
+      // Distal subsegments: only the external loads turn (by Q^T) in the frames that moved.
+      for (int j = k + 1; j <= J; ++j) {
+        if (!jac_external_) {
+          for (int r = 0; r < m; ++r) Jm(m * (j - 1) + r, c) = 0.0;
+          continue;
+        }
+        const Mat3 Qt = Q.transpose();
+        // Frames k and k+1 hold their perturbed values during the column: take the base ones.
+        const Mat3 Rj = (j - 1 == k ? base_k.R : j - 1 == k + 1 ? base_k1.R : frames_[j - 1].R).transpose();
+        const Vec3 Fj = jac_FT_[j] + Qt * jac_FE_[j];
+        const Vec3 Mj = jac_MT_[j] + axial_contraction(jac_G_[j], Q) + Qt * jac_pure_[j];
+        const Vec3 Wj = bb ? Vec3(Rj * (Qt * backbone_weight(j))) : Vec3::Zero();
+        constitutive(j, x.data() + m * (j - 1), poses_[j], Rj * Fj, Rj * Mj, Wj, jac_f_.data());
+        for (int r = 0; r < m; ++r) Jm(m * (j - 1) + r, c) = (jac_f_[r] - f[m * (j - 1) + r]) / h;
+      }
       jac_x_[c] = x[c];
-      if (!jac_f_.allFinite()) return false;
-      Jm.col(c) = (jac_f_ - f) / h;
     }
-  return true;
+    frames_[k] = base_k;
+    if (has_next) frames_[k + 1] = base_k1;
+  }
+  return Jm.allFinite();
 }
 
 void LumpedProblem::constitutive_all(const double* x, double* f) {

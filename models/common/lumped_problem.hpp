@@ -216,6 +216,12 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   std::vector<Vec3> disk_f_, disk_m_;  // disk loads of the banded residual
   int last_iterations_ = 0;  // Newton iterations of the last solve (adjust_warm)
   Eigen::VectorXd jac_x_, jac_f_, jac_uscale_;  // jacobian(): perturbed x, its residual, scales
+  // jacobian(): the distal wrenches split into the part moving with the frames (tendons) and the
+  // external part (see split_external_loads), the perturbed loads of two disks.
+  void split_external_loads();
+  bool jac_external_ = false;
+  std::vector<Vec3> jac_FT_, jac_MT_, jac_FE_, jac_pure_, jac_df_, jac_dm_;
+  std::vector<Mat3> jac_G_;
 };
 
 /// The workspace of CCsub and PRB: one problem (its state, Newton memory, buffers). Declared

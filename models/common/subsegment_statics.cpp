@@ -44,12 +44,14 @@ void SubsegmentStatics::update_friction(SubsegmentLoads& b, const Frame* frames)
   tendon::friction_tensions(frames, *routing_, b.tensions.data(), friction_, b.chord.data());
 }
 
-void SubsegmentStatics::disk_loads(SubsegmentLoads& b, const Frame* frames, Vec3* f, Vec3* m, int first) const {
+void SubsegmentStatics::disk_loads(SubsegmentLoads& b, const Frame* frames, Vec3* f, Vec3* m, int first,
+                                   int last_disk) const {
   const int J = b.active;
   const int D = routing_->disk_count();
   const double* s = routing_->disk_s.data();
   first = std::max(first, 1);
-  for (int j = first; j <= J; ++j) f[j] = m[j] = Vec3::Zero();
+  const int L = last_disk < 0 ? J : std::min(last_disk, J);
+  for (int j = first; j <= L; ++j) f[j] = m[j] = Vec3::Zero();
   // Eq. 30-33 (+ Eq. 58) as tendon::disk_wrench, tendon by tendon in the same order and with
   // the same operations (the pull towards disk j+1 is minus the chord towards disk j).
   for (const RoutedTendon& t : routing_->tendons) {
@@ -59,7 +61,7 @@ void SubsegmentStatics::disk_loads(SubsegmentLoads& b, const Frame* frames, Vec3
     auto tension = [&](int c) { return chord ? chord[c] : T0; };
     Vec3* H = b.holes.data() + t.index * D;
     Vec3* C = b.chords.data() + t.index * D;
-    const int last = std::min(t.end_disk, J + 1);
+    const int last = std::min(t.end_disk, L + 1);
     // Disks j >= first read the chords c >= first, i.e. the holes c >= first - 1.
     const int c0 = first - 1;
     H[c0] = physics::hole_position(frames[c0], t, s[c0]);
@@ -67,7 +69,7 @@ void SubsegmentStatics::disk_loads(SubsegmentLoads& b, const Frame* frames, Vec3
       H[c] = physics::hole_position(frames[c], t, s[c]);
       C[c] = (H[c - 1] - H[c]).normalized();
     }
-    const int end = std::min(t.end_disk, J);
+    const int end = std::min(t.end_disk, L);
     for (int j = first; j <= end; ++j) {
       const double T = tension(j);
       if (T == 0.0) continue;
@@ -83,12 +85,12 @@ void SubsegmentStatics::disk_loads(SubsegmentLoads& b, const Frame* frames, Vec3
       m[j] += (H[j] - frames[j].p).cross(F);
     }
   }
-  const physics::LoadCase& L = b.loads;
-  if (L.has_disk_weight())
-    for (int j = first; j <= J; ++j) f[j] += L.disk_weight(j);
-  if (J == n_ && L.has_tip_wrench()) {  // Eq. 44-45: the external tip wrench acts at O_n.
-    f[J] += L.tip_force();
-    m[J] += L.tip_moment();
+  const physics::LoadCase& lc = b.loads;
+  if (lc.has_disk_weight())
+    for (int j = first; j <= L; ++j) f[j] += lc.disk_weight(j);
+  if (J == n_ && L == J && lc.has_tip_wrench()) {  // Eq. 44-45: the external tip wrench acts at O_n.
+    f[J] += lc.tip_force();
+    m[J] += lc.tip_moment();
   }
 }
 

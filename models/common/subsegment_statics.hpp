@@ -72,7 +72,10 @@ class SubsegmentStatics {
   /// first - 1 on), f and m below first are left as they are: the loads of disks below first
   /// depend on frames 0..first only, so after a change of frames >= first + 1 this gives the same
   /// numbers as a full evaluation (the structured finite differences of LumpedProblem).
-  void disk_loads(SubsegmentLoads& b, const Frame* frames, Vec3* f, Vec3* m, int first = 1) const;
+  /// With last_disk >= 0 only disks first..min(last_disk, J) are computed (their holes up to disk
+  /// last_disk + 1), the tip wrench only if that range ends at J.
+  void disk_loads(SubsegmentLoads& b, const Frame* frames, Vec3* f, Vec3* m, int first = 1,
+                  int last_disk = -1) const;
   /// @brief The recursive balance (Eq. 44-47) for subsegments 1..J at the current load factor.
   ///
   /// @param frames Disk frames 0..N (base disk first).
