@@ -102,6 +102,21 @@ class CcsubProblem final : public detail::LumpedProblem {
     r[1] = xj[1] + gj_ei * xj[2] * z.y() - s * m.y();
     r[2] = gj_ei * xj[2] * z.z() - s * m.z();
   }
+  // Eq. 43 is linear in the loads: d r / d(F, M, W) = -(l/EI) ([p]x, I, [c]x).
+  bool load_jacobian(int j, const double*, const detail::SubsegmentPose& g, const Vec3&, const Vec3&, const Vec3&,
+                     double* L) const override {
+    const double s = body_.statics.length(j) / body_.EI;
+    Eigen::Map<Eigen::Matrix<double, 3, 9>> A(L);
+    auto cross = [](const Vec3& v) {
+      Mat3 S;
+      S << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
+      return S;
+    };
+    A.leftCols<3>() = -s * cross(g.p);
+    A.middleCols<3>(3) = -s * Mat3::Identity();
+    A.rightCols<3>() = -s * cross(g.c);
+    return true;
+  }
   const CcsubBody& body_;
 };
 

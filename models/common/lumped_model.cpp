@@ -167,6 +167,12 @@ Vec3 axial_contraction(const Mat3& G, const Mat3& Q) {
   return Vec3(X(1, 2) - X(2, 1), X(2, 0) - X(0, 2), X(0, 1) - X(1, 0));
 }
 
+Mat3 skew(const Vec3& v) {
+  Mat3 S;
+  S << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
+  return S;
+}
+
 }  // namespace
 
 void LumpedProblem::split_external_loads() {
@@ -218,16 +224,67 @@ void LumpedProblem::split_external_loads() {
   }
 }
 
+void LumpedProblem::load_sensitivities() {
+  // L_j = d r_j / d(F, M, W) in the frame of disk j-1 (m x 9) by forward differences of the
+  // constitutive law (exact for CCsub, linear in its loads), mapped to
+  //  - E_j: the response to a change (dF, dM0) of the distal wrench, base frame, moment about the
+  //    base origin, with the frames of subsegment j fixed (proximal rows of a column);
+  //  - D_j: the response to a small rotation w of everything distal of disk j-1 with the
+  //    external loads fixed in the base frame (distal rows): in the moving frame the tendon forces
+  //    are unchanged and the external force, moment and weight turn by -w.
+  const int m = body_.per_subsegment, J = active();
+  const bool bb = backbone_weight_on();
+  const int q_count = bb ? 9 : 6;
+  jac_E_.resize(m * J, 6);
+  if (jac_external_) jac_D_.resize(m * J, 3);
+  double r0[8], r1[8];
+  Eigen::Matrix<double, Eigen::Dynamic, 9, 0, 8, 9> L(m, 9);
+  for (int j = 1; j <= J; ++j) {
+    const double* xj = jac_x_.data() + m * (j - 1);
+    const Mat3 Rt = frames_[j - 1].R.transpose();
+    const Vec3 W = bb ? backbone_weight(j) : Vec3::Zero();
+    Vec3 v[3] = {Rt * F_[j], Rt * M_[j], Rt * W};
+    L.setZero();
+    const bool closed = load_jacobian(j, xj, poses_[j], v[0], v[1], v[2], L.data());
+    if (!closed) constitutive(j, xj, poses_[j], v[0], v[1], v[2], r0);
+    const double l = body_.statics.length(j);
+    const double scale[3] = {body_.EI / (l * l), body_.EI / l, body_.EI / (l * l)};
+    for (int q = 0; q < q_count && !closed; ++q) {
+      Vec3& target = v[q / 3];
+      const double keep = target[q % 3];
+      const double h = 1e-7 * std::max(target.norm(), scale[q / 3]);
+      target[q % 3] = keep + h;
+      constitutive(j, xj, poses_[j], v[0], v[1], v[2], r1);
+      target[q % 3] = keep;
+      for (int r = 0; r < m; ++r) L(r, q) = (r1[r] - r0[r]) / h;
+    }
+    const auto LF = L.leftCols(3), LM = L.middleCols(3, 3), LW = L.rightCols(3);
+    auto E = jac_E_.middleRows(m * (j - 1), m);
+    E.leftCols(3).noalias() = LF * Rt - LM * (Rt * skew(frames_[j].p));
+    E.rightCols(3).noalias() = LM * Rt;
+    if (jac_external_) {
+      // eps : (G [w]x) as a matrix in w.
+      Mat3 C;
+      for (int i = 0; i < 3; ++i) C.col(i) = axial_contraction(jac_G_[j], skew(Vec3::Unit(i)));
+      auto D = jac_D_.middleRows(m * (j - 1), m);
+      D.noalias() = LF * (Rt * skew(jac_FE_[j])) + LM * (Rt * (C + skew(jac_pure_[j])));
+      if (bb) D.noalias() += LW * (Rt * skew(W));
+    }
+  }
+}
+
 bool LumpedProblem::jacobian(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& f,
                              Eigen::Ref<Eigen::MatrixXd> Jm) {
   // Forward differences that exploit the chain's structure. A change of x_k moves every frame
   // distal of disk k-1 by one rigid motion (Q, t); the loads of the disks k-1 and k (whose chords
-  // reach across disk k) change otherwise and are recomputed. Distal of disk k every tendon
-  // force moves with the frames, so in the frame of disk j-1 (j > k) it is unchanged and only
-  // the external loads (fixed in the base frame) turn by Q^T; proximal of disk k-1 the distal
-  // wrench changes by one wrench, shifted from O_{k-1}. So a column costs one subsegment's
-  // kinematics, two disks' tendon forces and O(J) small products, instead of re-evaluating the
-  // chain from k on (tests/test_lumped_jacobian.cpp compares it with plain differences).
+  // reach across disk k) change otherwise and are recomputed, and so is the residual of
+  // subsegment k. Distal of disk k every tendon force moves with the frames, so in the frame of
+  // disk j-1 (j > k) it is unchanged and only the external loads (fixed in the base frame) turn
+  // by Q^T = I - [w]x; proximal of disk k-1 the distal wrench changes by one wrench (dF, dM0).
+  // Both act on the residuals through the load sensitivities of load_sensitivities(), so the
+  // off-diagonal blocks are products of m x 6 (m x 3) and 6 x m (3 x m) matrices: a column costs
+  // one subsegment's kinematics and two disks' tendon forces (tests/test_lumped_jacobian.cpp
+  // compares the result with plain and central differences).
   const int m = body_.per_subsegment, n = size(), J = active();
   const bool bb = backbone_weight_on();
   jac_x_ = x;
@@ -247,6 +304,11 @@ bool LumpedProblem::jacobian(const Eigen::Ref<const Eigen::VectorXd>& x, const E
     jac_dm_.resize(sz);
   }
   split_external_loads();
+  load_sensitivities();
+  jac_dW_.resize(6, n);
+  jac_dW_.leftCols(m).setZero();  // subsegment 1 has no proximal rows
+  jac_diag_.resize(m, n);
+  if (jac_external_) jac_Om_.resize(3, n);
   SubsegmentPose g;
   for (int k = 1; k <= J; ++k) {
     const Frame& prev = frames_[k - 1];
@@ -290,46 +352,41 @@ bool LumpedProblem::jacobian(const Eigen::Ref<const Eigen::VectorXd>& x, const E
       const Mat3 Rt = prev.R.transpose();
       const Vec3 Wk = bb ? Vec3(Rt * backbone_weight(k)) : Vec3::Zero();
       constitutive(k, xk, g, Rt * Fk, Rt * Mk, Wk, jac_f_.data());
-      for (int r = 0; r < m; ++r) Jm(m * (k - 1) + r, c) = (jac_f_[r] - f[m * (k - 1) + r]) / h;
-      // Proximal subsegments: the distal wrench at disk k-1 changes by (dF, dM about O_{k-1}).
+      for (int r = 0; r < m; ++r) jac_diag_(r, c) = (jac_f_[r] - f[m * (k - 1) + r]) / h;
+      // The change of the distal wrench at disk k-1 (base frame, moment about the origin).
       if (k >= 2) {
         Vec3 Fp = jac_df_[k - 1] + Fk, Mp = jac_dm_[k - 1] + Mk + (fk.p - prev.p).cross(Fk);
         if (bb) {
           const Vec3 W = backbone_weight(k);
-          const Vec3 ck = prev.p + prev.R * g.c;
           Fp += W;
-          Mp += (ck - prev.p).cross(W);
+          Mp += (prev.R * g.c).cross(W);
         }
         const Vec3 dF = Fp - F_[k - 1], dM = Mp - M_[k - 1];
-        for (int j = k - 1; j >= 1; --j) {
-          const Vec3 Fj = F_[j] + dF;
-          const Vec3 Mj = M_[j] + dM + (prev.p - frames_[j].p).cross(dF);
-          const Mat3 Rj = frames_[j - 1].R.transpose();
-          const Vec3 Wj = bb ? Vec3(Rj * backbone_weight(j)) : Vec3::Zero();
-          constitutive(j, x.data() + m * (j - 1), poses_[j], Rj * Fj, Rj * Mj, Wj, jac_f_.data());
-          for (int r = 0; r < m; ++r) Jm(m * (j - 1) + r, c) = (jac_f_[r] - f[m * (j - 1) + r]) / h;
-        }
+        jac_dW_.col(c).head<3>() = dF / h;
+        jac_dW_.col(c).tail<3>() = (dM + prev.p.cross(dF)) / h;
       }
-      // Distal subsegments: only the external loads turn (by Q^T) in the frames that moved.
-      for (int j = k + 1; j <= J; ++j) {
-        if (!jac_external_) {
-          for (int r = 0; r < m; ++r) Jm(m * (j - 1) + r, c) = 0.0;
-          continue;
-        }
-        const Mat3 Qt = Q.transpose();
-        // Frames k and k+1 hold their perturbed values during the column: take the base ones.
-        const Mat3 Rj = (j - 1 == k ? base_k.R : j - 1 == k + 1 ? base_k1.R : frames_[j - 1].R).transpose();
-        const Vec3 Fj = jac_FT_[j] + Qt * jac_FE_[j];
-        const Vec3 Mj = jac_MT_[j] + axial_contraction(jac_G_[j], Q) + Qt * jac_pure_[j];
-        const Vec3 Wj = bb ? Vec3(Rj * (Qt * backbone_weight(j))) : Vec3::Zero();
-        constitutive(j, x.data() + m * (j - 1), poses_[j], Rj * Fj, Rj * Mj, Wj, jac_f_.data());
-        for (int r = 0; r < m; ++r) Jm(m * (j - 1) + r, c) = (jac_f_[r] - f[m * (j - 1) + r]) / h;
-      }
+      // The rotation of everything distal of disk k, per unit change of x_c.
+      if (jac_external_)
+        jac_Om_.col(c) = Vec3(Q(2, 1) - Q(1, 2), Q(0, 2) - Q(2, 0), Q(1, 0) - Q(0, 1)) / (2.0 * h);
       jac_x_[c] = x[c];
     }
     frames_[k] = base_k;
     if (has_next) frames_[k + 1] = base_k1;
   }
+  // Off-diagonal blocks: two small products (n x 6 by 6 x n, n x 3 by 3 x n), then the diagonal
+  // blocks from the differences above.
+  jac_prod_.resize(n, n);
+  jac_prod_.noalias() = jac_E_ * jac_dW_;
+  for (int k = 2; k <= J; ++k) Jm.block(0, m * (k - 1), m * (k - 1), m) = jac_prod_.block(0, m * (k - 1), m * (k - 1), m);
+  if (jac_external_) jac_prod_.noalias() = jac_D_ * jac_Om_;
+  for (int k = 1; k < J; ++k) {
+    auto lower = Jm.block(m * k, m * (k - 1), m * (J - k), m);
+    if (jac_external_)
+      lower = jac_prod_.block(m * k, m * (k - 1), m * (J - k), m);
+    else
+      lower.setZero();
+  }
+  for (int k = 1; k <= J; ++k) Jm.block(m * (k - 1), m * (k - 1), m, m) = jac_diag_.middleCols(m * (k - 1), m);
   return Jm.allFinite();
 }
 

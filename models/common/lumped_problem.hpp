@@ -140,6 +140,13 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   /// gravity), all in the frame of disk j-1.
   virtual void constitutive(int j, const double* xj, const SubsegmentPose& g, const Vec3& F, const Vec3& M,
                             const Vec3& W, double* r) const = 0;
+  /// d r_j / d(F, M, W) of constitutive() at the given geometry (m x 9, column-major in L), if
+  /// the model has it in closed form; false: the Jacobian takes forward differences instead.
+  virtual bool load_jacobian(int j, const double* xj, const SubsegmentPose& g, const Vec3& F, const Vec3& M,
+                             const Vec3& W, double* L) const {
+    (void)j, (void)xj, (void)g, (void)F, (void)M, (void)W, (void)L;
+    return false;
+  }
   /// The x_j of the straight robot (zeros unless overridden); `rest`: for the rest state.
   virtual void straight_x(Eigen::VectorXd& x, bool rest) { (void)rest; x.setZero(body_.per_subsegment * active()); }
   /// Called with the x_j of a warm start (e.g. to take gauge references from it).
@@ -219,6 +226,9 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   // jacobian(): the distal wrenches split into the part moving with the frames (tendons) and the
   // external part (see split_external_loads), the perturbed loads of two disks.
   void split_external_loads();
+  // jacobian(): the residuals' response to distal wrench changes and to distal rotations.
+  void load_sensitivities();
+  Eigen::MatrixXd jac_E_, jac_D_, jac_dW_, jac_Om_, jac_diag_, jac_prod_;
   bool jac_external_ = false;
   std::vector<Vec3> jac_FT_, jac_MT_, jac_FE_, jac_pure_, jac_df_, jac_dm_;
   std::vector<Mat3> jac_G_;
