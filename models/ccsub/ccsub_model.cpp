@@ -27,13 +27,13 @@ struct ArcCoefficients {
   }
 };
 
-// Automatic formulation: reduced Newton steps on the banded system (KLU) from this many loaded
-// subsegments on. Crossover with the recursive form (dense LU, structured differences), paper
-// robot configuration 5 (docs/design-notes/lumped.md): at J = 60 the reduced steps take half the
-// time of repeated solves in one workspace and, in a fresh workspace (KLU's analysis and first
-// pivoting factorisation, the colouring), 27 % more under tendons alone and 9 % less with a tip
-// force; at J = 80 less in both; at J = 40 a fresh workspace costs 2.5x.
-constexpr int kBandedFrom = 60;
+// Automatic formulation: structured Newton steps (the recursive Jacobian's factors as a
+// block-banded system, KLU) from this many loaded subsegments on. Crossover with the dense LU of
+// the same Jacobian, paper robot configuration 5 (bench_lumped --sweep-only --quick,
+// docs/design-notes/lumped.md): at J = 40 the structured steps take 0.48x (tendons) and 0.70x
+// (tip force) of the dense ones in repeated solves; at J = 20 0.75x under tendons alone but
+// 1.16x with a tip force, and a fresh workspace costs up to 2.5x.
+constexpr int kBandedFrom = 30;
 // Cold direct solves: exact Newton down to this scaled residual, then modified Newton
 // (bvp::NewtonOptions::freeze_jacobian_below). On the 60 loaded cases of bench_loaded one
 // Jacobian instead of 3-4 (the recursive form's Jacobian costs about n/2 residuals), the same

@@ -214,33 +214,4 @@ void LumpedProblem::build_pattern() {
   pattern_J_ = J;
 }
 
-bool LumpedProblem::setup_newton_step(const Eigen::Ref<const Eigen::VectorXd>& x,
-                                      const Eigen::Ref<const Eigen::VectorXd>& f) {
-  (void)f;
-  const int K = body_.per_subsegment + 12, N = K * active();
-  x_ = x;
-  lift_banded(x_, y_);
-  fy_.resize(N);
-  if (!banded_residual(y_.data(), fy_.data())) return false;
-  if (fd_pattern_J_ != active()) {
-    fd_.prepare(pattern_, groups_);
-    jacobian_.resize(pattern_.nnz());
-    rhs_.resize(N);
-    fd_pattern_J_ = active();
-  }
-  if (!bvp::finite_difference_sparse_jacobian(view_, y_, fy_, pattern_, jacobian_.data(), &fd_)) return false;
-  return lu_.factorize(pattern_, jacobian_.data()) == bvp::SparseLu::Status::Success;
-}
-
-bool LumpedProblem::solve_newton_step(Eigen::Ref<Eigen::VectorXd> b) {
-  const int m = body_.per_subsegment, K = m + 12;
-  // Recursive residual rows are the banded constitutive rows; the poses and wrenches of the
-  // lifted iterate satisfy the other rows exactly.
-  rhs_.setZero();
-  for (int j = 0; j < active(); ++j) rhs_.segment(K * j, m) = b.segment(m * j, m);
-  if (!lu_.solve(rhs_.data())) return false;
-  for (int j = 0; j < active(); ++j) b.segment(m * j, m) = rhs_.segment(K * j, m);
-  return true;
-}
-
 }  // namespace tdcr::detail

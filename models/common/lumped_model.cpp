@@ -89,7 +89,7 @@ void LumpedProblem::bind(const ModelInput& input) {
   convention_ = input.actuation.convention;
   banded_ = body_.banded();
   reduced_ = body_.reduced(active());
-  if ((banded_ || reduced_) && pattern_J_ != active()) build_pattern();
+  if (banded_ && pattern_J_ != active()) build_pattern();
 }
 
 void LumpedProblem::adjust(bvp::NewtonOptions& options) const {
@@ -273,8 +273,8 @@ void LumpedProblem::load_sensitivities() {
   }
 }
 
-bool LumpedProblem::jacobian(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& f,
-                             Eigen::Ref<Eigen::MatrixXd> Jm) {
+bool LumpedProblem::structured_jacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
+                                        const Eigen::Ref<const Eigen::VectorXd>& f) {
   // Forward differences that exploit the chain's structure. A change of x_k moves every frame
   // distal of disk k-1 by one rigid motion (Q, t); the loads of the disks k-1 and k (whose chords
   // reach across disk k) change otherwise and are recomputed, and so is the residual of
@@ -284,7 +284,8 @@ bool LumpedProblem::jacobian(const Eigen::Ref<const Eigen::VectorXd>& x, const E
   // Both act on the residuals through the load sensitivities of load_sensitivities(), so the
   // off-diagonal blocks are products of m x 6 (m x 3) and 6 x m (3 x m) matrices: a column costs
   // one subsegment's kinematics and two disks' tendon forces (tests/test_lumped_jacobian.cpp
-  // compares the result with plain and central differences).
+  // compares the result with plain and central differences). The factors are kept for the dense
+  // Jacobian (jacobian()) and for the structured Newton step (lumped_structured.cpp).
   const int m = body_.per_subsegment, n = size(), J = active();
   const bool bb = backbone_weight_on();
   jac_x_ = x;
@@ -373,8 +374,16 @@ bool LumpedProblem::jacobian(const Eigen::Ref<const Eigen::VectorXd>& x, const E
     frames_[k] = base_k;
     if (has_next) frames_[k + 1] = base_k1;
   }
+  return jac_diag_.allFinite() && jac_dW_.allFinite() && jac_E_.allFinite() &&
+         (!jac_external_ || (jac_Om_.allFinite() && jac_D_.allFinite()));
+}
+
+bool LumpedProblem::jacobian(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& f,
+                             Eigen::Ref<Eigen::MatrixXd> Jm) {
+  if (!structured_jacobian(x, f)) return false;
+  const int m = body_.per_subsegment, n = size(), J = active();
   // Off-diagonal blocks: two small products (n x 6 by 6 x n, n x 3 by 3 x n), then the diagonal
-  // blocks from the differences above.
+  // blocks from the differences of structured_jacobian().
   jac_prod_.resize(n, n);
   jac_prod_.noalias() = jac_E_ * jac_dW_;
   for (int k = 2; k <= J; ++k) Jm.block(0, m * (k - 1), m * (k - 1), m) = jac_prod_.block(0, m * (k - 1), m * (k - 1), m);

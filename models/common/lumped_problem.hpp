@@ -12,7 +12,8 @@
 //    law, pose continuity with disk j-1 and the balance of disk j (tendon forces of disks j-1,
 //    j, j+1): a block-banded Jacobian (declared pattern, grouped finite differences, KLU: ~J);
 //  - reduced (Automatic from LumpedBody::banded_from on): the recursive unknowns and residual,
-//    each Newton step solved on the banded Jacobian at the lifted iterate (sparse LU: ~J).
+//    each Newton step solved with the structured recursive Jacobian as a block-banded system
+//    (lumped_structured.cpp, KLU: ~J).
 // Both give the same solution; Solution::unknowns always holds the x_j of all N subsegments.
 #pragma once
 
@@ -61,7 +62,7 @@ class LumpedBody {
   /// True if solved in the banded formulation (LumpedFormulation::Banded).
   bool banded() const;
   /// True if J loaded subsegments are solved in the recursive unknowns with reduced Newton
-  /// steps from the banded system (LumpedFormulation::Automatic from banded_from on).
+  /// steps (the structured recursive Jacobian, LumpedFormulation::Automatic from banded_from on).
   bool reduced(int J) const;
 
   SubsegmentStatics statics;
@@ -114,23 +115,21 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   bool residual(const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> f) final;
   const bvp::SparsityPattern* sparsity() const final { return banded_ ? &pattern_ : nullptr; }
   void unknown_scale(Eigen::Ref<Eigen::VectorXd> s) const final;
-  // Reduced Newton step (lumped_banded.cpp): the banded system at the lifted x, solved for the
-  // step of the x_j with the residuals of the recursive form as its constitutive rows; the
-  // poses and wrenches follow from the recursion at every iterate, so the iterations are those
-  // of the recursive form at a cost linear in J.
+  // Structured Newton step (lumped_structured.cpp): the recursive form's Jacobian factors
+  // (structured_jacobian) solved as a block-banded system by KLU; the iterations are those of
+  // the recursive form at a cost linear in J.
   bool has_newton_step() const final { return reduced_; }
-  // Recursive form without friction: the dense Jacobian by the same forward differences (same
-  // steps, same numbers) as bvp::finite_difference_jacobian, but a change of x_k leaves the
-  // frames below disk k and the loads of the disks below k - 1 as they are: the columns are
-  // taken from the tip down and each re-evaluates from subsegment k on (about half the work).
-  bool has_jacobian() const final { return !banded_ && !reduced_ && !body_.statics.friction(); }
+  // Recursive form without friction: the dense Jacobian by structured forward differences
+  // (structured_jacobian, then two small products); also what path following's bordered
+  // systems use in the reduced form.
+  bool has_jacobian() const final { return !banded_ && !body_.statics.friction(); }
   bool jacobian_is_forward_difference() const final { return true; }
   bool jacobian(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& f,
                 Eigen::Ref<Eigen::MatrixXd> J) final;
   bool setup_newton_step(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& f) final;
   bool solve_newton_step(Eigen::Ref<Eigen::VectorXd> b) final;
   /// The banded system's pattern and the column colouring of its grouped differences, for the
-  /// loaded subsegments of the last bind (built only for the banded or reduced forms; tests).
+  /// loaded subsegments of the last bind (built only for the banded formulation; tests).
   const bvp::SparsityPattern& banded_pattern() const { return pattern_; }
   const std::vector<int>& banded_groups() const { return groups_; }
 
@@ -195,29 +194,22 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   Actuation::DisplacementConvention convention_ = Actuation::DisplacementConvention::AtBase;
   bool banded_ = false;
   bool reduced_ = false;
-  // Reduced Newton steps: the banded residual as a system (grouped finite differences), its
-  // Jacobian at the lifted iterate and that Jacobian's LU.
-  struct BandedView final : bvp::ResidualSystem {
-    explicit BandedView(LumpedProblem& p) : p(p) {}
-    int size() const override { return (p.body_.per_subsegment + 12) * p.active(); }
-    bool residual(const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> f) override {
-      return p.banded_residual(y.data(), f.data());
-    }
-    void unknown_scale(Eigen::Ref<Eigen::VectorXd> s) const override { p.banded_scale(s.data()); }
-    LumpedProblem& p;
-  };
-  BandedView view_{*this};
-  bvp::FiniteDifferenceWorkspace fd_;
-  Eigen::VectorXd y_, fy_, rhs_;
-  std::vector<double> jacobian_;  // banded Jacobian values in pattern_'s CSC order
-  // KLU: analysed once per pattern, refactorised per step. The solve gives a Newton direction,
-  // judged afterwards on the recursive residual, so a refactorisation that may lose up to three
-  // digits is kept (KINSOL's own systems keep two): PRB's pivots shift by a few 1e-3 between
-  // iterations, and a fresh pivoting factorisation costs about 3 refactorisations.
+  // Structured Newton steps (lumped_structured.cpp): the recursive Jacobian's factors as a
+  // block-banded system in (d_j, s_j, t_j), its pattern (per J and external loads), the CSC
+  // positions in fill order, values and right-hand side. KLU: analysed once per pattern,
+  // refactorised per step. The solve gives a Newton direction, judged afterwards on the recursive
+  // residual, so a refactorisation that may lose up to three digits is kept (KINSOL's own systems
+  // keep two); a fresh pivoting factorisation costs about 3 refactorisations.
+  void build_structured_pattern();
+  bvp::SparsityPattern struct_pattern_;
+  std::vector<int> struct_pos_;
+  std::vector<double> struct_values_;
+  Eigen::VectorXd struct_rhs_;
+  int struct_J_ = -1;
+  bool struct_external_ = false;
   bvp::SparseLu lu_{1e-3};
-  int fd_pattern_J_ = -1;         // J that fd_, jacobian_ and rhs_ are sized for
   bvp::SparsityPattern pattern_;
-  std::vector<int> groups_;  // column colouring of pattern_ for the grouped differences
+  std::vector<int> groups_;  // column colouring of pattern_ (banded formulation; tests)
   int pattern_J_ = -1;
   Eigen::VectorXd x_;  // x_j of the loaded subsegments (guesses, lifting)
   std::vector<Vec3> disk_f_, disk_m_;  // disk loads of the banded residual
@@ -226,6 +218,9 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   // jacobian(): the distal wrenches split into the part moving with the frames (tendons) and the
   // external part (see split_external_loads), the perturbed loads of two disks.
   void split_external_loads();
+  // The factors of the recursive Jacobian at x (f: the residual there): jac_diag_, jac_E_, jac_D_,
+  // jac_dW_, jac_Om_ (see lumped_structured.cpp); false if a value is not finite.
+  bool structured_jacobian(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& f);
   // jacobian(): the residuals' response to distal wrench changes and to distal rotations.
   void load_sensitivities();
   Eigen::MatrixXd jac_E_, jac_D_, jac_dW_, jac_Om_, jac_diag_, jac_prod_;

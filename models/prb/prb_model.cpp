@@ -22,11 +22,13 @@ constexpr double kPhiScale = 1e-4;
 // local minimum of |F| (configurations 14 and 15 of the case study at n = 1 end there with
 // KINSOL's automatic bound).
 constexpr double kMaxNewtonStep = 1.0;
-// Automatic formulation: reduced Newton steps on the banded system (KLU) from this many loaded
-// subsegments on, as CCsub (docs/design-notes/lumped.md): at J = 40 faster than the recursive
-// form both in a fresh workspace (15-24 %) and in repeated solves (2x); at J = 30 a fresh
-// workspace costs 45 % more under tendons alone.
-constexpr int kBandedFrom = 40;
+// Automatic formulation: structured Newton steps (the recursive Jacobian's factors as a
+// block-banded system, KLU) from this many loaded subsegments on. Crossover with the dense LU of
+// the same Jacobian, paper robot configuration 5 (bench_lumped --sweep-only --quick,
+// docs/design-notes/lumped.md): at J = 20 the structured steps take 0.40x (tendons) and 0.60x
+// (tip force) of the dense ones in repeated solves and about the same in a fresh workspace; at
+// J = 10 0.65x / 0.91x repeated, but a fresh workspace costs 1.2x / 2.6x.
+constexpr int kBandedFrom = 16;
 
 // Model-specific points of a PRB subsegment in detail::SubsegmentPose::aux.
 constexpr int kJoint = 0;  // joint centres P_1..P_3: aux[0..2]
