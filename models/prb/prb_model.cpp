@@ -141,6 +141,61 @@ class PrbProblem final : public detail::LumpedProblem {
     r[4] = gj_ei * xj[4] - s * g.R.col(2).dot(Mb);
   }
 
+  // d r / d(F, M, W) of constitutive() in closed form (5 x 9, column-major): Eq. 48-51 and 54
+  // are linear in the loads, Eq. 52-53 through the gauge term's t2 = s^2 |Mb_xy|^2.
+  bool load_jacobian(int j, const double* xj, const detail::SubsegmentPose& g, const Vec3& F, const Vec3& Mj,
+                     const Vec3& Wj, double* Lp) const override {
+    const bool bb = backbone_weight_on();
+    const double s = body_.statics.length(j) / body_.EI;
+    const double cp = std::cos(xj[3]), sp = std::sin(xj[3]);
+    const Vec3* joint = g.aux + kJoint;
+    const Vec3* mid = g.aux + kMid;
+    const Eigen::RowVector3d y(-sp, cp, 0.0);
+    Eigen::Map<Eigen::Matrix<double, kU, 9>> L(Lp);
+    L.setZero();
+    for (int q = 0; q < 3; ++q) {
+      L.block<1, 3>(q, 0) = -s * y * skew(g.p - joint[q]);
+      L.block<1, 3>(q, 3) = -s * y;
+      if (bb) {
+        Mat3 A = Mat3::Zero();
+        for (int i = q + 1; i < 4; ++i) A += (body_.gamma[i] / body_.gamma_sum) * skew(mid[i] - joint[q]);
+        L.block<1, 3>(q, 6) = -s * y * A;
+      }
+    }
+    // Moment about O_{j-1} and its derivatives.
+    Vec3 Mb = Mj + g.p.cross(F);
+    Mat3 dW = Mat3::Zero();
+    if (bb) {
+      const Vec3 W = Wj / body_.gamma_sum;
+      for (int i = 0; i < 4; ++i) {
+        Mb += mid[i].cross(body_.gamma[i] * W);
+        dW += (body_.gamma[i] / body_.gamma_sum) * skew(mid[i]);
+      }
+    }
+    const double a2 = kGaugeA0 * kGaugeA0;
+    const double t2 = s * s * (Mb.x() * Mb.x() + Mb.y() * Mb.y());
+    const double dgauge_dt2 = -kGaugeEta * a2 / ((a2 + t2) * (a2 + t2));
+    const double sn = std::sin(xj[3] - phi_ref_[j]);
+    const Eigen::RowVector3d d3 =
+        Eigen::RowVector3d(s * cp, s * sp, 0.0) + sn * dgauge_dt2 * 2.0 * s * s * Eigen::RowVector3d(Mb.x(), Mb.y(), 0.0);
+    const Eigen::RowVector3d d4 = -s * g.R.col(2).transpose();
+    const Mat3 dF = skew(g.p);
+    L.block<1, 3>(3, 0) = d3 * dF;
+    L.block<1, 3>(3, 3) = d3;
+    L.block<1, 3>(4, 0) = d4 * dF;
+    L.block<1, 3>(4, 3) = d4;
+    if (bb) {
+      L.block<1, 3>(3, 6) = d3 * dW;
+      L.block<1, 3>(4, 6) = d4 * dW;
+    }
+    return true;
+  }
+  static Mat3 skew(const Vec3& v) {
+    Mat3 S;
+    S << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
+    return S;
+  }
+
   void set_phi_ref(const Eigen::VectorXd& x) {
     for (int j = 1; j <= active(); ++j) phi_ref_[j] = x[kU * (j - 1) + 3];
   }
