@@ -13,14 +13,15 @@
 /// warm-start another input. Cold guess: the straight robot.
 ///
 /// Formulations of the same equations (LumpedFormulation), same solution: recursive (the
-/// subsegment unknowns only; dense Jacobian by forward differences that re-evaluate only the
-/// part of the robot a column moves, dense LU, cost ~J^3, fastest for few subsegments) and
-/// banded (disk poses and internal wrenches are unknowns too; block-banded Jacobian, KLU, cost
-/// ~J per iteration, but more iterations: its steps leave the pose constraints).
-/// Automatic: recursive below 60 (CCsub) or 40 (PRB) loaded subsegments; from there on the
-/// recursive unknowns with reduced Newton steps, each solved on the banded system at the
-/// iterate's poses and wrenches (the iterations of the recursive form at a cost ~J each;
-/// docs/design-notes/lumped.md).
+/// subsegment unknowns only; dense Jacobian by structured forward differences, dense LU, cost
+/// ~J^3 in the LU, fastest for few subsegments) and banded (disk poses and internal wrenches are
+/// unknowns too; block-banded Jacobian, KLU, cost ~J per iteration, but more iterations: its
+/// steps leave the pose constraints). Automatic: recursive below 30 (CCsub) or 16 (PRB) loaded
+/// subsegments; from there on the recursive unknowns with structured Newton steps: the recursive
+/// Jacobian is a block diagonal plus two low-rank block-triangular parts (a change of one
+/// subsegment moves everything distal of it rigidly), so each step is a block-banded system in
+/// the step and two partial sums, factored by KLU (the iterations of the recursive form at a
+/// cost ~J each; docs/design-notes/lumped.md).
 #pragma once
 
 #include <memory>
