@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "common/lumped_problem.hpp"
+#include "tdcr/core/lie.hpp"
 
 namespace tdcr {
 
@@ -107,14 +108,9 @@ class CcsubProblem final : public detail::LumpedProblem {
                      double* L) const override {
     const double s = body_.statics.length(j) / body_.EI;
     Eigen::Map<Eigen::Matrix<double, 3, 9>> A(L);
-    auto cross = [](const Vec3& v) {
-      Mat3 S;
-      S << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
-      return S;
-    };
-    A.leftCols<3>() = -s * cross(g.p);
+    A.leftCols<3>() = -s * lie::hat(g.p);
     A.middleCols<3>(3) = -s * Mat3::Identity();
-    A.rightCols<3>() = -s * cross(g.c);
+    A.rightCols<3>() = -s * lie::hat(g.c);
     return true;
   }
   const CcsubBody& body_;

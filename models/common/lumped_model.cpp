@@ -4,6 +4,7 @@
 
 #include "common/lumped_problem.hpp"
 #include "tdcr/core/error.hpp"
+#include "tdcr/core/lie.hpp"
 #include "tdcr/models/tendon_physics.hpp"
 
 namespace tdcr {
@@ -167,12 +168,6 @@ Vec3 axial_contraction(const Mat3& G, const Mat3& Q) {
   return Vec3(X(1, 2) - X(2, 1), X(2, 0) - X(0, 2), X(0, 1) - X(1, 0));
 }
 
-Mat3 skew(const Vec3& v) {
-  Mat3 S;
-  S << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
-  return S;
-}
-
 }  // namespace
 
 void LumpedProblem::split_external_loads() {
@@ -260,15 +255,15 @@ void LumpedProblem::load_sensitivities() {
     }
     const auto LF = L.leftCols(3), LM = L.middleCols(3, 3), LW = L.rightCols(3);
     auto E = jac_E_.middleRows(m * (j - 1), m);
-    E.leftCols(3).noalias() = LF * Rt - LM * (Rt * skew(frames_[j].p));
+    E.leftCols(3).noalias() = LF * Rt - LM * (Rt * lie::hat(frames_[j].p));
     E.rightCols(3).noalias() = LM * Rt;
     if (jac_external_) {
       // eps : (G [w]x) as a matrix in w.
       Mat3 C;
-      for (int i = 0; i < 3; ++i) C.col(i) = axial_contraction(jac_G_[j], skew(Vec3::Unit(i)));
+      for (int i = 0; i < 3; ++i) C.col(i) = axial_contraction(jac_G_[j], lie::hat(Vec3::Unit(i)));
       auto D = jac_D_.middleRows(m * (j - 1), m);
-      D.noalias() = LF * (Rt * skew(jac_FE_[j])) + LM * (Rt * (C + skew(jac_pure_[j])));
-      if (bb) D.noalias() += LW * (Rt * skew(W));
+      D.noalias() = LF * (Rt * lie::hat(jac_FE_[j])) + LM * (Rt * (C + lie::hat(jac_pure_[j])));
+      if (bb) D.noalias() += LW * (Rt * lie::hat(W));
     }
   }
 }

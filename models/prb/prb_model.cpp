@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "common/lumped_problem.hpp"
+#include "tdcr/core/lie.hpp"
 
 namespace tdcr {
 
@@ -154,11 +155,11 @@ class PrbProblem final : public detail::LumpedProblem {
     Eigen::Map<Eigen::Matrix<double, kU, 9>> L(Lp);
     L.setZero();
     for (int q = 0; q < 3; ++q) {
-      L.block<1, 3>(q, 0) = -s * y * skew(g.p - joint[q]);
+      L.block<1, 3>(q, 0) = -s * y * lie::hat(g.p - joint[q]);
       L.block<1, 3>(q, 3) = -s * y;
       if (bb) {
         Mat3 A = Mat3::Zero();
-        for (int i = q + 1; i < 4; ++i) A += (body_.gamma[i] / body_.gamma_sum) * skew(mid[i] - joint[q]);
+        for (int i = q + 1; i < 4; ++i) A += (body_.gamma[i] / body_.gamma_sum) * lie::hat(mid[i] - joint[q]);
         L.block<1, 3>(q, 6) = -s * y * A;
       }
     }
@@ -169,7 +170,7 @@ class PrbProblem final : public detail::LumpedProblem {
       const Vec3 W = Wj / body_.gamma_sum;
       for (int i = 0; i < 4; ++i) {
         Mb += mid[i].cross(body_.gamma[i] * W);
-        dW += (body_.gamma[i] / body_.gamma_sum) * skew(mid[i]);
+        dW += (body_.gamma[i] / body_.gamma_sum) * lie::hat(mid[i]);
       }
     }
     const double a2 = kGaugeA0 * kGaugeA0;
@@ -179,7 +180,7 @@ class PrbProblem final : public detail::LumpedProblem {
     const Eigen::RowVector3d d3 =
         Eigen::RowVector3d(s * cp, s * sp, 0.0) + sn * dgauge_dt2 * 2.0 * s * s * Eigen::RowVector3d(Mb.x(), Mb.y(), 0.0);
     const Eigen::RowVector3d d4 = -s * g.R.col(2).transpose();
-    const Mat3 dF = skew(g.p);
+    const Mat3 dF = lie::hat(g.p);
     L.block<1, 3>(3, 0) = d3 * dF;
     L.block<1, 3>(3, 3) = d3;
     L.block<1, 3>(4, 0) = d4 * dF;
@@ -189,11 +190,6 @@ class PrbProblem final : public detail::LumpedProblem {
       L.block<1, 3>(4, 6) = d4 * dW;
     }
     return true;
-  }
-  static Mat3 skew(const Vec3& v) {
-    Mat3 S;
-    S << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
-    return S;
   }
 
   void set_phi_ref(const Eigen::VectorXd& x) {
