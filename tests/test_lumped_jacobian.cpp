@@ -13,6 +13,8 @@
 
 #include <gtest/gtest.h>
 
+#include "allocation_counter.hpp"
+
 #include "common/lumped_problem.hpp"
 #include "tdcr/bvp/residual_system.hpp"
 #include "tdcr/core/paper_robot.hpp"
@@ -145,4 +147,47 @@ TEST(LumpedJacobian, BandedColouringIsValidAndAsSmallAsGreedy) {
       }
     }
   }
+}
+
+// The structured Newton step (lumped_structured.cpp) solves J d = b with the factors of the
+// recursive Jacobian: the same step as the dense Jacobian's LU. Once its buffers and pattern are
+// sized (first call per J), a Jacobian, a step setup and a step solve allocate nothing.
+TEST(LumpedJacobian, StructuredStepSolvesTheDenseSystemAndAllocatesNothingOnceWarm) {
+  for (bool prb : {false, true})
+    for (bool tip : {false, true}) {
+      SCOPED_TRACE(std::string(prb ? "prb" : "ccsub") + (tip ? ", tip wrench and gravity" : ", tendons"));
+      Scene s = paper::scene(20, 5, "ccsub");  // J = 40: structured steps in the automatic form
+      if (tip) {
+        s.loads.tip_force = Vec3(0.2, -0.1, 0.05);
+        s.loads.gravity = Vec3(0.0, -9.81, 0.0);
+        s.robot.backbone.density = 8000.0;
+      }
+      std::unique_ptr<StaticModel> model;
+      if (prb) model = std::make_unique<PrbModel>(s.robot, s.effects, LumpedFormulation::Automatic);
+      else model = std::make_unique<CcsubModel>(s.robot, s.effects, LumpedFormulation::Automatic);
+      auto ws = model->make_workspace();
+      const Solution sol = solve(*model, *ws, s.input(), s.solver);
+      ASSERT_TRUE(sol.converged()) << sol.summary.message;
+      EXPECT_EQ(sol.summary.linear_solver, "system");
+      detail::LumpedProblem& P = *static_cast<detail::LumpedWorkspace&>(*ws).problem;
+      P.bind(s.input());
+      P.set_parameter(1.0);
+      ASSERT_TRUE(P.has_newton_step());
+      const int n = P.size();
+      Eigen::VectorXd x = sol.unknowns.head(n);
+      for (int i = 0; i < n; ++i) x[i] += 0.02 * (i % 3 ? -1.0 : 1.0);
+      Eigen::VectorXd f(n), b(n), d(n);
+      Eigen::MatrixXd J(n, n);
+      for (int i = 0; i < n; ++i) b[i] = std::sin(1.0 + i);
+      for (int round = 0; round < 2; ++round) {
+        const long before = g_allocations.load();
+        ASSERT_TRUE(P.residual(x, f));
+        ASSERT_TRUE(P.jacobian(x, f, J));
+        ASSERT_TRUE(P.setup_newton_step(x, f));
+        d = b;
+        ASSERT_TRUE(P.solve_newton_step(d));
+        if (round == 1) EXPECT_EQ(g_allocations.load() - before, 0);
+      }
+      EXPECT_LT((J * d - b).norm(), 1e-9 * b.norm() * std::max(1.0, J.norm()));
+    }
 }
