@@ -153,3 +153,32 @@ TEST(PathFollowing, TendonOnlySceneSolvesDirectly) {
   EXPECT_EQ(s.summary.continuation_steps, 0);
   EXPECT_TRUE(s.path_events.empty());
 }
+
+// A cold direct solve is only the fast path to the loading path's answer: one that has not
+// converged within 30 Newton iterations hands over to the path (VCref's on this scene failed in
+// its line search after 86), which lands where the path alone does.
+TEST(PathFollowing, StalledColdDirectSolveHandsOverToThePathEarly) {
+  const Scene scene = scene_file("antagonistic_tip_force.json");
+  auto m = make_model(ModelKind::VCref, scene.robot, scene.effects);
+  auto ws = m->make_workspace();
+  const Solution s = solve(*m, *ws, scene.input(), scene.solver);
+  ASSERT_TRUE(s.converged()) << s.summary.message;
+  EXPECT_GT(s.summary.continuation_steps, 0);
+  EXPECT_NE(s.summary.message.find("direct solve failed: KIN_MAXITER_REACHED: 30 iterations"), std::string::npos)
+      << s.summary.message;
+  // Without continuation the direct solve is all there is (no cap): it fails here, so the case
+  // exercises the hand-over.
+  SolverOptions direct_only = scene.solver;
+  direct_only.continuation = false;
+  auto ws2 = m->make_workspace();
+  const Solution d = solve(*m, *ws2, scene.input(), direct_only);
+  EXPECT_FALSE(d.converged()) << "the direct solve alone should fail here: " << d.summary.message;
+  // Same branch as CCsub and PRB (their direct solves land): within their model error.
+  for (ModelKind k : {ModelKind::CCsub, ModelKind::PRB}) {
+    auto mk = make_model(k, scene.robot, scene.effects);
+    auto wk = mk->make_workspace();
+    const Solution sk = solve(*mk, *wk, scene.input(), scene.solver);
+    ASSERT_TRUE(sk.converged()) << sk.summary.message;
+    EXPECT_LT((sk.tip().p - s.tip().p).norm(), 0.05 * scene.robot.total_length()) << mk->name();
+  }
+}

@@ -95,6 +95,10 @@ void name_infeasibility(detail::ModelProblem& P, const TendonRouting& routing, c
 // external loads only perturb the tendon-bent shape the cold guesses start from, and the direct
 // solve lands on the branch connected to rest (VCref's measured thresholds, docs/models.md).
 constexpr double kDirectLoadParameter = 2.0;
+// Newton iterations a cold direct solve may take before the loading path takes over. Direct
+// solves that land take 2-15 (the loaded cases of bench_loaded, the loaded-scene suite); VCref's
+// on the antagonistic scene of tests/data/antagonistic_tip_force.json spent 86 before failing.
+constexpr int kColdDirectIterations = 30;
 constexpr double kDirectCompressionParameter = 2.0;
 
 // Why a cold solve must follow the loading path instead of a direct solve ("" if it need not).
@@ -157,7 +161,11 @@ double solve_on_loading_path(const StaticModel& model, const ModelInput& input, 
   const bool skip_direct = input_path && large_change(model, warm_start->loads, input.loads);
   if (skip_direct && unpredicted) x = *unpredicted;
   if (!skip_direct) {
-    direct_solve(P, sys, nopt, warm, options.reuse_jacobian, x, sum);
+    // A cold direct solve is only the fast path to the loading path's answer: when it has not
+    // converged within kColdDirectIterations, the loading path from rest takes over.
+    bvp::NewtonOptions dopt = nopt;
+    if (!warm && options.continuation) dopt.max_iterations = std::min(nopt.max_iterations, kColdDirectIterations);
+    direct_solve(P, sys, dopt, warm, options.reuse_jacobian, x, sum);
     if (!sum.converged() && unpredicted) {  // the secant prediction failed: from the last answer
       const std::string first = sum.message;
       x = *unpredicted;
