@@ -96,8 +96,9 @@ void name_infeasibility(detail::ModelProblem& P, const TendonRouting& routing, c
 // solve lands on the branch connected to rest (VCref's measured thresholds, docs/models.md).
 constexpr double kDirectLoadParameter = 2.0;
 // Newton iterations a cold direct solve may take before the loading path takes over. Direct
-// solves that land take 2-15 (the loaded cases of bench_loaded, the loaded-scene suite); VCref's
-// on the antagonistic scene of tests/data/antagonistic_tip_force.json spent 86 before failing.
+// solves that land take at most 13 on the loaded cases of bench_loaded (28 with accuracy-driven
+// RK4, over its refinement solves; docs/models.md); VCref's on the antagonistic scene of
+// tests/data/antagonistic_tip_force.json spent 86 before failing.
 constexpr int kColdDirectIterations = 30;
 constexpr double kDirectCompressionParameter = 2.0;
 
