@@ -54,6 +54,10 @@ class ModelProblem {
   virtual double cold_freeze_jacobian_below() const { return 0.0; }
   /// The cold-start rule for the bound input.
   virtual ColdStart cold_start() const { return {}; }
+  /// Whether a sign change of the Jacobian's determinant along a loading path (without a fold)
+  /// is a bifurcation of the equilibria (ArclengthOptions::detect_bifurcations). False for
+  /// unknowns with a chart whose determinant changes sign where the shape does nothing special.
+  virtual bool determinant_marks_bifurcations() const { return true; }
   /// Cold guess at load factor 1 (system parameter already 1).
   virtual void cold_guess(Eigen::VectorXd& x) = 0;
   /// A second cold guess tried once after the first failed (false: none).

@@ -31,6 +31,7 @@ bvp::ArclengthResult follow_loading_path(ModelProblem& P, const TendonRouting& r
   a.start = 0.0;
   a.target = 1.0;
   a.at_fold = bvp::FoldAction::Snap;
+  a.detect_bifurcations = a.detect_bifurcations && P.determinant_marks_bifurcations();
   // The path is long in scaled arclength where the robot bends far: at least 400 corrector solves.
   a.max_steps = std::max(a.max_steps, 400);
   if (first_step > 0.0) a.initial_step = std::clamp(first_step, a.min_step, a.initial_step);
