@@ -31,19 +31,23 @@ void check_warm_start(const StaticModel& model, const Solution& warm) {
 
 // Direct Newton solve from x, with one retry from the problem's alternative cold guess. A cold
 // solve freezes the Jacobian near the solution where the problem allows it (and the options
-// allow Jacobian reuse at all).
+// allow Jacobian reuse at all). attempt_cap > 0 bounds the Newton iterations of each attempt
+// (within the options' total).
 void direct_solve(detail::ModelProblem& P, bvp::ParameterizedSystem& sys, const bvp::NewtonOptions& options,
-                  bool warm, bool allow_reuse, Eigen::VectorXd& x, SolverSummary& sum) {
+                  bool warm, bool allow_reuse, Eigen::VectorXd& x, SolverSummary& sum, int attempt_cap = 0) {
   bvp::NewtonOptions nopt = options;
   const double freeze = P.cold_freeze_jacobian_below();
   if (!warm && allow_reuse && freeze > nopt.function_tolerance) nopt.freeze_jacobian_below = freeze;
+  const int budget = nopt.max_iterations;
+  if (attempt_cap > 0) nopt.max_iterations = std::min(budget, attempt_cap);
   bvp::NewtonResult res = P.newton().solve(sys, x, nopt);
   detail::copy_newton_result(res, sum);
-  if (res.converged() || warm || nopt.max_iterations <= sum.iterations) return;
+  if (res.converged() || warm || budget <= sum.iterations) return;
   Eigen::VectorXd xr;
   if (!P.alternative_guess(xr)) return;
   bvp::NewtonOptions ropt = nopt;
-  ropt.max_iterations = nopt.max_iterations - sum.iterations;
+  ropt.max_iterations = budget - sum.iterations;
+  if (attempt_cap > 0) ropt.max_iterations = std::min(ropt.max_iterations, attempt_cap);
   const std::string first = sum.message;
   res = P.newton().solve(sys, xr, ropt);
   detail::copy_newton_result(res, sum);
@@ -162,11 +166,11 @@ double solve_on_loading_path(const StaticModel& model, const ModelInput& input, 
   const bool skip_direct = input_path && large_change(model, warm_start->loads, input.loads);
   if (skip_direct && unpredicted) x = *unpredicted;
   if (!skip_direct) {
-    // A cold direct solve is only the fast path to the loading path's answer: when it has not
-    // converged within kColdDirectIterations, the loading path from rest takes over.
-    bvp::NewtonOptions dopt = nopt;
-    if (!warm && options.continuation) dopt.max_iterations = std::min(nopt.max_iterations, kColdDirectIterations);
-    direct_solve(P, sys, dopt, warm, options.reuse_jacobian, x, sum);
+    // A cold direct solve is only the fast path to the loading path's answer: when an attempt
+    // has not converged within kColdDirectIterations, the next guess or the loading path from
+    // rest takes over.
+    const int cap = !warm && options.continuation ? kColdDirectIterations : 0;
+    direct_solve(P, sys, nopt, warm, options.reuse_jacobian, x, sum, cap);
     if (!sum.converged() && unpredicted) {  // the secant prediction failed: from the last answer
       const std::string first = sum.message;
       x = *unpredicted;

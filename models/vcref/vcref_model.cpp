@@ -116,6 +116,12 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
   }
   detail::ColdStart cold_start() const override { return cold_; }
   void cold_guess(Eigen::VectorXd& x) override { shape_guess(x, d_.arc_guess); }
+  // The other shape: under antagonistic tensions with a tip force the arcs can start Newton in a
+  // basin it does not leave (tests/data/antagonistic_tip_force.json), the straight robot not.
+  bool alternative_guess(Eigen::VectorXd& x) override {
+    shape_guess(x, !d_.arc_guess);
+    return true;
+  }
   void rest_state(Eigen::VectorXd& x) override { shape_guess(x, false); }
   std::string integrator_name() const override { return integrator_->name(); }
   // The reduced stiffness in the disk poses (vcref_stability.cpp).
