@@ -74,8 +74,10 @@ struct VcOptions {
   /// are unaffected (t_k = e_z on both sides). Off if this or Effects::kink_forces is false.
   bool kink_forces = true;
   VcFormulation formulation = VcFormulation::Automatic;  ///< Single or multiple shooting.
-  /// Automatic formulation: multiple shooting when the load parameter exceeds this.
-  double multiple_shooting_threshold = 10.0;
+  /// Automatic formulation: multiple shooting when the load parameter exceeds this (30: single
+  /// shooting along the loading path stays on its branch up to at least 19.8, hard case 14 at 869
+  /// coils; docs/design-notes/vc.md).
+  double multiple_shooting_threshold = 30.0;
   /// Single shooting with RK4: Newton's Jacobian is the exact derivative of the discrete shot
   /// (dual numbers through every RK4 stage, disk load and kink) instead of forward differences
   /// by the solver (6 extra shots; CVODE always takes these). The same Newton iterations to
