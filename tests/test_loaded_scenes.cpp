@@ -57,7 +57,7 @@ const std::vector<KnownFailure> kKnownFailures = {
     {"s1000", ModelKind::CCsub,
      "model limitation: CCsub's discretisation error near the limit at n = 5 (16.5 % of L without the tip force, "
      "5.4 % at n = 10, 1.5 % at n = 20)"},
-    {"s1001", ModelKind::VC, "VC: loading path stops (integration_failed at a fold, no landing)"},
+    {"s1001", ModelKind::VC, "VC: past the fold at 96 % (snap lands) a second fold at 99.5 % puts T3 at its limit (named infeasible)"},
     {"s1001", ModelKind::CCsub,
      "model limitation: a fold at 96 % of the load next to the tendon limit; at n = 10 CCsub meets none and stays "
      "on the branch VC and PRB leave there (at n = 20 it folds at 96.5 % and snaps)"},
