@@ -4,7 +4,10 @@
 // forward differences of the whole residual (bvp::finite_difference_jacobian: same steps) up to
 // their own rounding, for CCsub and PRB, with tendons alone, a tip wrench, gravity with disk and
 // backbone masses and only the first segment loaded, at the solution and off it. Both are also
-// checked against central differences: both must be accurate to forward differences' own error. A wrong rigid-motion term (a sign, a missing shift) gives errors of the Jacobian's own size.
+// checked against central differences: both must be accurate to forward differences' own error
+// (1e-6 of the largest entry, or twice the plain differences' error where PRB's central
+// differences at h = 1e-5 are themselves only 1e-5 accurate). A wrong rigid-motion term (a sign,
+// a missing shift) gives errors of 1e-3 .. 1 of the Jacobian's size.
 #include <algorithm>
 #include <cmath>
 #include <memory>
@@ -186,7 +189,9 @@ TEST(LumpedJacobian, StructuredStepSolvesTheDenseSystemAndAllocatesNothingOnceWa
         ASSERT_TRUE(P.setup_newton_step(x, f));
         d = b;
         ASSERT_TRUE(P.solve_newton_step(d));
-        if (round == 1) EXPECT_EQ(g_allocations.load() - before, 0);
+        if (round == 1) {
+          EXPECT_EQ(g_allocations.load() - before, 0);
+        }
       }
       EXPECT_LT((J * d - b).norm(), 1e-9 * b.norm() * std::max(1.0, J.norm()));
     }

@@ -176,7 +176,7 @@ void LumpedProblem::split_external_loads() {
   // at points that move with the frames). For the external part also
   // G_j = sum_e (p_e - O_j) f_e^T over its distal point loads and the distal pure moment, so that
   // after a rigid motion Q of everything distal of disk j its moment about O_j is
-  // Q (eps : (G_j Q)) + m_pure (see jacobian()).
+  // Q (eps : (G_j Q)) + m_pure (see structured_jacobian()).
   const int J = active();
   const physics::LoadCase& L = loads_.loads;
   const bool bb = backbone_weight_on(), dw = L.has_disk_weight();
@@ -220,8 +220,8 @@ void LumpedProblem::split_external_loads() {
 }
 
 void LumpedProblem::load_sensitivities() {
-  // L_j = d r_j / d(F, M, W) in the frame of disk j-1 (m x 9) by forward differences of the
-  // constitutive law (exact for CCsub, linear in its loads), mapped to
+  // L_j = d r_j / d(F, M, W) in the frame of disk j-1 (m x 9): the model's closed form
+  // (load_jacobian: CCsub, PRB), else forward differences of the constitutive law, mapped to
   //  - E_j: the response to a change (dF, dM0) of the distal wrench, base frame, moment about the
   //    base origin, with the frames of subsegment j fixed (proximal rows of a column);
   //  - D_j: the response to a small rotation w of everything distal of disk j-1 with the
@@ -232,7 +232,7 @@ void LumpedProblem::load_sensitivities() {
   const int q_count = bb ? 9 : 6;
   jac_E_.resize(m * J, 6);
   if (jac_external_) jac_D_.resize(m * J, 3);
-  double r0[8], r1[8];
+  double r0[8], r1[8];  // m <= 8 (CCsub 3, PRB 5), as L's row bound
   Eigen::Matrix<double, Eigen::Dynamic, 9, 0, 8, 9> L(m, 9);
   for (int j = 1; j <= J; ++j) {
     const double* xj = jac_x_.data() + m * (j - 1);

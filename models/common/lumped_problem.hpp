@@ -123,6 +123,8 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   // (structured_jacobian, then two small products); also what path following's bordered
   // systems use in the reduced form.
   bool has_jacobian() const final { return !banded_ && !body_.statics.friction(); }
+  // Its diagonal blocks are forward differences (of first-order accuracy): differential
+  // kinematics keeps its own central differences.
   bool jacobian_is_forward_difference() const final { return true; }
   bool jacobian(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& f,
                 Eigen::Ref<Eigen::MatrixXd> J) final;
