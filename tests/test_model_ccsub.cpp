@@ -281,3 +281,31 @@ TEST(CcsubModel, BandedFormulationMatchesRecursive) {
   s.loads.gravity = Vec3(0.0, -9.81, 0.0);
   lumped_reference::expect_banded_matches_recursive<CcsubModel>(s);
 }
+
+// The cold guess (fixed-point passes of Eq. 43 from the straight robot, ccsub_model.cpp): under a
+// pure tip moment the moment is the same in every subsegment's frame whatever the shape, so the
+// first pass is already the exact arc and Newton has nothing left to do.
+TEST(CcsubModel, ColdGuessIsTheExactArcUnderPureTipMoment) {
+  for (double angle_deg : {90.0, 200.0}) {
+    Scene s = paper_scene(4, {0, 0, 0, 0});
+    const double EI = s.robot.backbone.effective_stiffness().EI;
+    s.loads.tip_moment = EI * (angle_deg * M_PI / 180.0 / 0.1) * Vec3(1.0, 2.0, 0.0).normalized();
+    const Solution sol = solve_ccsub(s);
+    ASSERT_TRUE(sol.converged()) << sol.summary.message;
+    EXPECT_EQ(sol.summary.iterations, 0) << angle_deg << " deg: " << sol.summary.message;
+  }
+}
+
+// ... and under tendons and a tip force (case 14 of benchmarks/data/paper_code_cases_inputs.csv:
+// n = 10, tensions 0.87-1.45 T_M, 0.47 N obliquely down, load parameter 1.3) the passes bring
+// the direct solve from 8 Newton iterations (from the straight robot) to 3, on the paper code's
+// answer (benchmarks/data/paper_code_cases_timing.csv, CCsub row of case 14).
+TEST(CcsubModel, ColdGuessShortensLoadedDirectSolve) {
+  const Scene s = paper_scene(10, {8.033547215, 7.34380927063, 4.80800016499, 6.02588378056},
+                              Vec3(0.334562710152, -0.00508794674257, -0.335202507993));
+  const Solution sol = solve_ccsub(s);
+  ASSERT_TRUE(sol.converged()) << sol.summary.message;
+  EXPECT_EQ(sol.summary.continuation_steps, 0);
+  EXPECT_LE(sol.summary.iterations, 4) << sol.summary.message;
+  EXPECT_LT((sol.tip().p - Vec3(0.0344213906525212, -0.00906305256452425, 0.0918165235558875)).norm(), 1e-8);
+}

@@ -119,12 +119,12 @@ void LumpedProblem::unknown_scale(Eigen::Ref<Eigen::VectorXd> s) const {
 }
 
 void LumpedProblem::cold_guess(Eigen::VectorXd& y) {
-  straight_x(x_, false);
+  guess_x(x_, false);
   lift(x_, y);
 }
 
 void LumpedProblem::rest_state(Eigen::VectorXd& y) {
-  straight_x(x_, true);
+  guess_x(x_, true);
   lift(x_, y);
 }
 

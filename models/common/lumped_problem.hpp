@@ -102,7 +102,7 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   /// Warm starts: modified Newton from the previous solve's Jacobian, unless that solve needed
   /// many iterations (its Jacobian is then too far from this one's).
   void adjust_warm(bvp::NewtonOptions& options, bool same_input) const override;
-  /// The straight robot (straight_x), lifted to the formulation's unknowns.
+  /// The model's cold guess (guess_x), lifted to the formulation's unknowns.
   void cold_guess(Eigen::VectorXd& y) final;
   void rest_state(Eigen::VectorXd& y) final;
   bool warm_guess(const Solution& previous, Eigen::VectorXd& y) final;
@@ -148,8 +148,10 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
     (void)j, (void)xj, (void)g, (void)F, (void)M, (void)W, (void)L;
     return false;
   }
-  /// The x_j of the straight robot (zeros unless overridden); `rest`: for the rest state.
-  virtual void straight_x(Eigen::VectorXd& x, bool rest) { (void)rest; x.setZero(body_.per_subsegment * active()); }
+  /// The x_j of the cold guess, or with `rest` of the rest state (the straight robot): zeros
+  /// unless overridden (CCsub: fixed-point passes from the straight robot; PRB: the straight
+  /// robot with its bending planes set by the load).
+  virtual void guess_x(Eigen::VectorXd& x, bool rest) { (void)rest; x.setZero(body_.per_subsegment * active()); }
   /// Called with the x_j of a warm start (e.g. to take gauge references from it).
   virtual void on_warm(const Eigen::VectorXd& x) { (void)x; }
   /// Scale of x_j (per_subsegment values; default ones).

@@ -206,7 +206,7 @@ class PrbProblem final : public detail::LumpedProblem {
   // Straight guess (all joint angles and twists zero); each bending plane is put where the moment
   // at the straight state under the full load points (y_phi along M*), see prb.hpp. With
   // phi_ref = phi it is also the exact solution at load factor 0.
-  void straight_x(Eigen::VectorXd& x, bool) override {
+  void guess_x(Eigen::VectorXd& x, bool) override {
     x.setZero(kU * active());
     const double lambda = loads_.loads.load_factor();
     set_parameter(1.0);
