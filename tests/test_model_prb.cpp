@@ -80,11 +80,15 @@ TEST(PrbModel, PureTipMomentWithinThreeRAccuracy) {
   EXPECT_GT(err, 5e-4);  // the 3R body is not an arc
 }
 
-// 3. Mirror symmetry about the x-z plane.
+// 3. Mirror symmetry about the x-z plane, both solved to a residual of 1e-13 (at the default
+// 1e-10 the two solves may stop at different points within the tolerance, ~1e-12 m apart).
 TEST(PrbModel, MirrorSymmetry) {
   const double TM = paper::max_tension(paper::robot(5));
-  const Solution a = solve_prb(paper_scene(5, {TM, 0.2 * TM, 0.5 * TM, 0}, Vec3(0.1, 0.2, 0.05)));
-  const Solution b = solve_prb(paper_scene(5, {0.2 * TM, TM, 0, 0.5 * TM}, Vec3(0.1, -0.2, 0.05)));
+  Scene sa = paper_scene(5, {TM, 0.2 * TM, 0.5 * TM, 0}, Vec3(0.1, 0.2, 0.05));
+  Scene sb = paper_scene(5, {0.2 * TM, TM, 0, 0.5 * TM}, Vec3(0.1, -0.2, 0.05));
+  sa.solver.function_tolerance = sb.solver.function_tolerance = 1e-13;
+  const Solution a = solve_prb(sa);
+  const Solution b = solve_prb(sb);
   ASSERT_TRUE(a.converged()) << a.summary.message;
   ASSERT_TRUE(b.converged()) << b.summary.message;
   const Mat3 S = Vec3(1, -1, 1).asDiagonal();
@@ -273,4 +277,35 @@ TEST(PrbModel, BandedFormulationMatchesRecursive) {
   Scene s = paper_scene(6, {0.3 * TM, 0, 0.6 * TM, 0}, Vec3(0.03, -0.02, 0.0));
   s.loads.gravity = Vec3(0.0, -9.81, 0.0);
   lumped_reference::expect_banded_matches_recursive<PrbModel>(s);
+}
+
+// The cold guess (fixed-point passes of Eq. 48-54 from the straight robot, prb_model.cpp): under a
+// pure tip moment every joint carries the same moment whatever the shape, so the first pass is
+// the answer; under tendons and a tip force (case 14 of
+// benchmarks/data/paper_code_cases_inputs.csv: n = 10, tensions 0.87-1.45 T_M, 0.47 N obliquely
+// down) the passes bring the direct solve from 4 Newton iterations (from the straight robot with
+// its bending planes along the moment) to 2, on the answer of a tight solve from the loading path.
+TEST(PrbModel, ColdGuessShortensDirectSolves) {
+  Scene m = paper_scene(4, {0, 0, 0, 0});
+  m.loads.tip_moment = m.robot.backbone.effective_stiffness().EI * (M_PI / 2 / 0.1) * Vec3(1.0, 2.0, 0.0).normalized();
+  const Solution arc = solve_prb(m);
+  ASSERT_TRUE(arc.converged()) << arc.summary.message;
+  EXPECT_EQ(arc.summary.iterations, 0) << arc.summary.message;
+
+  Scene s = paper_scene(10, {8.033547215, 7.34380927063, 4.80800016499, 6.02588378056},
+                        Vec3(0.334562710152, -0.00508794674257, -0.335202507993));
+  const Solution sol = solve_prb(s);
+  ASSERT_TRUE(sol.converged()) << sol.summary.message;
+  EXPECT_EQ(sol.summary.continuation_steps, 0);
+  EXPECT_LE(sol.summary.iterations, 2) << sol.summary.message;
+  // The loading path in 20 warm-started steps of all loads together.
+  Solution path;
+  for (int k = 1; k <= 20; ++k) {
+    Scene step = s;
+    for (double& t : step.actuation.values) t *= k / 20.0;
+    step.loads.tip_force *= k / 20.0;
+    path = k == 1 ? solve_prb(step) : solve_prb(step, &path);
+    ASSERT_TRUE(path.converged()) << k << ": " << path.summary.message;
+  }
+  EXPECT_LT((sol.tip().p - path.tip().p).norm(), 1e-8);
 }

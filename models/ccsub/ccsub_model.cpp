@@ -1,8 +1,6 @@
 #include "tdcr/models/ccsub.hpp"
 
 #include <cmath>
-#include <algorithm>
-#include <vector>
 
 #include "common/lumped_problem.hpp"
 #include "tdcr/core/lie.hpp"
@@ -80,7 +78,7 @@ class CcsubBody final : public detail::LumpedBody {
 // The 3 residuals of Eq. 43 per subsegment (see ccsub.hpp).
 class CcsubProblem final : public detail::LumpedProblem {
  public:
-  explicit CcsubProblem(const CcsubBody& body) : LumpedProblem(body), body_(body), next_(body.N + 1) {}
+  explicit CcsubProblem(const CcsubBody& body) : LumpedProblem(body), body_(body) {}
   // The unknowns are curvature components: no chart for a stale Jacobian to wander along (PRB's
   // bending-plane angle has one: with a frozen Jacobian it drifted by 5 pi on configuration 7 of
   // the case study and landed on the other chart of the same shape, where the stability test
@@ -94,38 +92,28 @@ class CcsubProblem final : public detail::LumpedProblem {
     return external || size() >= kColdFreezeFromUnknowns ? kColdFreezeJacobianBelow : 0.0;
   }
 
-  // The cold guess: fixed-point (Picard) passes x <- P(x) from the straight robot, where P(x)
-  // solves Eq. 43 for x_j with the moments and the axis z_j of the shape x. The first pass is
-  // exact for tendons alone where the routing is straight (their moment in the frame of disk
-  // j-1 does not depend on the shape: the constant curvature of CC) and adds the external loads
-  // as linear beam theory does; the next one bends the loads' lever arms with that shape. Passes
-  // stop where they stop contracting (|P(x) - x| not halved): with a load parameter above about
-  // 1 the map can expand. On the 60 loaded cases of bench_loaded three passes take the cold
-  // direct solves from 6.1 to 2.9 Newton iterations on average (docs/design-notes/lumped.md).
+  // The cold guess: fixed-point passes from the straight robot (LumpedProblem::
+  // fixed_point_passes). The first pass is exact for tendons alone where the routing is straight
+  // (their moment in the frame of disk j-1 does not depend on the shape: the constant curvature
+  // of CC) and under a pure tip moment, and adds the other external loads as linear beam theory
+  // does; the next ones bend the loads' lever arms with that shape. On the 60 loaded cases of
+  // bench_loaded three passes take the cold direct solves from 6.1 to 2.9 Newton iterations on
+  // average (docs/design-notes/lumped.md).
   void guess_x(Eigen::VectorXd& x, bool rest) override {
     x.setZero(3 * active());
-    if (rest) return;
-    const double lambda = loads_.loads.load_factor();
-    set_parameter(1.0);
+    if (!rest) fixed_point_passes(x, kColdGuessPasses);
+  }
+  // Eq. 43 solved for x_j with the axis z_j of the shape x_j: eps from the z row, then u.
+  bool fixed_point(int j, const double*, const detail::SubsegmentPose& g, const Vec3& F, const Vec3& M, const Vec3& W,
+                   double* next, double*) const override {
+    const Vec3 m = M + g.p.cross(F) + g.c.cross(W);
     const double gj_ei = body_.GJ / body_.EI;
-    double last_step = INFINITY;
-    for (int pass = 0; pass < kColdGuessPasses; ++pass) {
-      evaluate(x.data());
-      double step = 0.0;
-      for (int j = 1; j <= active(); ++j) {
-        const Vec3 m = frames_[j - 1].R.transpose() * base_moment(j);
-        const double s = body_.statics.length(j) / body_.EI;
-        const Vec3 z = poses_[j].R.col(2);
-        const double eps = s * m.z() / (gj_ei * z.z());
-        const Vec3 p(s * m.x() - gj_ei * eps * z.x(), s * m.y() - gj_ei * eps * z.y(), eps);
-        step = std::max(step, (p - Vec3(x.data() + 3 * (j - 1))).cwiseAbs().maxCoeff());
-        next_[j] = p;
-      }
-      if (!(step <= 0.5 * last_step)) break;
-      for (int j = 1; j <= active(); ++j) x.segment<3>(3 * (j - 1)) = next_[j];
-      last_step = step;
-    }
-    set_parameter(lambda);
+    const double s = body_.statics.length(j) / body_.EI;
+    const Vec3 z = g.R.col(2);
+    next[2] = s * m.z() / (gj_ei * z.z());
+    next[0] = s * m.x() - gj_ei * next[2] * z.x();
+    next[1] = s * m.y() - gj_ei * next[2] * z.y();
+    return true;
   }
   // The straight robot, if a direct solve from the fixed-point guess fails.
   bool alternative_guess(Eigen::VectorXd& y) override {
@@ -157,7 +145,6 @@ class CcsubProblem final : public detail::LumpedProblem {
     return true;
   }
   const CcsubBody& body_;
-  std::vector<Vec3> next_;  // the cold guess's next fixed-point pass
 };
 
 std::unique_ptr<detail::LumpedProblem> CcsubBody::make_problem() const { return std::make_unique<CcsubProblem>(*this); }

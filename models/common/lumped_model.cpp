@@ -128,6 +128,36 @@ void LumpedProblem::rest_state(Eigen::VectorXd& y) {
   lift(x_, y);
 }
 
+void LumpedProblem::fixed_point_passes(Eigen::VectorXd& x, int passes) {
+  const int m = body_.per_subsegment;
+  const double lambda = loads_.loads.load_factor();
+  set_parameter(1.0);
+  const bool bb = backbone_weight_on();
+  double last_change = INFINITY;
+  next_x_.resize(x.size());
+  for (int pass = 0; pass < passes; ++pass) {
+    evaluate(x.data());
+    double change = 0.0;
+    for (int j = 1; j <= active(); ++j) {
+      const Mat3 Rt = frames_[j - 1].R.transpose();
+      const Vec3 W = bb ? Vec3(Rt * backbone_weight(j)) : Vec3::Zero();
+      const double* xj = x.data() + m * (j - 1);
+      double* next = next_x_.data() + m * (j - 1);
+      double weight[8];  // m <= 8
+      for (int i = 0; i < m; ++i) weight[i] = 1.0;
+      if (!fixed_point(j, xj, poses_[j], Rt * F_[j], Rt * M_[j], W, next, weight)) {
+        set_parameter(lambda);
+        return;
+      }
+      for (int i = 0; i < m; ++i) change = std::max(change, weight[i] * std::abs(next[i] - xj[i]));
+    }
+    if (!(change <= 0.5 * last_change)) break;
+    x = next_x_;
+    last_change = change;
+  }
+  set_parameter(lambda);
+}
+
 bool LumpedProblem::warm_guess(const Solution& previous, Eigen::VectorXd& y) {
   if (previous.unknowns.size() != body_.per_subsegment * body_.N || !previous.unknowns.allFinite()) return false;
   x_ = previous.unknowns.head(body_.per_subsegment * active());

@@ -152,6 +152,21 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   /// unless overridden (CCsub: fixed-point passes from the straight robot; PRB: the straight
   /// robot with its bending planes set by the load).
   virtual void guess_x(Eigen::VectorXd& x, bool rest) { (void)rest; x.setZero(body_.per_subsegment * active()); }
+  /// A fixed-point map of subsegment j's constitutive law: the x_j (in `next`) that satisfy it
+  /// for the given loads (frame of disk j-1, as constitutive()) with the geometry g of the
+  /// current xj held where the law needs it; false if the model has none. `weight` (m values,
+  /// ones on entry): the weights of |next - xj| in the contraction test of fixed_point_passes
+  /// (e.g. 0 for an angle that is only a chart).
+  virtual bool fixed_point(int j, const double* xj, const SubsegmentPose& g, const Vec3& F, const Vec3& M,
+                           const Vec3& W, double* next, double* weight) const {
+    (void)j, (void)xj, (void)g, (void)F, (void)M, (void)W, (void)next, (void)weight;
+    return false;
+  }
+  /// Up to `passes` fixed-point (Picard) passes x <- P(x) of every loaded subsegment at full
+  /// load, P the model's fixed_point() in the shape x: a cold guess. Passes stop where they stop
+  /// contracting (the largest weighted change not halved): with a load parameter above about 1
+  /// the map can expand. Leaves the load factor as it was.
+  void fixed_point_passes(Eigen::VectorXd& x, int passes);
   /// Called with the x_j of a warm start (e.g. to take gauge references from it).
   virtual void on_warm(const Eigen::VectorXd& x) { (void)x; }
   /// Scale of x_j (per_subsegment values; default ones).
@@ -230,6 +245,7 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   Eigen::MatrixXd jac_E_, jac_D_, jac_dW_, jac_Om_, jac_diag_, jac_prod_;
   bool jac_external_ = false;
   std::vector<Vec3> jac_FT_, jac_MT_, jac_FE_, jac_pure_, jac_df_, jac_dm_;
+  Eigen::VectorXd next_x_;  // fixed_point_passes()
   std::vector<Mat3> jac_G_;
 };
 

@@ -30,6 +30,8 @@ constexpr double kMaxNewtonStep = 1.0;
 // (tip force) of the dense ones in repeated solves and about the same in a fresh workspace; at
 // J = 10 0.65x / 0.91x repeated, but a fresh workspace costs 1.2x / 2.6x.
 constexpr int kBandedFrom = 16;
+// Fixed-point passes of the cold guess (PrbProblem::guess_x).
+constexpr int kColdGuessPasses = 3;
 
 // Model-specific points of a PRB subsegment in detail::SubsegmentPose::aux.
 constexpr int kJoint = 0;  // joint centres P_1..P_3: aux[0..2]
@@ -203,10 +205,11 @@ class PrbProblem final : public detail::LumpedProblem {
   void set_phi_ref(const Eigen::VectorXd& x) {
     for (int j = 1; j <= active(); ++j) phi_ref_[j] = x[kU * (j - 1) + 3];
   }
-  // Straight guess (all joint angles and twists zero); each bending plane is put where the moment
-  // at the straight state under the full load points (y_phi along M*), see prb.hpp. With
-  // phi_ref = phi it is also the exact solution at load factor 0.
-  void guess_x(Eigen::VectorXd& x, bool) override {
+  // Rest state: the straight robot (all joint angles and twists zero), each bending plane put
+  // where the moment at the straight state under the full load points (y_phi along M*), see
+  // prb.hpp; with phi_ref = phi it is also the exact solution at load factor 0. Cold guess: from
+  // there, fixed-point passes (LumpedProblem::fixed_point_passes, PrbProblem::fixed_point).
+  void guess_x(Eigen::VectorXd& x, bool rest) override {
     x.setZero(kU * active());
     const double lambda = loads_.loads.load_factor();
     set_parameter(1.0);
@@ -217,7 +220,34 @@ class PrbProblem final : public detail::LumpedProblem {
       x[kU * (j - 1) + 3] = scale * std::hypot(a.x(), a.y()) > 1e-14 ? std::atan2(-a.x(), a.y()) : 0.0;
     }
     set_parameter(lambda);
+    if (!rest) fixed_point_passes(x, kColdGuessPasses);
     set_phi_ref(x);
+  }
+  // Eq. 48-54 solved for x_j with the joint positions and end axis of the shape x_j: the bending
+  // plane along the moment about O_{j-1} (Eq. 52-53 without the gauge), then each joint angle
+  // from the moment about its joint (Eq. 48-51) and the twist from Eq. 54. phi is a chart (any
+  // value at zero bending): it does not count in the contraction test.
+  bool fixed_point(int j, const double* xj, const detail::SubsegmentPose& g, const Vec3& F, const Vec3& Mj,
+                   const Vec3& Wj, double* next, double* weight) const override {
+    const bool bb = backbone_weight_on();
+    const double s = body_.statics.length(j) / body_.EI;
+    const Vec3* joint = g.aux + kJoint;
+    const Vec3* mid = g.aux + kMid;
+    const Vec3 W = Wj / body_.gamma_sum;
+    Vec3 Mb = Mj + g.p.cross(F);
+    if (bb)
+      for (int i = 0; i < 4; ++i) Mb += mid[i].cross(body_.gamma[i] * W);
+    next[3] = s * std::hypot(Mb.x(), Mb.y()) > 1e-14 ? std::atan2(-Mb.x(), Mb.y()) : xj[3];
+    const Vec3 y(-std::sin(next[3]), std::cos(next[3]), 0.0);
+    for (int q = 0; q < 3; ++q) {
+      Vec3 Mq = Mj + (g.p - joint[q]).cross(F);
+      if (bb)
+        for (int i = q + 1; i < 4; ++i) Mq += (mid[i] - joint[q]).cross(body_.gamma[i] * W);
+      next[q] = s * y.dot(Mq) / body_.k_theta[q];
+    }
+    next[4] = s * g.R.col(2).dot(Mb) / (body_.GJ / body_.EI);
+    weight[3] = 0.0;
+    return true;
   }
 
   const PrbBody& body_;
