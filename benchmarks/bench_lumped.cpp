@@ -8,7 +8,10 @@
 // configuration 5 = (0, 0, T_M, 0) load every subsegment and show the cost of the full system.
 //
 // Then a scaling sweep (n = 5..200 disks per segment; --quick: n = 5, 10, 20) on configuration 5
-// with and without a tip force: median time of the automatic formulation over --reps cold solves
+// without a tip force (the cold guesses are exact there for tendons alone: 0-1 Newton
+// iterations), with a small one (tip_force: 0.054 N, load parameter L^2 |F| / EI = 0.13) and a
+// large one (tip_0.5N: 0.5 N across the bending plane and along it, load parameter 1.2, the
+// largest force of bench_loaded's cases): median time of the automatic formulation over --reps cold solves
 // in one workspace (median_us), the first solve of that fresh workspace (first_us: also sizes
 // buffers and analyses the sparsity pattern), the log-log slope of median_us vs n from n = 10 to
 // 200, and the tip distance to the recursive (dense) formulation.
@@ -43,11 +46,16 @@ bool sweep(bool quick, int reps) {
               "first_us", "dense_us", "tip_diff_m");
   bool ok = true;
   for (const char* name : {"ccsub", "prb"}) {
-    for (bool tip : {false, true}) {
+    struct Load {
+      const char* label;
+      Vec3 tip_force;
+    };
+    for (const Load& load : {Load{"tendons", Vec3::Zero()}, Load{"tip_force", Vec3(0.05, 0.02, 0.0)},
+                             Load{"tip_0.5N", Vec3(0.4, 0.3, 0.0)}}) {
       double t10 = 0.0, t200 = 0.0;
       for (int n : ns) {
         Scene s = paper::scene(n, 5, name);
-        if (tip) s.loads.tip_force = Vec3(0.05, 0.02, 0.0);
+        s.loads.tip_force = load.tip_force;
         const auto model = lumped(name, s, LumpedFormulation::Automatic);
         // The first solve of a fresh workspace (sizes the buffers, analyses the sparsity pattern,
         // colours the columns), then `reps` cold solves in that workspace (the median).
@@ -66,12 +74,12 @@ bool sweep(bool quick, int reps) {
         ok = ok && t.last.converged();
         if (n == 10) t10 = t.median_us;
         if (n == 200) t200 = t.median_us;
-        std::printf("%-6s %-9s %4d %8d %6d %12.1f %12.1f %12.1f %12.2e %s\n", name, tip ? "tip_force" : "tendons", n,
+        std::printf("%-6s %-9s %4d %8d %6d %12.1f %12.1f %12.1f %12.2e %s\n", name, load.label, n,
                     t.last.summary.unknowns, t.last.summary.iterations, t.median_us, first_us, dense_us, diff,
                     t.last.converged() ? "" : t.last.summary.message.c_str());
       }
       if (t10 > 0.0 && t200 > 0.0)
-        std::printf("%-6s %-9s log-log slope n = 10..200: %.2f\n", name, tip ? "tip_force" : "tendons",
+        std::printf("%-6s %-9s log-log slope n = 10..200: %.2f\n", name, load.label,
                     std::log(t200 / t10) / std::log(20.0));
     }
   }

@@ -80,12 +80,11 @@ class CcsubProblem final : public detail::LumpedProblem {
  public:
   explicit CcsubProblem(const CcsubBody& body) : LumpedProblem(body), body_(body) {}
   // The unknowns are curvature components: no chart for a stale Jacobian to wander along (PRB's
-  // bending-plane angle has one: with a frozen Jacobian it drifted by 5 pi on configuration 7 of
-  // the case study and landed on the other chart of the same shape, where the stability test
-  // reads the wrong sign). Measured in docs/design-notes/lumped.md.
-  // Exact Newton's 2 iterations from the cold guess of a tendon-only scene (the case study's
-  // configurations) beat one Jacobian and 3-4 frozen iterations below 60 unknowns (the second
-  // Newton call's overhead): freeze there only under external loads, where exact Newton takes 3-4.
+  // bending-plane angle has one, see PrbProblem::cold_freeze_jacobian_below).
+  // Tendon-only scenes (the case study's configurations) take 0-1 exact Newton iterations from
+  // the fixed-point guess (2 from the straight robot, where freezing was measured not to pay
+  // below 60 unknowns: the second Newton call's overhead): freeze there only under external
+  // loads.
   double cold_freeze_jacobian_below() const override {
     const physics::LoadCase& l = loads_.loads;
     const bool external = l.has_tip_wrench() || l.has_gravity();

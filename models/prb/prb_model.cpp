@@ -32,6 +32,8 @@ constexpr double kMaxNewtonStep = 1.0;
 constexpr int kBandedFrom = 16;
 // Fixed-point passes of the cold guess (PrbProblem::guess_x).
 constexpr int kColdGuessPasses = 3;
+// Cold direct solves: exact Newton down to this scaled residual, then modified Newton (as CCsub).
+constexpr double kColdFreezeJacobianBelow = 1e-3;
 
 // Model-specific points of a PRB subsegment in detail::SubsegmentPose::aux.
 constexpr int kJoint = 0;  // joint centres P_1..P_3: aux[0..2]
@@ -103,6 +105,16 @@ class PrbProblem final : public detail::LumpedProblem {
   // the same answer). PRB's stability verdicts come from its reduced stiffness, not from these.
   bool determinant_marks_bifurcations() const override { return false; }
 
+  // Cold direct solves: modified Newton once the scaled residual is below kColdFreezeJacobianBelow.
+  // phi is a chart a stale Jacobian can wander along: from the straight guess a frozen Jacobian
+  // once drifted by 5 pi on configuration 7 of the case study and landed on the other chart of
+  // the same shape (where the stability test read the wrong sign). From the fixed-point guess
+  // the frozen phase starts closer: the 16 configurations of the case study at n = 1, 2, 3, 5, 7,
+  // 10, 15, 16, 20, 30 give the same status, tip (within 1e-8 m) and stability verdict with and
+  // without freezing, and so do the 80 rows of the loaded-scene suite. Measured gain: PRB n = 100
+  // with a 0.5 N tip force (bench_lumped's tip_0.5N) 3 exact iterations -> 8 with one Jacobian
+  // less, 2.5 -> 1.8 ms (docs/design-notes/lumped.md).
+  double cold_freeze_jacobian_below() const override { return kColdFreezeJacobianBelow; }
   void adjust(bvp::NewtonOptions& options) const override {
     LumpedProblem::adjust(options);
     // The banded unknowns include every disk pose: a bound on their joint step would stall it.
