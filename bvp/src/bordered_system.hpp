@@ -35,7 +35,8 @@ class BorderedSystem final : public ResidualSystem {
   bool sparse_jacobian(const Eigen::Ref<const Eigen::VectorXd>& y,
                        const Eigen::Ref<const Eigen::VectorXd>& g, double* values) override;
   void residual_scale(Eigen::Ref<Eigen::VectorXd> s) const override;
-  void unknown_scale(Eigen::Ref<Eigen::VectorXd> s) const override { s = 1.0 / w_.array(); }
+  // KINSOL's uscale of y: the inner system's for x (W itself), 1 / lambda_scale for lambda.
+  void unknown_scale(Eigen::Ref<Eigen::VectorXd> s) const override { s = w_; }
   double relative_noise() const override { return inner_.relative_noise(); }
 
   /// The border: scaled unit tangent t and unscaled predictor y_pred.
