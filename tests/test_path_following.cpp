@@ -183,3 +183,30 @@ TEST(PathFollowing, StalledColdDirectSolveHandsOverEarly) {
   ASSERT_TRUE(d.converged()) << d.summary.message;
   EXPECT_NE(d.summary.message.find("first attempt: KIN_LINESEARCH_NONCONV"), std::string::npos) << d.summary.message;
 }
+
+// A soft robot under a transverse tip force (tests/data/soft_transverse_tip_force.json, load
+// parameter 15.8): the loading path's length in scaled arclength grows with the number of
+// unknowns (VCref: 378) and PRB's bending-plane angles turn along it. Measured path steps: VCref
+// 15 (31 with the options' step bound alone), PRB 15 (64 while the corrector had inverted
+// unknown scales), CCsub 11; each lands on the answer of a 40-step natural path within 1e-7 m.
+TEST(PathFollowing, SoftTransversePathTakesFewSteps) {
+  const Scene scene = scene_file("soft_transverse_tip_force.json");
+  for (ModelKind k : {ModelKind::VCref, ModelKind::PRB, ModelKind::CCsub}) {
+    SCOPED_TRACE(to_string(k));
+    auto m = make_model(k, scene.robot, scene.effects);
+    auto ws = m->make_workspace();
+    const Solution s = solve(*m, *ws, scene.input(), scene.solver);
+    ASSERT_TRUE(s.converged()) << s.summary.message;
+    EXPECT_GT(s.summary.continuation_steps, 0);
+    EXPECT_LE(s.summary.continuation_steps, 20) << s.summary.message;
+    auto wp = m->make_workspace();
+    SolverOptions o = scene.solver;
+    o.continuation = false;
+    const Solution start = solve(*m, *wp, scaled(scene, 0.025), o);
+    ASSERT_TRUE(start.converged()) << start.summary.message;
+    bool all = false;
+    const Solution path = natural_path(*m, *wp, scene, start, 0.025, 1.0, 40, all);
+    ASSERT_TRUE(all);
+    EXPECT_LT((path.tip().p - s.tip().p).norm(), 1e-7) << path.tip().p.transpose() << " vs " << s.tip().p.transpose();
+  }
+}
