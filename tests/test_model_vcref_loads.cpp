@@ -43,9 +43,12 @@ Solution fine_loading_path(const Scene& scene, int steps) {
 }
 
 // The old behaviour, for contrast: a direct Newton solve from the cold guess whatever the loads.
-Solution direct_cold(const Scene& s) {
+// A direct solve from the constant-curvature arcs alone (VcrefOptions::guess_passes 0): with the
+// fixed-point passes (the default) the direct solves below land on the loading path's answer.
+Solution direct_cold(const Scene& s, int guess_passes = 0) {
   VcrefOptions o;
   o.load_threshold = o.compression_threshold = std::numeric_limits<double>::infinity();
+  o.guess_passes = guess_passes;
   VcrefModel model(s.robot, s.effects, o);
   EXPECT_FALSE(model.loads_from_rest(s.input()));
   auto ws = model.make_workspace();
@@ -79,11 +82,15 @@ TEST(VcrefLargeLoads, LongSoftRobotUnderGravityFollowsTheLoadingPath) {
               sol.tip().p.y(), sol.tip().p.z(), ref.tip().p.y(), ref.tip().p.z(), d);
   EXPECT_LT(d, 1e-8);
   EXPECT_LT(sol.tip().p.y(), -0.45);  // it hangs below its base
-  // Without the rule the direct solve takes another equilibrium (the reason for the rule).
+  // Without the rule the direct solve from the arcs takes another equilibrium (the reason for
+  // the rule); from the fixed-point guess it lands on the path's answer here.
   const Solution direct = direct_cold(s);
   if (direct.converged()) {
     EXPECT_GT((direct.tip().p - ref.tip().p).norm(), 0.1);
   }
+  const Solution passes = direct_cold(s, 3);
+  ASSERT_TRUE(passes.converged()) << passes.summary.message;
+  EXPECT_LT((passes.tip().p - ref.tip().p).norm(), 1e-8);
 }
 
 // The paper robot (n = 10) with configuration 2 (T1 = T_M) and no tension, under the tip force
@@ -120,6 +127,9 @@ TEST(VcrefLargeLoads, PaperRobotUnderCompressiveTipForceFollowsTheLoadingPath) {
     if (direct.converged()) {
       EXPECT_GT((direct.tip().p - ref.tip().p).norm(), 0.1) << c;
     }
+    const Solution passes = direct_cold(s, 3);
+    ASSERT_TRUE(passes.converged()) << passes.summary.message;
+    EXPECT_LT((passes.tip().p - ref.tip().p).norm(), 1e-8) << c;
   }
 }
 
@@ -175,6 +185,17 @@ TEST(VcrefLargeLoads, RuleDecidedOnceFromExternalLoads) {
   bad = VcrefOptions();
   bad.compression_threshold = std::nan("");
   EXPECT_THROW(VcrefModel(heavy.robot, heavy.effects, bad), InputError);
+  for (int passes : {-1, 21}) {
+    bad = VcrefOptions();
+    bad.guess_passes = passes;
+    try {
+      VcrefModel m2(heavy.robot, heavy.effects, bad);
+      ADD_FAILURE() << "guess_passes " << passes << " accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("vcref.guess_passes"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(std::to_string(passes)), std::string::npos) << e.what();
+    }
+  }
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 
 #include "tdcr/core/scene_io.hpp"
 #include "tdcr/models/static_model.hpp"
+#include "tdcr/models/vcref.hpp"
 
 using namespace tdcr;
 
@@ -160,7 +161,10 @@ TEST(PathFollowing, TendonOnlySceneSolvesDirectly) {
 // before the limit); the straight guess lands, on the answer of a fine natural loading path.
 TEST(PathFollowing, StalledColdDirectSolveHandsOverEarly) {
   const Scene scene = scene_file("antagonistic_tip_force.json");
-  auto m = make_model(ModelKind::VCref, scene.robot, scene.effects);
+  // From the arcs alone (no fixed-point passes: with them the first attempt converges).
+  VcrefOptions arcs;
+  arcs.guess_passes = 0;
+  auto m = std::make_unique<VcrefModel>(scene.robot, scene.effects, arcs);
   auto ws = m->make_workspace();
   const Solution s = solve(*m, *ws, scene.input(), scene.solver);
   ASSERT_TRUE(s.converged()) << s.summary.message;
@@ -182,6 +186,14 @@ TEST(PathFollowing, StalledColdDirectSolveHandsOverEarly) {
   const Solution d = solve(*m, *w2, scene.input(), o);
   ASSERT_TRUE(d.converged()) << d.summary.message;
   EXPECT_NE(d.summary.message.find("first attempt: KIN_LINESEARCH_NONCONV"), std::string::npos) << d.summary.message;
+  // From the default guess (the arcs and fixed-point passes) the first attempt lands, there.
+  auto md = make_model(ModelKind::VCref, scene.robot, scene.effects);
+  auto wd = md->make_workspace();
+  const Solution f = solve(*md, *wd, scene.input(), scene.solver);
+  ASSERT_TRUE(f.converged()) << f.summary.message;
+  EXPECT_EQ(f.summary.message.find("first attempt"), std::string::npos) << f.summary.message;
+  EXPECT_LE(f.summary.iterations, 5);
+  EXPECT_LT((path.tip().p - f.tip().p).norm(), 1e-7);
 }
 
 // A soft robot under a transverse tip force (tests/data/soft_transverse_tip_force.json, load

@@ -199,22 +199,55 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
   // Disk poses on the constant-curvature arcs of the tendon moments (paper Eq. 8 with u = sum T_k
   // (e_z x r_k) / EI per segment) or, with `arcs` false, the straight robot; wrenches from the
   // statics of that shape (backward pass of the disk equilibria at the current load factor).
-  // Rbar_j = R_j, w_j = 0.
+  // Rbar_j = R_j, w_j = 0. With arcs, then fixed-point passes as CCsub's cold guess: each
+  // interval bent into the arc of the moment at its proximal disk (u = K^-1 R^T m), the statics
+  // redone on that shape, while the passes contract (the largest change of u l halves); they add
+  // the external loads' bending to the tendons' arcs.
   void shape_guess(Eigen::VectorXd& x, bool arcs) {
     const int N = d_.N;
     const TendonRouting& routing = *d_.routing;
     const std::vector<double>& T = problem_.tensions();
-    x.setZero(d_.size);
     frames_.assign(N + 1, Frame{});
+    u_.assign(N + 1, Vec3::Zero());
+    m_.assign(N + 1, Vec3::Zero());
     for (int j = 1; j <= N; ++j) {
       const int seg = routing.disk_segment[j];
-      const double l = routing.disk_s[j] - routing.disk_s[j - 1];
       Vec3 u = Vec3::Zero();
       if (arcs)
         for (const RoutedTendon& t : problem_.active().tendons)
           if (t.segment >= seg) u += T[t.index] * Vec3::UnitZ().cross(physics::tendon_offset(t, routing.disk_s[j]));
-      u = d_.section.inv_kbt.cwiseProduct(u);
-      frames_[j] = frames_[j - 1] * lie::exp_se3(u * l, Vec3::UnitZ() * l);
+      u_[j] = d_.section.inv_kbt.cwiseProduct(u);
+    }
+    shape_statics(x);
+    double last = INFINITY;
+    for (int pass = 0; arcs && pass < d_.guess_passes; ++pass) {
+      double change = 0.0;
+      for (int j = 1; j <= N; ++j) {
+        const double l = routing.disk_s[j] - routing.disk_s[j - 1];
+        const Vec3 u = d_.section.inv_kbt.cwiseProduct(frames_[j - 1].R.transpose() * m_[j - 1]);
+        change = std::max(change, l * (u - u_[j]).cwiseAbs().maxCoeff());
+        next_u_[j] = u;
+      }
+      if (!(change <= 0.5 * last)) break;
+      last = change;
+      std::swap(u_, next_u_);
+      shape_statics(x);
+    }
+    shooting_.invalidate();
+  }
+
+  // The unknowns of the shape with curvature u_[j] on interval j: disk poses, reference
+  // rotations, and the wrenches of the backward pass (m_[j]: the moment just distal of disk j,
+  // about its centre, base frame).
+  void shape_statics(Eigen::VectorXd& x) {
+    const int N = d_.N;
+    const TendonRouting& routing = *d_.routing;
+    const std::vector<double>& T = problem_.tensions();
+    x.setZero(d_.size);
+    next_u_.resize(N + 1);
+    for (int j = 1; j <= N; ++j) {
+      const double l = routing.disk_s[j] - routing.disk_s[j - 1];
+      frames_[j] = frames_[j - 1] * lie::exp_se3(u_[j] * l, Vec3::UnitZ() * l);
       if (j < N) problem_.reference(j) = frames_[j].R;
     }
     const physics::LoadCase& load = problem_.loads();
@@ -236,12 +269,12 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
       const Vec3 dp = frames_[j].p - frames_[j - 1].p;
       m += dp.cross(n + 0.5 * w * l);
       n += w * l;
+      m_[j - 1] = m;
       const int c = j - 1 == 0 ? 0 : 6 + 12 * (j - 2);  // first unknown of node j-1
       if (j - 1 >= 1) x.segment<3>(c) = frames_[j - 1].p;
       x.segment<3>(j - 1 == 0 ? 0 : c + 6) = n;
       x.segment<3>(j - 1 == 0 ? 3 : c + 9) = m;
     }
-    shooting_.invalidate();
   }
 
   const VcrefModel::Data& d_;
@@ -254,6 +287,7 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
   detail::ColdStart cold_;
   Actuation::DisplacementConvention convention_ = Actuation::DisplacementConvention::AtBase;
   std::vector<Frame> frames_;  // guess scratch
+  std::vector<Vec3> u_, next_u_, m_;  // guess scratch: interval curvatures, moments
   struct Structure {
     std::vector<char> mask;  // VcrefShooting::pass_through() it was built for
     std::shared_ptr<const bvp::ShootingStructure> structure;
@@ -272,6 +306,8 @@ VcrefModel::VcrefModel(const Robot& robot, const Effects& effects, const VcrefOp
     throw InputError("vcref.load_threshold", format_value(options_.load_threshold), "must be positive");
   if (!(options_.compression_threshold > 0.0))
     throw InputError("vcref.compression_threshold", format_value(options_.compression_threshold), "must be positive");
+  if (options_.guess_passes < 0 || options_.guess_passes > 20)
+    throw InputError("vcref.guess_passes", std::to_string(options_.guess_passes), "must be in 0..20");
   auto d = std::make_shared<Data>();
   d->robot = &this->robot();
   d->routing = &routing();
@@ -286,6 +322,7 @@ VcrefModel::VcrefModel(const Robot& robot, const Effects& effects, const VcrefOp
   d->friction = effects.tendon_friction.on();
   d->tendon_friction = effects.tendon_friction;
   d->arc_guess = options_.initial_guess == VcrefOptions::InitialGuess::ConstantCurvature;
+  d->guess_passes = options_.guess_passes;
   d->length = this->robot().total_length();
   d->l_min = d->length;
   for (int j = 1; j <= N; ++j) d->l_min = std::min(d->l_min, routing().disk_s[j] - routing().disk_s[j - 1]);

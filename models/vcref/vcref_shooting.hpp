@@ -24,6 +24,7 @@ struct VcrefModel::Data {
   bool friction = false;            // Effects::tendon_friction on: disk loads read all proximal poses
   TendonFriction tendon_friction;
   bool arc_guess = true;            // VcrefOptions::initial_guess
+  int guess_passes = 3;             // VcrefOptions::guess_passes
   double length = 0.0;              // robot length L
   double l_min = 0.0;               // shortest interval
   // Layout and Jacobian pattern of every routed tendon: a workspace's fallback (its own patterns
