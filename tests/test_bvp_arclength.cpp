@@ -536,3 +536,52 @@ TEST(BvpArclength, FrozenCorrectorJacobiansFindTheSamePathWithFewerJacobians) {
   EXPECT_EQ(ArclengthOptions::from(no_reuse).corrector_freeze_jacobian_below, 0.0);
   EXPECT_GT(ArclengthOptions::from(tdcr::SolverOptions()).corrector_freeze_jacobian_below, 0.0);
 }
+
+namespace {
+// One state a = ref + sin(w) with the unknown w in a chart around ref that degenerates at
+// |w| = pi / 2, and F = a - 3 lambda: a moves by 3 along the path, three times what one chart
+// covers. recenter() folds w into ref once |w| > 0.5 (VCref's disk rotation charts, in one
+// dimension).
+class ChartSystem : public tdcr::bvp::ParameterizedSystem {
+ public:
+  explicit ChartSystem(bool recentre) : recentre_(recentre) {}
+  int size() const override { return 1; }
+  void set_parameter(double lambda) override { lambda_ = lambda; }
+  bool residual(const Eigen::Ref<const Vec>& x, Eigen::Ref<Vec> f) override {
+    f[0] = ref + std::sin(x[0]) - 3.0 * lambda_;
+    return true;
+  }
+  bool recenter(Eigen::Ref<Vec> x) override {
+    if (!recentre_ || std::abs(x[0]) <= 0.5) return false;
+    ref += std::sin(x[0]);
+    x[0] = 0.0;
+    ++recentred;
+    return true;
+  }
+  double ref = 0.0;
+  int recentred = 0;
+
+ private:
+  bool recentre_;
+  double lambda_ = 0.0;
+};
+}  // namespace
+
+// A chart that degenerates along the path looks like a fold in its coordinates (dF/dw = cos w
+// vanishes at a = ref + 1); re-centred at accepted points the path is regular to the target.
+TEST(BvpArclength, RecentredChartsKeepThePathRegular) {
+  ChartSystem s(true);
+  Vec x = Vec::Zero(1);
+  ArclengthOptions o;
+  o.target = 1.0;
+  const ArclengthResult r = follow(s, x, o);
+  ASSERT_TRUE(r.converged()) << r.message;
+  EXPECT_TRUE(r.events.empty()) << r.message;
+  EXPECT_GE(s.recentred, 3);  // measured: 4
+  EXPECT_NEAR(s.ref + std::sin(x[0]), 3.0, 1e-10);
+  // Without re-centring the chart's edge stops the path (a fold at a = 1, a third of the way).
+  ChartSystem fixed(false);
+  Vec y = Vec::Zero(1);
+  const ArclengthResult q = follow(fixed, y, o);
+  EXPECT_FALSE(q.converged() && q.events.empty()) << q.message;
+}

@@ -63,7 +63,6 @@ const std::vector<KnownFailure> kKnownFailures = {
      "on the branch VC and PRB leave there (at n = 20 it folds at 96.5 % and snaps)"},
     {"s1006", ModelKind::VCref, "VCref: no landing past a fold at 99 % of the load"},
     {"s1006", ModelKind::PRB, "PRB: snap with no landing"},
-    {"s1011", ModelKind::VCref, "VCref at n = 20: the loading path spends its 400 corrector solves by 59 % (a disk chart loops)"},
 };
 
 const KnownFailure* known_failure(const std::string& scene, ModelKind model) {

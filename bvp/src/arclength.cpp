@@ -464,6 +464,18 @@ void Run::run(Eigen::VectorXd& x) {
       step = opt_.initial_step;
       continue;
     }
+    // Charts that drifted far are re-centred at the accepted point; its tangent (and
+    // determinant, whose sign a chart change of positive Jacobian keeps) in the new coordinates,
+    // oriented by the old one (its lambda component and the unknowns outside the charts are
+    // unchanged); the corrector's factored Jacobian belongs to the old coordinates.
+    if (sys_.recenter(prev_.y.head(n_))) {
+      newton_.forget_jacobian();
+      guess_ = prev_.t;
+      if (!tangent(prev_, guess_)) {
+        stall("singular augmented Jacobian after re-centring the charts");
+        break;
+      }
+    }
     const double rel = (lambda(prev_) - opt_.start) / span_;
     if (rel < -opt_.window || rel > 1.0 + opt_.window) {
       stall("the path left the parameter window");

@@ -299,6 +299,8 @@ NewtonSolver& NewtonSolver::operator=(NewtonSolver&&) noexcept = default;
 
 int NewtonSolver::rebuilds() const { return impl_->rebuilds; }
 
+void NewtonSolver::forget_jacobian() { impl_->factored = nullptr; }
+
 SparseLuStatistics NewtonSolver::sparse_lu_statistics() const { return impl_->lu_statistics(); }
 
 NewtonResult NewtonSolver::solve(ResidualSystem& system, Eigen::VectorXd& x,

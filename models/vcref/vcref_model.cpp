@@ -40,6 +40,18 @@ class VcrefSystem final : public bvp::ParameterizedSystem {
     shooting_.invalidate();
   }
   void accept_step(Eigen::VectorXd& x) override { shooting_.rebase(x); }
+  // Along a loading path a disk can turn by more than pi from its reference (the rest state's):
+  // its rotation vector w then nears |w| = 2 pi, where the chart degenerates and the path's
+  // steps are spent on w (VCref s1011 of the loaded-scene suite, docs/hard-cases.md). Re-centred
+  // once some |w| exceeds kRecenterAngle.
+  bool recenter(Eigen::Ref<Eigen::VectorXd> x) override {
+    constexpr double kRecenterAngle = 1.0;  // rad
+    const int nodes = (static_cast<int>(x.size()) - 6) / 12;
+    bool far = false;
+    for (int k = 1; k <= nodes && !far; ++k) far = x.segment<3>(6 + 12 * (k - 1) + 3).norm() > kRecenterAngle;
+    if (far) shooting_.rebase(x);
+    return far;
+  }
 
  private:
   VcrefShooting& problem_;

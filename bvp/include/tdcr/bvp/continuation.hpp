@@ -32,6 +32,15 @@ class ParameterizedSystem : public ResidualSystem {
   /// its unknowns here, e.g. fold rotation increments into reference rotations and zero them
   /// (x must then describe the same state afterwards). Default: nothing.
   virtual void accept_step(Eigen::VectorXd& x) { (void)x; }
+  /// @brief Pseudo-arclength continuation calls this at every accepted point x of a path (at the
+  /// current parameter): a system whose unknowns are charts around references may re-centre
+  /// them where they have drifted far (x must then describe the same state afterwards) and
+  /// return true; the path then recomputes its tangent there in the new coordinates. Default:
+  /// nothing (false).
+  virtual bool recenter(Eigen::Ref<Eigen::VectorXd> x) {
+    (void)x;
+    return false;
+  }
 };
 
 /// @brief Step control of continuation().

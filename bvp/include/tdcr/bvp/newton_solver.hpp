@@ -120,6 +120,10 @@ class NewtonSolver {
   NewtonResult solve(ResidualSystem& system, Eigen::VectorXd& x,
                      const NewtonOptions& options = NewtonOptions());
 
+  /// @brief Forget the factored Jacobian: the next solve with NewtonOptions::reuse_jacobian
+  /// starts with a fresh one (e.g. after the system re-parameterised its unknowns).
+  void forget_jacobian();
+
   /// @brief Number of times the SUNDIALS objects were (re)built; lets tests and benchmarks
   /// verify that repeated solves reuse the workspace.
   int rebuilds() const;
