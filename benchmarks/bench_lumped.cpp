@@ -1,7 +1,8 @@
 // Solve time of the lumped static models CCsub and PRB on the paper's robot (Table 3), cold
-// solves from the straight initial guess (one model and one workspace per row), against the paper's own code (reference/
-// paper_code_timing.csv: configuration 2 = (T_M, 0, 0, 0), straight guess, median of up to 100
-// cold solves). Usage: bench_lumped [--quick] [--reps N]
+// solves from each model's cold guess (fixed-point passes from the straight robot: 0-1 Newton
+// iterations for these tendon-only configurations; one model and one workspace per row), against
+// the paper's own code (reference/paper_code_timing.csv: configuration 2 = (T_M, 0, 0, 0), its
+// straight guess, median of up to 100 cold solves). Usage: bench_lumped [--quick] [--reps N]
 //
 // Configuration 2 loads segment 1 only: segment 2 carries no load and is exactly straight, so
 // tdcr leaves its subsegments out of the unknowns (the paper's code solves for them). Rows with

@@ -2,6 +2,8 @@
 // recursive formulation (the banded one is in lumped_banded.cpp).
 #include "tdcr/models/lumped_model.hpp"
 
+#include <cmath>
+
 #include "common/lumped_problem.hpp"
 #include "tdcr/core/error.hpp"
 #include "tdcr/core/lie.hpp"
@@ -149,7 +151,12 @@ void LumpedProblem::fixed_point_passes(Eigen::VectorXd& x, int passes) {
         set_parameter(lambda);
         return;
       }
-      for (int i = 0; i < m; ++i) change = std::max(change, weight[i] * std::abs(next[i] - xj[i]));
+      for (int i = 0; i < m; ++i) {
+        // A non-finite value (e.g. a subsegment's axis at 90 deg in CCsub's twist row) makes the
+        // change NaN and ends the passes with the last finite x (std::max would skip it).
+        const double d = std::isfinite(next[i]) ? weight[i] * std::abs(next[i] - xj[i]) : NAN;
+        if (!(d <= change)) change = d;
+      }
     }
     if (!(change <= 0.5 * last_change)) break;
     x = next_x_;

@@ -150,7 +150,8 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   }
   /// The x_j of the cold guess, or with `rest` of the rest state (the straight robot): zeros
   /// unless overridden (CCsub: fixed-point passes from the straight robot; PRB: the straight
-  /// robot with its bending planes set by the load).
+  /// robot with its bending planes set by the load, and for the cold guess fixed-point passes
+  /// from there).
   virtual void guess_x(Eigen::VectorXd& x, bool rest) { (void)rest; x.setZero(body_.per_subsegment * active()); }
   /// A fixed-point map of subsegment j's constitutive law: the x_j (in `next`) that satisfy it
   /// for the given loads (frame of disk j-1, as constitutive()) with the geometry g of the
@@ -164,8 +165,8 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   }
   /// Up to `passes` fixed-point (Picard) passes x <- P(x) of every loaded subsegment at full
   /// load, P the model's fixed_point() in the shape x: a cold guess. Passes stop where they stop
-  /// contracting (the largest weighted change not halved): with a load parameter above about 1
-  /// the map can expand. Leaves the load factor as it was.
+  /// contracting (the largest weighted change not halved, or not finite): with a load parameter
+  /// above about 1 the map can expand. Leaves the load factor as it was.
   void fixed_point_passes(Eigen::VectorXd& x, int passes);
   /// Called with the x_j of a warm start (e.g. to take gauge references from it).
   virtual void on_warm(const Eigen::VectorXd& x) { (void)x; }

@@ -237,7 +237,8 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
       for (int j = 1; j <= N; ++j) {
         const double l = routing.disk_s[j] - routing.disk_s[j - 1];
         const Vec3 u = d_.section.inv_kbt.cwiseProduct(frames_[j - 1].R.transpose() * m_[j - 1]);
-        change = std::max(change, l * (u - u_[j]).cwiseAbs().maxCoeff());
+        const double d = u.allFinite() ? l * (u - u_[j]).cwiseAbs().maxCoeff() : NAN;
+        if (!(d <= change)) change = d;  // NaN ends the passes with the last finite shape
         next_u_[j] = u;
       }
       if (!(change <= 0.5 * last)) break;
