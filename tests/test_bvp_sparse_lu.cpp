@@ -1,8 +1,10 @@
 // bvp::SparseLu: solves against dense LU, keeps its analysis and pivot order across matrices of
-// one pattern, re-pivots when the reused order meets a zero pivot or too much growth, and says
-// Singular for a singular matrix.
+// one pattern (and the analyses of its last two patterns), re-pivots when the reused order meets
+// a zero pivot or too much growth, says Singular for a singular matrix, and gives the sign and
+// log|det| of the factored matrix as dense LU does.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 #include <utility>
 #include <vector>
@@ -127,4 +129,93 @@ TEST(BvpSparseLu, SingularAndInvalidInputAreReported) {
   const SparsityPattern rect = SparsityPattern::from_triplets(2, 3, {{0, 0}, {1, 1}});
   const std::vector<double> v{1.0, 1.0};
   EXPECT_EQ(lu.factorize(rect, v.data()), SparseLu::Status::Failed);
+}
+
+// Three patterns p, q, r: p and q alternate without re-analysis; r replaces the least recently
+// used one (q after p, q, p, q, p), so p stays kept and q is analysed again (replacing r). Every solve uses the
+// factorisation of the matrix just factorised.
+TEST(BvpSparseLu, KeepsTheAnalysesOfItsLastTwoPatterns) {
+  const SparsityPattern p = block_band(10, 3), q = block_band(8, 4), r = block_band(6, 2);
+  SparseLu lu;
+  int expected = 0;
+  unsigned seed = 1;
+  for (const auto& [pattern, analysed] : std::vector<std::pair<const SparsityPattern*, bool>>{
+           {&p, true}, {&q, true}, {&p, false}, {&q, false}, {&p, false}, {&r, true}, {&p, false},
+           {&q, true}, {&p, false}}) {
+    const std::vector<double> v = random_values(*pattern, ++seed);
+    ASSERT_EQ(lu.factorize(*pattern, v.data()), SparseLu::Status::Success);
+    EXPECT_LE(solve_error(lu, *pattern, v, seed), 1e-12) << "step " << seed;
+    if (analysed) ++expected;
+    EXPECT_EQ(lu.statistics().symbolic_analyses, expected) << "step " << seed;
+  }
+  EXPECT_EQ(lu.statistics().factorizations, 4);  // one per analysis: kept slots refactorise
+}
+
+// The determinant from KLU's factors (row and column permutations, row scaling, BTF blocks)
+// against dense LU: random block-banded matrices, the same with two columns swapped (the sign
+// flips), a block-diagonal matrix (several BTF blocks) and a refactorisation in a reused order.
+TEST(BvpSparseLu, DeterminantMatchesDenseLu) {
+  auto check = [](SparseLu& lu, const SparsityPattern& pat, const std::vector<double>& v, const char* what) {
+    ASSERT_EQ(lu.factorize(pat, v.data()), SparseLu::Status::Success) << what;
+    const Eigen::PartialPivLU<Eigen::MatrixXd> dense_lu(dense(pat, v));
+    const Eigen::VectorXd d = dense_lu.matrixLU().diagonal();
+    int sign = static_cast<int>(dense_lu.permutationP().determinant());
+    double log_abs = 0.0;
+    for (Eigen::Index i = 0; i < d.size(); ++i) {
+      if (d[i] < 0.0) sign = -sign;
+      log_abs += std::log(std::abs(d[i]));
+    }
+    int klu_sign = 0;
+    double klu_log = 0.0;
+    ASSERT_TRUE(lu.determinant(klu_sign, klu_log)) << what;
+    EXPECT_EQ(klu_sign, sign) << what;
+    EXPECT_NEAR(klu_log, log_abs, 1e-10 * std::max(1.0, std::abs(log_abs))) << what;
+  };
+  const SparsityPattern p = block_band(12, 3);
+  SparseLu lu;
+  int negative = 0;
+  for (unsigned seed = 1; seed <= 12; ++seed) {
+    // Weak diagonals: pivoting permutes rows, and about half the determinants are negative.
+    const std::vector<double> v = random_values(p, seed, seed % 2 ? 0.2 : 10.0);
+    check(lu, p, v, "block band");
+    negative += std::signbit(dense(p, v).determinant());
+  }
+  EXPECT_GT(negative, 0);
+  // Columns 0 and 1 swapped: same pattern (full blocks), the opposite sign.
+  std::vector<double> v = random_values(p, 40, 0.5), w = v;
+  const int len = p.col_ptr[1] - p.col_ptr[0];
+  ASSERT_EQ(p.col_ptr[2] - p.col_ptr[1], len);
+  std::swap_ranges(w.begin(), w.begin() + len, w.begin() + len);
+  check(lu, p, v, "unswapped");
+  check(lu, p, w, "swapped");
+  int s1 = 0, s2 = 0;
+  double l1 = 0.0, l2 = 0.0;
+  lu.factorize(p, v.data());
+  lu.determinant(s1, l1);
+  lu.factorize(p, w.data());
+  lu.determinant(s2, l2);
+  EXPECT_EQ(s1, -s2);
+  EXPECT_NEAR(l1, l2, 1e-10 * std::abs(l1));
+  // Block diagonal: KLU's BTF splits it into blocks.
+  std::vector<std::pair<int, int>> e;
+  for (int b = 0; b < 4; ++b)
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) e.emplace_back(3 * b + i, 3 * b + j);
+  const SparsityPattern blocks = SparsityPattern::from_triplets(12, 12, e);
+  SparseLu lu2;
+  check(lu2, blocks, random_values(blocks, 5, 0.1), "block diagonal");
+  check(lu2, blocks, random_values(blocks, 6, 0.1), "block diagonal, refactorised");
+  // Structurally zero diagonals: BTF's matching permutes columns (an odd Q for the swaps).
+  for (const std::vector<std::pair<int, int>>& t :
+       {std::vector<std::pair<int, int>>{{0, 1}, {1, 0}},
+        std::vector<std::pair<int, int>>{{0, 1}, {1, 0}, {1, 2}, {2, 2}},
+        std::vector<std::pair<int, int>>{{0, 3}, {1, 2}, {2, 1}, {3, 0}, {0, 0}, {3, 2}}}) {
+    const int n = t.size() == 2 ? 2 : t.size() == 4 ? 3 : 4;
+    const SparsityPattern anti = SparsityPattern::from_triplets(n, n, t);
+    SparseLu lu3;
+    check(lu3, anti, random_values(anti, 9, 0.0), "zero diagonal");
+  }
+  int sign = 1;
+  double log_abs = 0.0;
+  EXPECT_FALSE(SparseLu().determinant(sign, log_abs));  // nothing factorised
 }

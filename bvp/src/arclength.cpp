@@ -97,7 +97,7 @@ class Run {
       const ArclengthOptions& options, ArclengthResult& result)
       : newton_(newton), sys_(system), nopt_(newton_options), opt_(options), res_(result),
         n_(system.size()), span_(options.target - options.start), dir_(span_ > 0.0 ? 1.0 : -1.0),
-        bordered_(system, std::abs(span_)), w_(bordered_.weights()) {
+        bordered_(system, std::abs(span_), newton.tangent_lu()), w_(bordered_.weights()) {
     corrector_.max_iterations = std::min(nopt_.max_iterations, opt_.corrector_max_iterations);
     if (opt_.corrector_freeze_jacobian_below > corrector_.function_tolerance && !corrector_.reuse_jacobian)
       corrector_.freeze_jacobian_below = opt_.corrector_freeze_jacobian_below;

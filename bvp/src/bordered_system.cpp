@@ -7,8 +7,8 @@
 
 namespace tdcr::bvp::detail {
 
-BorderedSystem::BorderedSystem(ParameterizedSystem& inner, double lambda_scale)
-    : inner_(inner), n_(inner.size()), inner_pattern_(inner.sparsity()) {
+BorderedSystem::BorderedSystem(ParameterizedSystem& inner, double lambda_scale, SparseLu& tangent_lu)
+    : inner_(inner), n_(inner.size()), inner_pattern_(inner.sparsity()), klu_(tangent_lu) {
   sparse_ = inner_pattern_ != nullptr;
   const int n = n_;
   w_.resize(n + 1);
@@ -55,8 +55,6 @@ BorderedSystem::BorderedSystem(ParameterizedSystem& inner, double lambda_scale)
   for (int i = 0; i <= n; ++i) pattern_.row_idx.push_back(i);
   pattern_.col_ptr[n + 1] = static_cast<int>(pattern_.row_idx.size());
   values_.assign(static_cast<size_t>(pattern_.nnz()), 0.0);
-  S_.resize(n + 1, n + 1);
-  S_.reserve(pattern_.nnz());
 }
 
 void BorderedSystem::set_border(const Eigen::VectorXd& t, const Eigen::VectorXd& y_pred) {
@@ -174,24 +172,16 @@ bool BorderedSystem::dense_tangent(Eigen::VectorXd& t, int& det_sign, double& de
   return true;
 }
 
-// The same scaling on the bordered pattern, then a sparse LU (column ordering reused).
+// The same scaling on the bordered pattern, then KLU (analysis and pivot order reused).
 bool BorderedSystem::sparse_tangent(Eigen::VectorXd& t, int& det_sign, double& det_log) {
   const int n1 = n_ + 1;
   for (int j = 0; j < n1; ++j)
     for (int k = pattern_.col_ptr[j]; k < pattern_.col_ptr[j + 1]; ++k)
       values_[k] *= fs_[pattern_.row_idx[k]] * w_inv_[j];
-  S_ = Eigen::Map<const Eigen::SparseMatrix<double, Eigen::ColMajor, int>>(
-      n1, n1, pattern_.nnz(), pattern_.col_ptr.data(), pattern_.row_idx.data(), values_.data());
-  if (!analyzed_) {
-    slu_.analyzePattern(S_);
-    analyzed_ = true;
-  }
-  slu_.factorize(S_);
-  if (slu_.info() != Eigen::Success) return false;
-  det_sign = static_cast<int>(slu_.signDeterminant());
-  det_log = slu_.logAbsDeterminant();
-  t = slu_.solve(rhs_);
-  return slu_.info() == Eigen::Success;
+  if (klu_.factorize(pattern_, values_.data()) != SparseLu::Status::Success) return false;
+  if (!klu_.determinant(det_sign, det_log)) return false;
+  t = rhs_;
+  return klu_.solve(t.data());
 }
 
 }  // namespace tdcr::bvp::detail

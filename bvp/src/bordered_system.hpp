@@ -8,10 +8,10 @@
 #include <Eigen/Core>
 #include <Eigen/LU>
 #include <Eigen/SparseCore>
-#include <Eigen/SparseLU>
 
 #include "tdcr/bvp/continuation.hpp"
 #include "tdcr/bvp/residual_system.hpp"
+#include "tdcr/bvp/sparse_lu.hpp"
 
 namespace tdcr::bvp::detail {
 
@@ -24,7 +24,9 @@ namespace tdcr::bvp::detail {
 /// in the constructor; residuals and Jacobians allocate nothing (except what the inner does).
 class BorderedSystem final : public ResidualSystem {
  public:
-  BorderedSystem(ParameterizedSystem& inner, double lambda_scale);
+  /// @param tangent_lu the sparse factorisation tangent() uses (borrowed, e.g. the Newton
+  /// workspace's NewtonSolver::tangent_lu(), so that paths after the first re-analyse nothing).
+  BorderedSystem(ParameterizedSystem& inner, double lambda_scale, SparseLu& tangent_lu);
 
   int size() const override { return n_ + 1; }
   bool residual(const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> g) override;
@@ -45,8 +47,9 @@ class BorderedSystem final : public ResidualSystem {
   const Eigen::VectorXd& weights() const { return w_; }
 
   /// Factorise the augmented Jacobian [dF/dz; border^T] (rows scaled by the residual scale)
-  /// at y, a solution of F: a dense LU, or a sparse LU (Eigen::SparseLU on the bordered
-  /// pattern) when the inner system declares a pattern, so large sparse systems stay O(nnz). Outputs the unit tangent t (M t = e_{n+1}, normalised, so that
+  /// at y, a solution of F: a dense LU, or a sparse LU (KLU on the bordered pattern, analysed
+  /// once per path and refactorised in the last pivot order while that stays accurate) when the
+  /// inner system declares a pattern, so large sparse systems stay O(nnz). Outputs the unit tangent t (M t = e_{n+1}, normalised, so that
   /// border^T t > 0), the sign and log|.| of det M. False if F or its Jacobian cannot be
   /// evaluated or t is not finite (M singular).
   bool tangent(const Eigen::VectorXd& y, const Eigen::VectorXd& border, Eigen::VectorXd& t,
@@ -73,11 +76,10 @@ class BorderedSystem final : public ResidualSystem {
   Eigen::VectorXd f_, f_pert_, col_, rhs_;
   Eigen::MatrixXd M_;                       // dense case only
   Eigen::PartialPivLU<Eigen::MatrixXd> lu_;  // dense case only
-  // Sparse case: the scaled augmented matrix on pattern_, factorised by SparseLU (its column
-  // ordering is computed once; the determinant sign comes from the factors and permutations).
-  Eigen::SparseMatrix<double, Eigen::ColMajor, int> S_;
-  Eigen::SparseLU<Eigen::SparseMatrix<double, Eigen::ColMajor, int>, Eigen::COLAMDOrdering<int>> slu_;
-  bool analyzed_ = false;
+  // Sparse case: the scaled augmented matrix on pattern_, factorised by KLU (the determinant
+  // sign comes from its factors and permutations). KLU, not Eigen::SparseLU: the supernodal
+  // factorisation was a quarter of VCref's loading-path time on soft robots.
+  SparseLu& klu_;
   bool dense_tangent(Eigen::VectorXd& t, int& det_sign, double& det_log);
   bool sparse_tangent(Eigen::VectorXd& t, int& det_sign, double& det_log);
 };

@@ -18,6 +18,7 @@ static_assert(std::is_same<sunindextype, long>::value,
 // The SUNDIALS adapter: SUNMatrix in, SparseLu does the work.
 class KluSolver {
  public:
+  explicit KluSolver(SparseLu& lu) : lu_(lu) {}
   int setup(SUNMatrix A) {
     if (SUNMatGetID(A) != SUNMATRIX_SPARSE || SM_SPARSETYPE_S(A) != CSC_MAT ||
         SM_ROWS_S(A) != SM_COLUMNS_S(A))
@@ -37,12 +38,11 @@ class KluSolver {
   }
 
   int last_flag() const { return last_flag_; }
-  const SparseLuStatistics& statistics() const { return lu_.statistics(); }
   long integer_words() const { return lu_.integer_words(); }
   long real_words() const { return lu_.real_words(); }
 
  private:
-  SparseLu lu_;
+  SparseLu& lu_;  // the Newton workspace's: it outlives this solver and its analyses are kept
   int last_flag_ = SUNLS_SUCCESS;
 };
 
@@ -84,11 +84,11 @@ int free_solver(SUNLinearSolver S) {
 
 }  // namespace
 
-SUNLinearSolver make_klu_linear_solver(SUNContext ctx) {
+SUNLinearSolver make_klu_linear_solver(SUNContext ctx, SparseLu& lu) {
   SUNLinearSolver S = SUNLinSolNewEmpty(ctx);
   if (!S) throw std::bad_alloc();
   try {
-    S->content = new KluSolver();
+    S->content = new KluSolver(lu);
   } catch (...) {
     SUNLinSolFreeEmpty(S);
     throw;
@@ -102,14 +102,6 @@ SUNLinearSolver make_klu_linear_solver(SUNContext ctx) {
   S->ops->space = space;
   S->ops->free = free_solver;
   return S;
-}
-
-void add_klu_statistics(SUNLinearSolver solver, SparseLuStatistics& total) {
-  const SparseLuStatistics& s = content(solver).statistics();
-  total.symbolic_analyses += s.symbolic_analyses;
-  total.factorizations += s.factorizations;
-  total.refactorizations += s.refactorizations;
-  total.rejected_refactorizations += s.rejected_refactorizations;
 }
 
 }  // namespace tdcr::bvp::detail

@@ -7,7 +7,7 @@
 /// so every Newton solve re-analysed an unchanged pattern and re-allocated the LU memory. Its
 /// refactor check (crude rcond only) also turns a zero pivot in the reused order into a fatal
 /// setup failure instead of a fresh factorisation. This solver is bvp::SparseLu (sparse_lu.hpp:
-/// analysis once per pattern, refactorisation with a pivot-growth check) behind the
+/// analysis once per pattern (the last two kept), refactorisation with a pivot-growth check) behind the
 /// SUNLinearSolver interface.
 #pragma once
 
@@ -20,11 +20,10 @@
 
 namespace tdcr::bvp::detail {
 
-/// @brief Creates the solver for CSC SUNSparseMatrix systems (throws std::bad_alloc).
-/// Free it with SUNLinSolFree.
-SUNLinearSolver make_klu_linear_solver(SUNContext ctx);
-
-/// @brief Adds the work counters of a solver made by make_klu_linear_solver to total.
-void add_klu_statistics(SUNLinearSolver solver, SparseLuStatistics& total);
+/// @brief Creates the solver for CSC SUNSparseMatrix systems on `lu`, which it borrows: `lu`
+/// must outlive it, and keeps its analysed patterns after it is freed (SUNLinSolFree), so a
+/// Newton workspace that rebuilds its SUNDIALS objects for another system size re-analyses
+/// nothing it has seen recently. Throws std::bad_alloc.
+SUNLinearSolver make_klu_linear_solver(SUNContext ctx, SparseLu& lu);
 
 }  // namespace tdcr::bvp::detail

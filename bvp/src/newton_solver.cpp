@@ -18,6 +18,7 @@
 
 #include "dense_linear_solver.hpp"
 #include "klu_linear_solver.hpp"
+#include "tdcr/bvp/sparse_lu.hpp"
 #include "tdcr/core/error.hpp"
 
 namespace tdcr::bvp {
@@ -82,7 +83,10 @@ struct NewtonSolver::Impl {
   bool has_pattern = false;
   bool dense_fallback = false;  // pattern is SparsityPattern::dense(n): KLU without a pattern
   int rebuilds = 0;
-  SparseLuStatistics retired_lu;  // KLU work of linear solvers already freed
+  // KLU factorisations owned here, not by the SUNDIALS linear solver, so that they (their
+  // analyses, LU memory and pivot orders) survive rebuilds for another system size.
+  SparseLu lu;          // the KINSOL linear solver's
+  SparseLu tangent_lu;  // NewtonSolver::tangent_lu()
 
   // Per-solve state, reached from the C callbacks through user_data.
   ResidualSystem* system = nullptr;
@@ -109,7 +113,6 @@ struct NewtonSolver::Impl {
 
   void destroy() {
     if (kin) KINFree(&kin);
-    if (LS && sparse) retired_lu = lu_statistics();
     if (LS) SUNLinSolFree(LS);
     if (J) SUNMatDestroy(J);
     if (fscale) N_VDestroy(fscale);
@@ -122,11 +125,7 @@ struct NewtonSolver::Impl {
     n = -1;
   }
 
-  SparseLuStatistics lu_statistics() const {
-    SparseLuStatistics total = retired_lu;
-    if (LS && sparse) detail::add_klu_statistics(LS, total);
-    return total;
-  }
+  SparseLuStatistics lu_statistics() const { return lu.statistics(); }
 
   /// Adopt a new Jacobian structure (nullptr: none) without rebuilding the SUNDIALS objects.
   void set_pattern(const SparsityPattern* p, bool dense) {
@@ -151,7 +150,7 @@ struct NewtonSolver::Impl {
       if (J) LS = detail::make_system_step_solver(ctx, &Impl::step_fn, this);
     } else if (use_klu) {
       J = SUNSparseMatrix(size, size, p->nnz(), CSC_MAT, ctx);
-      if (J) LS = detail::make_klu_linear_solver(ctx);
+      if (J) LS = detail::make_klu_linear_solver(ctx, lu);
     } else {
       J = SUNDenseMatrix(size, size, ctx);
       if (J) LS = detail::make_dense_linear_solver(ctx);
@@ -302,6 +301,8 @@ int NewtonSolver::rebuilds() const { return impl_->rebuilds; }
 void NewtonSolver::forget_jacobian() { impl_->factored = nullptr; }
 
 SparseLuStatistics NewtonSolver::sparse_lu_statistics() const { return impl_->lu_statistics(); }
+
+SparseLu& NewtonSolver::tangent_lu() { return impl_->tangent_lu; }
 
 NewtonResult NewtonSolver::solve(ResidualSystem& system, Eigen::VectorXd& x,
                                  const NewtonOptions& options) {

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 #include "physics/tendon_path.hpp"
 #include "tdcr/core/lie.hpp"
@@ -14,6 +15,10 @@ namespace tdcr {
 namespace {
 constexpr double kFdStep = 1e-7;  // forward-difference step, relative to the unknown's scale
 Eigen::Map<Vec3> out(double* r) { return Eigen::Map<Vec3>(r); }
+bool same_bits(const Frame& a, const Frame& b) {
+  return std::memcmp(a.R.data(), b.R.data(), 9 * sizeof(double)) == 0 &&
+         std::memcmp(a.p.data(), b.p.data(), 3 * sizeof(double)) == 0;
+}
 }  // namespace
 
 VcrefShooting::VcrefShooting(const VcrefModel::Data& d)
@@ -23,7 +28,8 @@ VcrefShooting::VcrefShooting(const VcrefModel::Data& d)
       section_(d.section),
       rod_(d.section),
       rbar_(d.N, Mat3::Identity()),
-      frames_(d.N + 1) {}
+      frames_(d.N + 1),
+      wrench_memo_(d.N + 1) {}
 
 void VcrefShooting::bind(const ModelInput& input, const SolverOptions& options) {
   const TendonRouting& routing = *d_.routing;
@@ -62,6 +68,7 @@ void VcrefShooting::set_load_factor(double lambda) {
   load_.set_load_factor(lambda);
   tension_.resize(load_.full_tensions().size());
   for (std::size_t k = 0; k < tension_.size(); ++k) tension_[k] = load_.tension(static_cast<int>(k));
+  ++tension_version_;  // invalidates wrench_memo_
   section_ = d_.section;
   section_.gravity = load_.has_backbone_weight();
   section_.weight = load_.backbone_weight();
@@ -119,9 +126,22 @@ std::pair<int, int> VcrefShooting::dependent_rows(int block, int k, int j) const
 // j+1 if some tendon passes) must be set when a tendon acts on disk j.
 void VcrefShooting::subtract_disk_load(int j, Vec3& F, Vec3& M) const {
   if (tendon_at_[j]) {
-    const tendon::DiskWrench w =
-        d_.friction ? tendon::disk_wrench_friction(j, frames_.data(), active_, chord_.data(), d_.remove_normal)
-                    : tendon::disk_wrench(j, frames_.data(), active_, tension_.data(), d_.remove_normal);
+    tendon::DiskWrench w;
+    if (d_.friction) {
+      w = tendon::disk_wrench_friction(j, frames_.data(), active_, chord_.data(), d_.remove_normal);
+    } else {
+      // Bit-identical frames give the bit-identical wrench: reuse it.
+      WrenchMemo& m = wrench_memo_[j];
+      const int read = j < d_.N && passes_[j] ? 3 : 2;
+      bool hit = m.version == tension_version_;
+      for (int i = 0; hit && i < read; ++i) hit = same_bits(m.frames[i], frames_[j - 1 + i]);
+      if (!hit) {
+        m.wrench = tendon::disk_wrench(j, frames_.data(), active_, tension_.data(), d_.remove_normal);
+        for (int i = 0; i < read; ++i) m.frames[i] = frames_[j - 1 + i];
+        m.version = tension_version_;
+      }
+      w = m.wrench;
+    }
     F -= w.force;
     M -= w.moment;
   }

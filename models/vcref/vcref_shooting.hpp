@@ -8,6 +8,7 @@
 #include "physics/load_case.hpp"
 #include "tdcr/bvp/shooting.hpp"
 #include "tdcr/models/cosserat_rod.hpp"
+#include "tdcr/models/tendon_physics.hpp"
 #include "tdcr/models/vcref.hpp"
 
 namespace tdcr {
@@ -97,6 +98,17 @@ class VcrefShooting final : public bvp::ShootingProblem {
   std::vector<Mat3> rbar_;          // chart references (0 unused)
   mutable std::vector<Frame> frames_;  // disk frames of one block evaluation
   mutable std::vector<double> chord_;  // friction: chord tensions (tendon::friction_tensions)
+  // The last tendon wrench on each disk and the frames it was computed in (j-1, j and, if a
+  // tendon passes, j+1), valid while tension_ is unchanged (version). A Jacobian's finite
+  // differences in a node's wrench unknowns move no frame: those junctions reuse the wrench
+  // instead of recomputing it (it was a fifth of a stiff direct solve's time).
+  struct WrenchMemo {
+    Frame frames[3];
+    tendon::DiskWrench wrench;
+    unsigned version = 0;
+  };
+  mutable std::vector<WrenchMemo> wrench_memo_;
+  unsigned tension_version_ = 1;
   mutable int chart_node_ = -1;        // last chart evaluation: node, w, Rbar exp(w)
   mutable Vec3 chart_w_ = Vec3::Zero();
   mutable Mat3 chart_R_ = Mat3::Identity();

@@ -14,6 +14,8 @@
 
 namespace tdcr::bvp {
 
+class SparseLu;
+
 /// @brief Settings of one Newton solve (a subset of SolverOptions plus KINSOL details).
 struct NewtonOptions {
   /// Stop when max_i |s_i F_i| <= this, s = ResidualSystem::residual_scale (KINSOL fnormtol).
@@ -131,6 +133,12 @@ class NewtonSolver {
   /// @brief KLU work over this solver's lifetime (all zero if KLU was never used); lets tests
   /// and benchmarks verify that repeated solves keep the symbolic analysis.
   SparseLuStatistics sparse_lu_statistics() const;
+
+  /// @brief A second KLU factorisation kept with this workspace for callers that factor their
+  /// own matrices between Newton solves (the arclength tangents of arclength_continuation), so
+  /// that its analysis and LU memory serve every path solved with this workspace. Not used by
+  /// solve(); not counted in sparse_lu_statistics().
+  SparseLu& tangent_lu();
 
  private:
   struct Impl;

@@ -8,8 +8,10 @@
 /// hold one directly.
 ///
 /// Policy (the reason this wraps KLU instead of calling it directly):
-///  - the pattern is analysed (BTF + AMD ordering, symbolic factorisation) only when it differs
-///    from the analysed one;
+///  - a pattern is analysed (BTF + AMD ordering, symbolic factorisation) only when it differs
+///    from the kPatternSlots patterns analysed last; each keeps its analysis and its last
+///    factorisation (a Newton solver that alternates between two systems, e.g. a loading
+///    path's bordered corrector and the natural solve at its end, re-analyses neither);
 ///  - a matrix with the analysed pattern is refactorised with the previous pivot order
 ///    (klu_refactor), which skips the pivot search and the memory allocation; the result is
 ///    kept only if the refactorisation succeeded and its reciprocal pivot growth is at least a
@@ -35,6 +37,9 @@ constexpr double kRefactorGrowthRatio = 1e-2;
 /// across matrices of one pattern. Move-only; not thread safe (one per workspace).
 class SparseLu {
  public:
+  /// Distinct patterns kept analysed (least recently used one replaced).
+  static constexpr int kPatternSlots = 2;
+
   /// @param refactor_growth_ratio a refactorisation is kept if its reciprocal pivot growth is
   /// at least this times the reference one (> 0; smaller keeps more refactorisations, at up to
   /// log10(1 / ratio) digits of extra error in a solve).
@@ -64,11 +69,16 @@ class SparseLu {
   /// @brief Solves A x = b in place (b has n entries) with the last successful factorisation.
   /// False if there is none or KLU reports a failure.
   bool solve(double* b);
+  /// @brief Sign and log|det| of the last successfully factorised matrix, from KLU's factors:
+  /// det A = sign(P) sign(Q) prod(Rs) prod(diag U) (row scaling Rs > 0, BTF blocks upper
+  /// triangular, L unit lower). sign is -1, 0 (a zero pivot) or +1; false if there is no
+  /// factorisation. Allocates nothing after the first call for a given size.
+  bool determinant(int& sign, double& log_abs);
   /// @brief True after a successful factorize() (until the next one fails).
   bool factorized() const;
   /// @brief Work counters since construction.
   const SparseLuStatistics& statistics() const;
-  /// @brief Integer words held (the analysed pattern).
+  /// @brief Integer words held (the analysed patterns).
   long integer_words() const;
   /// @brief Real words of KLU's memory in use.
   long real_words() const;
