@@ -112,6 +112,9 @@ TEST(PathFollowing, IssueExampleBAllStaticModelsOnOneStableBranch) {
   const double length = 0.1;
   SolverOptions options = scene.solver;
   options.stability = true;
+  // The fold located on the requested mesh (a coarse path's fold is 1.6e-4 of the load off here,
+  // which the margins 0.05 % below it resolve; CoarseLoadingPathKeepsTheAnswer covers the default).
+  options.coarse_loading_path = false;
   Vec3 ref = Vec3::Zero();
   for (ModelKind kind : {ModelKind::VCref, ModelKind::VC, ModelKind::CCsub, ModelKind::PRB}) {
     auto m = make_model(kind, scene.robot, scene.effects);
@@ -139,6 +142,45 @@ TEST(PathFollowing, IssueExampleBAllStaticModelsOnOneStableBranch) {
       EXPECT_LT(b.stability.margin, 0.05 * s.stability.margin) << s.stability.margin;
     }
     EXPECT_LT((s.tip().p - ref).norm(), 0.05 * length) << m->name() << " tip " << s.tip().p.transpose();
+  }
+}
+
+// SolverOptions::coarse_loading_path (the default): VC and VCref follow the loading path on a
+// coarse RK4 mesh and solve the answer on the requested one from its end. On issue 12's example b
+// (a fold and a snap on the way) the answer is the one of the whole path on the requested mesh
+// (within the Newton tolerance), the path events are the coarse path's (the fold within 5e-4 of
+// the load of the fine path's), and the integrations on the requested mesh are those of one short
+// Newton solve. A mesh no finer than the coarse one, or the option off, follows the path as
+// before.
+TEST(PathFollowing, CoarseLoadingPathKeepsTheAnswer) {
+  const Scene scene = scene_file("issue12_b.json");
+  for (ModelKind kind : {ModelKind::VCref, ModelKind::VC}) {
+    auto m = make_model(kind, scene.robot, scene.effects);
+    auto ws = m->make_workspace();
+    SolverOptions fine = scene.solver;
+    fine.coarse_loading_path = false;
+    const Solution whole = solve(*m, *ws, scene.input(), fine);
+    const Solution coarse = solve(*m, *ws, scene.input(), scene.solver);
+    ASSERT_TRUE(whole.converged() && coarse.converged()) << m->name() << ": " << coarse.summary.message;
+    EXPECT_NE(coarse.summary.message.find("loading path on a coarse RK4 mesh"), std::string::npos)
+        << coarse.summary.message;
+    EXPECT_EQ(whole.summary.message.find("coarse"), std::string::npos) << whole.summary.message;
+    EXPECT_LT((coarse.tip().p - whole.tip().p).norm(), 1e-9) << m->name();
+    ASSERT_EQ(coarse.path_events.size(), whole.path_events.size()) << m->name();
+    for (size_t k = 0; k < whole.path_events.size(); ++k) {
+      EXPECT_EQ(coarse.path_events[k].type, whole.path_events[k].type) << m->name() << " event " << k;
+      EXPECT_NEAR(coarse.path_events[k].load_fraction, whole.path_events[k].load_fraction, 5e-4)
+          << m->name() << " event " << k;
+    }
+    EXPECT_GT(coarse.summary.continuation_steps, 0);
+    // On the coarse mesh itself nothing changes: the path is followed there, as with the option off.
+    SolverOptions on_coarse = scene.solver;
+    on_coarse.rk4_steps = SolverOptions::kCoarsePathRk4Steps;
+    on_coarse.rk4_max_step = SolverOptions::kCoarsePathRk4MaxStep;
+    const Solution plain = solve(*m, *ws, scene.input(), on_coarse);
+    ASSERT_TRUE(plain.converged()) << plain.summary.message;
+    EXPECT_EQ(plain.summary.message.find("coarse RK4 mesh"), std::string::npos) << plain.summary.message;
+    EXPECT_EQ(plain.summary.continuation_steps, coarse.summary.continuation_steps) << m->name();
   }
 }
 

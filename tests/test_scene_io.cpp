@@ -138,7 +138,8 @@ TEST(SceneIo, ParsesFullKeySet) {
     "model": "ccsub",
     "solver": {"integrator": "cvode", "rk4_steps": 16, "cvode_rtol": 1e-6, "cvode_atol": 1e-9,
                "function_tolerance": 1e-8, "step_tolerance": 1e-12, "max_iterations": 50,
-               "linear_solver": "klu", "continuation": true, "max_continuation_steps": 20}
+               "linear_solver": "klu", "continuation": true, "max_continuation_steps": 20,
+               "coarse_loading_path": false}
   })";
   const tdcr::Scene s = tdcr::parse_scene(text);
   const auto& b = s.robot.backbone;
@@ -180,6 +181,8 @@ TEST(SceneIo, ParsesFullKeySet) {
   EXPECT_EQ(s.solver.linear_solver, tdcr::LinearSolverKind::SparseKLU);
   EXPECT_TRUE(s.solver.continuation);
   EXPECT_EQ(s.solver.max_continuation_steps, 20);
+  EXPECT_FALSE(s.solver.coarse_loading_path);
+  EXPECT_TRUE(tdcr::SolverOptions().coarse_loading_path);
 }
 
 TEST(SceneIo, ParsesDirectStiffness) {

@@ -397,6 +397,12 @@ const Schema<SolverOptions>& solver_schema() {
                     {"", nullptr, "follow the loading path from rest when the loads are large or a direct solve fails", kNewton}),
       integer_field("max_continuation_steps", &S::max_continuation_steps,
                     {"", nullptr, ">= 1; at most this many Newton solves (converged or failed steps)", kNewton}),
+      boolean_field("coarse_loading_path", &S::coarse_loading_path,
+                    {"", nullptr,
+                     "a cold solve that follows the loading path from rest follows it on a coarse RK4 mesh "
+                     "(2 steps per disk interval, h <= 4 mm) and solves the answer on the requested mesh "
+                     "from its end",
+                     "VC, VCref (RK4)"}),
       boolean_field("stability", &S::stability,
                     {"", nullptr,
                      "decide the stability of every converged answer (`stability` in the JSON output): VC by "

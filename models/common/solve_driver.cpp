@@ -333,6 +333,52 @@ Solution solve_refined(const StaticModel& model, ModelWorkspace& workspace, cons
   }
 }
 
+// --- Coarse loading paths (SolverOptions::coarse_loading_path). ---
+
+// Whether a cold solve of VC or VCref on RK4 should follow its loading path on the coarse mesh:
+// the path is the model's cold rule here (reason non-empty) and the requested mesh is finer.
+bool wants_coarse_path(const StaticModel& model, const SolverOptions& options, const Solution* warm_start,
+                       const std::string& reason) {
+  return options.coarse_loading_path && !warm_start && options.continuation && !reason.empty() &&
+         options.integrator == IntegratorKind::FixedStepRK4 && options.rk4_tip_tolerance == 0.0 &&
+         (model.kind() == ModelKind::VC || model.kind() == ModelKind::VCref) &&
+         (options.rk4_steps > SolverOptions::kCoarsePathRk4Steps ||
+          options.rk4_max_step < SolverOptions::kCoarsePathRk4MaxStep);
+}
+
+// The loading path on the coarse mesh, then Newton on the requested mesh from its answer (a warm
+// start at the same input: a direct solve). If either fails the result is not converged, with
+// the reason in `failure`; the caller then follows the path on the requested mesh. Work counts
+// are those of both solves, path events the coarse path's.
+Solution solve_with_coarse_path(const StaticModel& model, ModelWorkspace& workspace, const ModelInput& input,
+                                const SolverOptions& options, std::string& failure) {
+  SolverOptions coarse_options = options;
+  coarse_options.rk4_steps = SolverOptions::kCoarsePathRk4Steps;
+  coarse_options.rk4_max_step = SolverOptions::kCoarsePathRk4MaxStep;
+  coarse_options.coarse_loading_path = false;
+  coarse_options.stability = false;
+  coarse_options.differential_kinematics = false;
+  const Solution coarse = tdcr::solve(model, workspace, input, coarse_options, nullptr);
+  if (!coarse.converged()) {
+    failure = "the loading path on the coarse mesh failed: " + coarse.summary.message;
+    return coarse;
+  }
+  SolverOptions fine_options = options;
+  fine_options.coarse_loading_path = false;
+  Solution fine = tdcr::solve(model, workspace, input, fine_options, &coarse);
+  if (!fine.converged()) {
+    failure = "the solve on the requested mesh from the coarse path's answer failed: " + fine.summary.message;
+    add_work(coarse.summary, fine.summary);
+    return fine;
+  }
+  add_work(coarse.summary, fine.summary);
+  fine.path_events = coarse.path_events;
+  fine.summary.message = "loading path on a coarse RK4 mesh (" + std::to_string(SolverOptions::kCoarsePathRk4Steps) +
+                         " steps per disk interval, h <= " + format_value(SolverOptions::kCoarsePathRk4MaxStep) +
+                         " m): " + coarse.summary.message + "; then on the requested mesh: " + fine.summary.message;
+  return fine;
+}
+
 }  // namespace
 
 Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelInput& input,
@@ -351,7 +397,21 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
   if (detail::needs_displacement_solve(model, input))  // tensions of displaced tendons as unknowns
     return detail::solve_displacement_input(model, workspace, input, options, warm_start);
 
-  detail::ModelProblem& P = model.bind(workspace, input, options);
+  detail::ModelProblem* bound = &model.bind(workspace, input, options);
+  std::string coarse_failure;  // why a coarse loading path was not the answer ("" if none was tried)
+  SolverSummary coarse_work;   // the work it took (counted in this solve's summary)
+  if (bound->system() &&
+      wants_coarse_path(model, options, warm_start, path_reason(model, input, bound->cold_start()))) {
+    Solution answer = solve_with_coarse_path(model, workspace, input, options, coarse_failure);
+    workspace.history_.valid = false;  // a cold solve leaves no warm-start history
+    if (answer.converged()) {
+      answer.summary.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      return answer;
+    }
+    coarse_work = answer.summary;
+    bound = &model.bind(workspace, input, options);  // back to the requested mesh: the whole path there
+  }
+  detail::ModelProblem& P = *bound;
   Solution sol;
   sol.model = model.name();
   sol.model_fingerprint = model.fingerprint();
@@ -417,6 +477,10 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
   sol.loads = input.loads;
   if (!sum.converged() && reached < 1.0) name_infeasibility(P, model.routing(), sol.unknowns, reached, sol);
   physics::check_geometry(model.robot(), model.routing(), sol, P.max_curvature());
+  if (!coarse_failure.empty()) {
+    sum.message += " (followed on the requested mesh because " + coarse_failure + ")";
+    add_work(coarse_work, sum);
+  }
   sum.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return sol;
 }

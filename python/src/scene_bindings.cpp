@@ -326,6 +326,7 @@ void bind_effects(py::module_& m) {
       .def_readwrite("cvode_atol", &tdcr::SolverOptions::cvode_atol)
       .def_readwrite("continuation", &tdcr::SolverOptions::continuation)
       .def_readwrite("max_continuation_steps", &tdcr::SolverOptions::max_continuation_steps)
+      .def_readwrite("coarse_loading_path", &tdcr::SolverOptions::coarse_loading_path)
       .def_readwrite("stability", &tdcr::SolverOptions::stability)
       .def_readwrite("differential_kinematics", &tdcr::SolverOptions::differential_kinematics)
       .def_readwrite("reuse_jacobian", &tdcr::SolverOptions::reuse_jacobian)

@@ -67,6 +67,19 @@ struct SolverOptions {
   bool continuation = true;
   /// Bound on continuation work: at most this many Newton solves (converged or failed steps).
   int max_continuation_steps = 64;
+  /// VC and VCref with RK4, cold solves that follow the loading path from rest: follow it on a
+  /// coarse mesh (kCoarsePathRk4Steps per disk interval, steps of at most kCoarsePathRk4MaxStep)
+  /// and solve the answer on the requested mesh (rk4_steps, rk4_max_step) from its end, a
+  /// warm-started Newton solve. The path only carries the solve to the loading branch; the
+  /// answer has the requested mesh's accuracy. If the coarse path or the final solve fails, the
+  /// whole path is followed again on the requested mesh. Path events (folds, snaps) are those of
+  /// the coarse path. No effect when the requested mesh is not finer than the coarse one, with
+  /// rk4_tip_tolerance (which starts coarse anyway) or with CVODE.
+  bool coarse_loading_path = true;
+  /// RK4 steps per disk interval of a coarse loading path (coarse_loading_path).
+  static constexpr int kCoarsePathRk4Steps = 2;
+  /// Longest RK4 step of a coarse loading path (m; coarse_loading_path).
+  static constexpr double kCoarsePathRk4MaxStep = 4e-3;
   /// Decide the stability of every converged answer (Solution::stability): VC by the
   /// conjugate-point test (6 extra shots), CCsub and PRB by the eigenvalues of the reduced
   /// stiffness (one extra Jacobian); VCref and CC report "undetermined". Off by default until the
