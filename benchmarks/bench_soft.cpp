@@ -22,6 +22,7 @@
 // instead of the default fixed steps; the output file is then DIR/soft_tol.csv.
 #include <time.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -213,16 +214,24 @@ int main(int argc, char** argv) {
               "max ratio", "soft: med/max", "control: max", "soft: median/max CPU");
   bool ok = true;
   const auto largest = [](const std::vector<double>& v) {
-    double m = 0.0;
+    double m = v.empty() ? kNaN : v.front();
     for (double x : v) m = std::max(m, x);
     return m;
+  };
+  // "-" where a group has no converged scene (e.g. no control scene in --quick).
+  const auto ratio = [](double x) {
+    char b[32];
+    if (std::isfinite(x)) std::snprintf(b, sizeof b, "%.1fx", x);
+    else std::snprintf(b, sizeof b, "-");
+    return std::string(b);
   };
   for (ModelKind kind : models) {
     const std::vector<double>& r = ratios[kind];
     const std::vector<double>& t = times[kind];
-    std::printf("%-6s %9d %10d %13.1fx %13.1fx %8.1fx/%.1fx %13.1fx %11.2f/%.2f ms\n", to_string(kind).c_str(),
-                converged[kind], scenes, median(r), largest(r), median(soft_ratios[kind]), largest(soft_ratios[kind]),
-                largest(control_ratios[kind]), 1e-3 * median(t), 1e-3 * largest(t));
+    const std::string soft = ratio(median(soft_ratios[kind])) + "/" + ratio(largest(soft_ratios[kind]));
+    std::printf("%-6s %9d %10d %14s %14s %16s %14s %11.2f/%.2f ms\n", to_string(kind).c_str(), converged[kind],
+                scenes, ratio(median(r)).c_str(), ratio(largest(r)).c_str(), soft.c_str(),
+                ratio(largest(control_ratios[kind])).c_str(), 1e-3 * median(t), 1e-3 * largest(t));
     ok = ok && converged[kind] > 0;
   }
   std::printf("targets (issue 13): every model within 10x of the fastest on each scene; VC under 20 ms\n");

@@ -173,6 +173,20 @@ TEST(PathFollowing, CoarseLoadingPathKeepsTheAnswer) {
           << m->name() << " event " << k;
     }
     EXPECT_GT(coarse.summary.continuation_steps, 0);
+    EXPECT_NE(coarse.summary.message.find("(2 per disk interval at least, h <= 0.004 m)"), std::string::npos)
+        << coarse.summary.message;
+    // A requested mesh finer in one setting only: the path's mesh takes the coarser of each (one
+    // step per interval here, never two), and the answer is that of the whole path on it.
+    SolverOptions one_step = scene.solver;
+    one_step.rk4_steps = 1;
+    one_step.rk4_max_step = 1e-3;
+    const Solution mixed = solve(*m, *ws, scene.input(), one_step);
+    one_step.coarse_loading_path = false;
+    const Solution mixed_whole = solve(*m, *ws, scene.input(), one_step);
+    ASSERT_TRUE(mixed.converged() && mixed_whole.converged()) << mixed.summary.message;
+    EXPECT_NE(mixed.summary.message.find("(1 per disk interval at least, h <= 0.004 m)"), std::string::npos)
+        << mixed.summary.message;
+    EXPECT_LT((mixed.tip().p - mixed_whole.tip().p).norm(), 1e-9) << m->name();
     // On the coarse mesh itself nothing changes: the path is followed there, as with the option off.
     SolverOptions on_coarse = scene.solver;
     on_coarse.rk4_steps = SolverOptions::kCoarsePathRk4Steps;

@@ -352,9 +352,10 @@ bool wants_coarse_path(const StaticModel& model, const SolverOptions& options, c
 // are those of both solves, path events the coarse path's.
 Solution solve_with_coarse_path(const StaticModel& model, ModelWorkspace& workspace, const ModelInput& input,
                                 const SolverOptions& options, std::string& failure) {
+  // The coarse mesh, never finer than the requested one in either of its two settings.
   SolverOptions coarse_options = options;
-  coarse_options.rk4_steps = SolverOptions::kCoarsePathRk4Steps;
-  coarse_options.rk4_max_step = SolverOptions::kCoarsePathRk4MaxStep;
+  coarse_options.rk4_steps = std::min(options.rk4_steps, SolverOptions::kCoarsePathRk4Steps);
+  coarse_options.rk4_max_step = std::max(options.rk4_max_step, SolverOptions::kCoarsePathRk4MaxStep);
   coarse_options.coarse_loading_path = false;
   coarse_options.stability = false;
   coarse_options.differential_kinematics = false;
@@ -373,8 +374,8 @@ Solution solve_with_coarse_path(const StaticModel& model, ModelWorkspace& worksp
   }
   add_work(coarse.summary, fine.summary);
   fine.path_events = coarse.path_events;
-  fine.summary.message = "loading path on a coarse RK4 mesh (" + std::to_string(SolverOptions::kCoarsePathRk4Steps) +
-                         " steps per disk interval, h <= " + format_value(SolverOptions::kCoarsePathRk4MaxStep) +
+  fine.summary.message = "loading path on a coarse RK4 mesh (" + std::to_string(coarse_options.rk4_steps) +
+                         " per disk interval at least, h <= " + format_value(coarse_options.rk4_max_step) +
                          " m): " + coarse.summary.message + "; then on the requested mesh: " + fine.summary.message;
   return fine;
 }

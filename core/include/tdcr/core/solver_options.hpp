@@ -68,8 +68,9 @@ struct SolverOptions {
   /// Bound on continuation work: at most this many Newton solves (converged or failed steps).
   int max_continuation_steps = 64;
   /// VC and VCref with RK4, cold solves that follow the loading path from rest: follow it on a
-  /// coarse mesh (kCoarsePathRk4Steps per disk interval, steps of at most kCoarsePathRk4MaxStep)
-  /// and solve the answer on the requested mesh (rk4_steps, rk4_max_step) from its end, a
+  /// coarse mesh (kCoarsePathRk4Steps per disk interval, steps of at most kCoarsePathRk4MaxStep;
+  /// each setting never finer than the requested one) and solve the answer on the requested mesh
+  /// (rk4_steps, rk4_max_step) from its end, a
   /// warm-started Newton solve. The path only carries the solve to the loading branch; the
   /// answer has the requested mesh's accuracy. If the coarse path or the final solve fails, the
   /// whole path is followed again on the requested mesh. Path events (folds, snaps) are those of
