@@ -477,6 +477,9 @@ TEST(BvpArclength, OptionsValidationNamesTheField) {
   EXPECT_EQ(field_of([](ArclengthOptions& o) { o.snap_perturbation = 0.0; }), "arclength.snap_perturbation");
   EXPECT_EQ(field_of([](ArclengthOptions& o) { o.snap_tries = 0; }), "arclength.snap_tries");
   EXPECT_EQ(field_of([](ArclengthOptions& o) { o.snap_max_iterations = 0; }), "arclength.snap_max_iterations");
+  EXPECT_EQ(field_of([](ArclengthOptions& o) { o.damped_landing_steps = -1; }), "arclength.damped_landing_steps");
+  EXPECT_EQ(field_of([](ArclengthOptions& o) { o.damped_landing_rate = 0.0; }), "arclength.damped_landing_rate");
+  EXPECT_EQ(field_of([](ArclengthOptions& o) { o.damped_landing_move = -1.0; }), "arclength.damped_landing_move");
   EXPECT_EQ(field_of([](ArclengthOptions& o) { o.corrector_max_iterations = 0; }),
             "arclength.corrector_max_iterations");
 
@@ -584,4 +587,99 @@ TEST(BvpArclength, RecentredChartsKeepThePathRegular) {
   Vec y = Vec::Zero(1);
   const ArclengthResult q = follow(fixed, y, o);
   EXPECT_FALSE(q.converged() && q.events.empty()) << q.message;
+}
+
+namespace {
+
+// F = (x^3 - x - lambda, y): the gradient of V = x^4 / 4 - x^2 / 2 - lambda x + y^2 / 2, with a
+// fold at lambda = 2 / (3 sqrt 3), x = -1 / sqrt 3, past which only the right branch is left;
+// viscous damping as ParameterizedSystem::set_damping describes. Residuals fail for x > `wall`
+// (a limit of the system, as a tendon reaching the backbone).
+class DampedCubic : public tdcr::bvp::ParameterizedSystem {
+ public:
+  explicit DampedCubic(double wall = INFINITY) : wall_(wall), ref_(Vec::Zero(2)) {}
+  int size() const override { return 2; }
+  void set_parameter(double lambda) override { lambda_ = lambda; }
+  bool residual(const Eigen::Ref<const Vec>& x, Eigen::Ref<Vec> f) override {
+    if (x[0] > wall_) return false;
+    f << x[0] * x[0] * x[0] - x[0] - lambda_, x[1];
+    f += rate_ * (x - ref_);
+    return true;
+  }
+  bool set_damping(const Eigen::Ref<const Vec>& x_ref, double rate) override {
+    ref_ = x_ref;
+    rate_ = rate;
+    ++damping_calls;
+    return true;
+  }
+  int damping_calls = 0;
+
+ private:
+  double wall_, lambda_ = 0.0, rate_ = 0.0;
+  Vec ref_;
+};
+
+// Newton attempts from the fold that cannot land (one iteration each, a tiny perturbation).
+ArclengthOptions hopeless_newton_snaps() {
+  ArclengthOptions o;
+  o.start = -1.0;
+  o.target = 1.0;
+  o.at_fold = FoldAction::Snap;
+  o.snap_tries = 1;
+  o.snap_max_iterations = 1;
+  o.snap_perturbation = 1e-9;
+  return o;
+}
+
+const double kLeftRoot = -1.324717957244746;  // x^3 - x + 1 = 0
+
+}  // namespace
+
+TEST(BvpArclength, DampedMotionLandsWhereNewtonAttemptsCannot) {
+  const double right_root = 1.324717957244746;  // x^3 - x - 1 = 0: the answer at lambda = 1
+  {
+    DampedCubic sys;
+    NewtonSolver newton;
+    Vec x(2);
+    x << kLeftRoot, 0.0;
+    ArclengthOptions o = hopeless_newton_snaps();
+    o.damped_landing_steps = 0;  // without the damped motion the snap stalls
+    const ArclengthResult r = tdcr::bvp::arclength_continuation(newton, sys, x, NewtonOptions(), o);
+    EXPECT_EQ(r.status, ArclengthStatus::Stalled);
+    EXPECT_NE(r.message.find("no Newton solve past the fold"), std::string::npos) << r.message;
+  }
+  DampedCubic sys;
+  NewtonSolver newton;
+  Vec x(2);
+  x << kLeftRoot, 0.0;
+  const ArclengthResult r = tdcr::bvp::arclength_continuation(newton, sys, x, NewtonOptions(), hopeless_newton_snaps());
+  ASSERT_TRUE(r.converged()) << r.message;
+  EXPECT_GT(sys.damping_calls, 2);
+  ASSERT_EQ(r.count(ArclengthEventType::Fold), 1);
+  ASSERT_EQ(r.count(ArclengthEventType::Snap), 1);
+  EXPECT_NEAR(r.events[0].lambda, 2.0 / (3.0 * std::sqrt(3.0)), 1e-6);
+  EXPECT_NEAR(x[0], right_root, 1e-9);  // the stable branch the motion comes to rest on
+  EXPECT_NEAR(x[1], 0.0, 1e-12);
+  EXPECT_TRUE(r.limit.empty());
+  // The damping is off again: the residual at the answer is the system's own.
+  Vec f(2);
+  sys.set_parameter(1.0);
+  ASSERT_TRUE(sys.residual(x, f));
+  EXPECT_LT(f.norm(), 1e-9);
+}
+
+TEST(BvpArclength, DampedMotionIntoALimitNamesIt) {
+  DampedCubic sys(/*wall=*/0.5);
+  NewtonSolver newton;
+  Vec x(2);
+  x << kLeftRoot, 0.0;
+  ArclengthOptions o = hopeless_newton_snaps();
+  o.fold_limit = [](const Vec& xf, double) { return xf[0] > 0.45 ? std::string("x at its wall") : std::string(); };
+  const ArclengthResult r = tdcr::bvp::arclength_continuation(newton, sys, x, NewtonOptions(), o);
+  EXPECT_EQ(r.status, ArclengthStatus::Stalled);
+  EXPECT_EQ(r.limit, "x at its wall");
+  EXPECT_NE(r.message.find("runs into a limit"), std::string::npos) << r.message;
+  // The returned state is the path's last equilibrium on the first branch, not the wall.
+  EXPECT_LT(x[0], -1.0 / std::sqrt(3.0));
+  EXPECT_NEAR(x[0] * x[0] * x[0] - x[0], r.parameter, 1e-9);
 }

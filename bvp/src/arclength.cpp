@@ -4,6 +4,7 @@
 #include "tdcr/bvp/arclength.hpp"
 
 #include <algorithm>
+#include <limits>
 #include <cmath>
 #include <cstdio>
 #include <utility>
@@ -47,6 +48,9 @@ void ArclengthOptions::validate() const {
   positive("snap_perturbation", snap_perturbation);
   if (snap_tries < 1) fail("snap_tries", snap_tries, "must be at least 1");
   if (snap_max_iterations < 1) fail("snap_max_iterations", snap_max_iterations, "must be at least 1");
+  if (damped_landing_steps < 0) fail("damped_landing_steps", damped_landing_steps, "must not be negative");
+  positive("damped_landing_rate", damped_landing_rate);
+  positive("damped_landing_move", damped_landing_move);
   if (corrector_max_iterations < 1) fail("corrector_max_iterations", corrector_max_iterations, "must be at least 1");
   if (!(corrector_freeze_jacobian_below >= 0.0 && std::isfinite(corrector_freeze_jacobian_below)))
     fail("corrector_freeze_jacobian_below", corrector_freeze_jacobian_below, "must be >= 0 and finite");
@@ -130,6 +134,9 @@ class Run {
   bool refine(ArclengthEventType type, Point& event);
   bool finish(const Point& a, const Point& b, bool b_is_fold);
   bool snap(const Point& fold);
+  bool land(const Point& fold, double landing);
+  bool damped_landing(const Point& fold, double landing, const NewtonOptions& attempt);
+  double undamped_norm(const Eigen::VectorXd& x);
   bool step_events(bool& done);
   void reach(const Point& p) {
     push(p);
@@ -152,7 +159,7 @@ class Run {
   detail::BorderedSystem bordered_;
   const Eigen::VectorXd& w_;
   Point prev_, cur_, probe_, best_, fold_, bif_, a_, b_;
-  Eigen::VectorXd y_pred_, guess_, xn_, phi_, sol_;
+  Eigen::VectorXd y_pred_, guess_, xn_, phi_, sol_, f_, f_scale_, ref_;
   std::string why_;
   bool start_ok = false;
 };
@@ -333,27 +340,95 @@ bool Run::snap(const Point& fold) {
     for (int k = 0; k < opt_.snap_tries; ++k, amplitude *= 2.0) {
       for (double sign : {1.0, -1.0}) {
         xn_ = fold.y.head(n_) + sign * amplitude * phi_.cwiseQuotient(w_.head(n_));
-        if (!natural_solve(landing, xn_, &attempt)) continue;
-        const double jump = (xn_ - fold.y.head(n_)).cwiseProduct(w_.head(n_)).norm();
-        cur_.y << xn_, landing;
-        cur_.s = fold.s;
-        y_pred_.setZero();
-        y_pred_[n_] = dir_;
-        if (!tangent(cur_, y_pred_)) {
-          stall("snap: singular augmented Jacobian at the landing point");
-          return false;
-        }
-        record(ArclengthEventType::Snap, cur_, true, jump);
-        if (landing == opt_.target) {
-          sol_ = cur_.y;
-          res_.status = ArclengthStatus::Reached;
-        }
-        return true;
+        if (natural_solve(landing, xn_, &attempt)) return land(fold, landing);
       }
     }
     if (landing == opt_.target) break;
   }
+  double landing = lambda(fold) + dir_ * opt_.snap_overshoot * std::abs(span_);
+  if (!before_target(landing)) landing = opt_.target;
+  NewtonOptions damped = nopt_;  // not the corrector's frozen Jacobians: each step damps anew
+  damped.max_iterations = std::min(nopt_.max_iterations, opt_.corrector_max_iterations);
+  if (damped_landing(fold, landing, damped)) return land(fold, landing);
+  if (!why_.empty()) return false;
   stall("snap: no Newton solve past the fold converged");
+  return false;
+}
+
+// xn_ solves the system at `landing`: a new branch starts there.
+bool Run::land(const Point& fold, double landing) {
+  const double jump = (xn_ - fold.y.head(n_)).cwiseProduct(w_.head(n_)).norm();
+  cur_.y << xn_, landing;
+  cur_.s = fold.s;
+  y_pred_.setZero();
+  y_pred_[n_] = dir_;
+  if (!tangent(cur_, y_pred_)) {
+    stall("snap: singular augmented Jacobian at the landing point");
+    return false;
+  }
+  record(ArclengthEventType::Snap, cur_, true, jump);
+  if (landing == opt_.target) {
+    sol_ = cur_.y;
+    res_.status = ArclengthStatus::Reached;
+  }
+  return true;
+}
+
+// Scaled residual norm at x without damping (at the current parameter); infinity if the
+// residual cannot be evaluated.
+double Run::undamped_norm(const Eigen::VectorXd& x) {
+  sys_.set_damping(x, 0.0);
+  if (!sys_.residual(x, f_) || !f_.allFinite()) return std::numeric_limits<double>::infinity();
+  return f_.cwiseProduct(f_scale_).norm();
+}
+
+// The snap's last resort: from the fold state at `landing`, implicit Euler steps of the
+// overdamped motion (ParameterizedSystem::set_damping) with switched evolution relaxation, until
+// the motion rests; then natural Newton. Where the vanished equilibrium leaves a slow passage or
+// a local minimum of |F| that holds Newton's attempts, the motion still drifts through it, and it
+// comes to rest at a stable equilibrium (it lowers the potential), not at whichever root Newton
+// would find. xn_ gets the landing; true if it converged. The damping is off on return.
+bool Run::damped_landing(const Point& fold, double landing, const NewtonOptions& attempt) {
+  if (opt_.damped_landing_steps == 0) return false;
+  ref_ = fold.y.head(n_);
+  if (!sys_.set_damping(ref_, 0.0)) return false;
+  f_.resize(n_);
+  f_scale_.resize(n_);
+  sys_.residual_scale(f_scale_);
+  sys_.set_parameter(landing);
+  constexpr double kRestRate = 1e-6, kMaxRate = 1e12, kFactor = 4.0;
+  double rate = opt_.damped_landing_rate, norm = undamped_norm(ref_);
+  bool landed = false;
+  for (int k = 0; k < opt_.damped_landing_steps && !landed && std::isfinite(norm); ++k) {
+    const bool at_rest = rate <= kRestRate;
+    sys_.set_damping(ref_, at_rest ? 0.0 : rate);
+    xn_ = ref_;
+    const bool ok = natural_solve(landing, xn_, &attempt);
+    if (at_rest) {
+      landed = ok;
+      if (!ok) rate = kRestRate * kFactor;  // not at rest yet: damp again
+      continue;
+    }
+    const double next = ok ? undamped_norm(xn_) : std::numeric_limits<double>::infinity();
+    if (!std::isfinite(next)) {
+      rate *= kFactor;
+      if (rate > kMaxRate) break;
+      continue;
+    }
+    const double move = (xn_ - ref_).cwiseProduct(w_.head(n_)).norm();
+    ref_ = xn_;  // no re-centring here: the path's points keep the system's charts
+    rate *= std::clamp(move / opt_.damped_landing_move, 1.0 / kFactor, kFactor);
+    norm = next;
+  }
+  sys_.set_damping(ref_, 0.0);
+  if (landed) return true;
+  // Stuck: where the motion leads into a limit of the system, that is the answer.
+  if (opt_.fold_limit) res_.limit = opt_.fold_limit(ref_, landing);
+  if (!res_.limit.empty()) {
+    stall("snap: the damped motion from the fold runs into a limit of the system (the result's limit)");
+    return false;
+  }
+  stall("snap: no Newton solve past the fold converged, and the damped motion from the fold did not come to rest");
   return false;
 }
 

@@ -181,7 +181,19 @@ void LumpedProblem::evaluate(const double* x) {
 
 bool LumpedProblem::residual(const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> f) {
   const bool ok = banded_ ? banded_residual(y.data(), f.data()) : recursive_residual(y.data(), f.data());
+  if (ok && damping_ > 0.0) f += damping_ * damping_scale_.cwiseProduct(y - damping_ref_);
   return ok && f.allFinite();
+}
+
+bool LumpedProblem::set_damping(const Eigen::Ref<const Eigen::VectorXd>& x_ref, double rate) {
+  if (!has_jacobian() || reduced_) return false;
+  damping_ = rate;
+  if (rate > 0.0) {
+    damping_ref_ = x_ref;  // allocates at a snap only
+    damping_scale_.resize(size());
+    unknown_scale(damping_scale_);
+  }
+  return true;
 }
 
 bool LumpedProblem::recursive_residual(const double* x, double* f) {
@@ -412,7 +424,12 @@ bool LumpedProblem::structured_jacobian(const Eigen::Ref<const Eigen::VectorXd>&
 
 bool LumpedProblem::jacobian(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& f,
                              Eigen::Ref<Eigen::MatrixXd> Jm) {
-  if (!structured_jacobian(x, f)) return false;
+  if (damping_ > 0.0) {  // structured_jacobian differences the undamped residual
+    damping_f_ = f - damping_ * damping_scale_.cwiseProduct(x - damping_ref_);
+    if (!structured_jacobian(x, damping_f_)) return false;
+  } else if (!structured_jacobian(x, f)) {
+    return false;
+  }
   const int m = body_.per_subsegment, n = size(), J = active();
   // Off-diagonal blocks: two small products (n x 6 by 6 x n, n x 3 by 3 x n), then the diagonal
   // blocks from the differences of structured_jacobian().
@@ -428,6 +445,7 @@ bool LumpedProblem::jacobian(const Eigen::Ref<const Eigen::VectorXd>& x, const E
       lower.setZero();
   }
   for (int k = 1; k <= J; ++k) Jm.block(m * (k - 1), m * (k - 1), m, m) = jac_diag_.middleCols(m * (k - 1), m);
+  if (damping_ > 0.0) Jm.diagonal() += damping_ * damping_scale_;
   return Jm.allFinite();
 }
 

@@ -113,6 +113,12 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   int size() const final { return stride() * loads_.active; }
   void set_parameter(double lambda) final { loads_.set_load_factor(lambda); }
   bool residual(const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> f) final;
+  /// Viscous damping of the x_j (snap landings): the constitutive residuals are B Q, Q the
+  /// potential's gradient in the x_j and B a positive diagonal at rest (lumped_stability.cpp),
+  /// so r + rate s (x - x_ref) (s the unknowns' scales) is an implicit Euler step of an
+  /// overdamped motion. Recursive form without friction only (the Jacobian this class
+  /// assembles); false otherwise.
+  bool set_damping(const Eigen::Ref<const Eigen::VectorXd>& x_ref, double rate) final;
   const bvp::SparsityPattern* sparsity() const final { return banded_ ? &pattern_ : nullptr; }
   void unknown_scale(Eigen::Ref<Eigen::VectorXd> s) const final;
   // Structured Newton step (lumped_structured.cpp): the recursive form's Jacobian factors
@@ -214,6 +220,8 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   Actuation::DisplacementConvention convention_ = Actuation::DisplacementConvention::AtBase;
   bool banded_ = false;
   bool reduced_ = false;
+  double damping_ = 0.0;  // set_damping's rate, reference and the unknowns' scales
+  Eigen::VectorXd damping_ref_, damping_scale_, damping_f_;
   // Structured Newton steps (lumped_structured.cpp): the recursive Jacobian's factors as a
   // block-banded system in (d_j, s_j, t_j), its pattern (per J and external loads), the CSC
   // positions in fill order, values and right-hand side. KLU: analysed once per pattern,

@@ -113,6 +113,13 @@ bvp::ArclengthResult follow_loading_path(ModelProblem& P, const TendonRouting& r
                   "the loading path stopped at %.1f %% of the load (returned shape: the equilibrium there): ",
                   100.0 * r.parameter);
     sum.message = buf + why;
+    if (!r.limit.empty()) {
+      // The robot snaps at the fold and its motion runs into a tendon's geometric limit.
+      std::snprintf(buf, sizeof buf, ", met by the robot snapping from the fold at %.2f %% of the load; ",
+                    100.0 * r.parameter);
+      sum.termination = TerminationType::Infeasible;
+      sum.message = r.limit + buf + sum.message;
+    }
   }
   return r;
 }

@@ -52,6 +52,11 @@ class VcrefSystem final : public bvp::ParameterizedSystem {
     if (far) shooting_.rebase(x);
     return far;
   }
+  bool set_damping(const Eigen::Ref<const Eigen::VectorXd>& x, double rate) override {
+    problem_.set_damping(x.data(), rate);
+    shooting_.invalidate();
+    return true;
+  }
 
  private:
   VcrefShooting& problem_;

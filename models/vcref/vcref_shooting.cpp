@@ -190,6 +190,24 @@ void VcrefShooting::junction(int j, const bvp::ShootingNodes& nodes, double* r) 
   out(r + 3) = lie::vee(cosserat::rotation(e).transpose() * cosserat::rotation(y));
   out(r + 6) = F - cosserat::force(y);
   out(r + 9) = M - cosserat::moment(y);
+  if (damping_ > 0.0) {
+    // The rows are the gradient of the potential in the disk's position and (world) rotation.
+    const double Fs = load_.force_scale(), L = d_.length;
+    const Mat3& R = cosserat::rotation(y);
+    out(r + 6) += damping_ * (Fs / L) * (cosserat::position(y) - damping_ref_[j].p);
+    out(r + 9) += damping_ * (Fs * L) * (R * lie::log_so3(damping_ref_[j].R.transpose() * R));
+  }
+}
+
+void VcrefShooting::set_damping(const double* x, double rate) {
+  damping_ = rate;
+  if (rate == 0.0) return;
+  damping_ref_.resize(d_.N);  // allocates once per workspace, at its first damped snap
+  cosserat::State y;
+  for (int k = 1; k < d_.N; ++k) {
+    start_state(k, x + 6 + 12 * (k - 1), y.data());
+    damping_ref_[k] = cosserat::frame_of(y.data());
+  }
 }
 
 void VcrefShooting::unknown_scale(int k, double* s) const {

@@ -57,6 +57,11 @@ class VcrefShooting final : public bvp::ShootingProblem {
     chart_node_ = -1;
     return rbar_[j];
   }
+  // Viscous damping of the disk poses (bvp::ParameterizedSystem::set_damping): from now on the
+  // equilibrium rows of disks 1..N-1 get rate (F_s / L) (p_j - p_j,ref) and rate F_s L R_j
+  // log(R_j,ref^T R_j), the poses of `x` as reference; rate 0 removes them. The tip disk stays
+  // undamped (its pose is no unknown): it follows quasi-statically.
+  void set_damping(const double* x, double rate);
   // Component index 0..11 (p, w, n, m) of unknown j of node k.
   static int component(int k, int j) { return k == 0 ? j + 6 : j; }
 
@@ -109,6 +114,8 @@ class VcrefShooting final : public bvp::ShootingProblem {
   };
   mutable std::vector<WrenchMemo> wrench_memo_;
   unsigned tension_version_ = 1;
+  double damping_ = 0.0;               // set_damping's rate, and its reference poses per disk
+  std::vector<Frame> damping_ref_;
   mutable int chart_node_ = -1;        // last chart evaluation: node, w, Rbar exp(w)
   mutable Vec3 chart_w_ = Vec3::Zero();
   mutable Mat3 chart_R_ = Mat3::Identity();

@@ -45,7 +45,11 @@ enum class FoldAction {
   /// converged solution is the landing point on another branch, from which the continuation goes
   /// on towards the target. This models a quasi-static snap-through: at the fold the state loses
   /// its equilibrium and moves to a distant one at (almost) the same load. The landing branch is
-  /// the one nearest along the tangent, not proven stable (no stability test is made).
+  /// the one nearest along the tangent, not proven stable (no stability test is made). If no
+  /// attempt lands and the system can damp (ParameterizedSystem::set_damping), the state moves
+  /// from the fold by overdamped motion at the landing parameter until it rests (see
+  /// ArclengthOptions::damped_landing_steps): the landing is then where a real structure with
+  /// viscous damping comes to rest, a stable equilibrium.
   Snap
 };
 
@@ -101,6 +105,19 @@ struct ArclengthOptions {
   /// Snap: Newton iteration limit of each attempt (capped by the Newton options' own limit); an
   /// attempt that starts in the basin of the vanished equilibrium only creeps, so cut it short.
   int snap_max_iterations = 30;
+  /// Snap: when no Newton attempt lands, at most this many implicit Euler steps of the
+  /// overdamped motion (ParameterizedSystem::set_damping) from the fold state at the first
+  /// landing parameter, each a Newton solve of corrector_max_iterations at most. The pseudo-time
+  /// step starts at 1 / damped_landing_rate and follows the motion: multiplied by
+  /// damped_landing_move / (scaled move of the step), by 1/4 to 4 per step, and quartered after
+  /// a failed step (the residual grows while the structure snaps, so it cannot steer the step).
+  /// Once the step has grown past 1e6 the motion has come to rest and a natural Newton solve
+  /// finishes. 0: no damped landing.
+  int damped_landing_steps = 300;
+  /// Snap: first damping rate of the damped landing (scaled units: 1 / pseudo-time step).
+  double damped_landing_rate = 1.0;
+  /// Snap: scaled move per step of the damped landing that keeps its pseudo-time step.
+  double damped_landing_move = 0.02;
   /// Snap: a test of the fold point (x, lambda), called before any snap is tried. A non-empty
   /// return names a limit of the system there (no other branch is sought: the run stalls at the
   /// fold with that reason, instead of spending up to 8 x 2 x 4 attempts of snap_max_iterations
@@ -118,7 +135,8 @@ struct ArclengthOptions {
   /// @brief Throws InputError (field `arclength.<name>`) on inconsistent values: start ==
   /// target, non-finite values, steps not positive or min_step > initial_step > max_step,
   /// growth < 1, shrink outside (0, 1), max_turn outside (0, pi], counts < 1 (snap_max_iterations included), negative window,
-  /// event_tolerance outside (0, 1), snap_overshoot outside (0, 1), snap_perturbation <= 0.
+  /// event_tolerance outside (0, 1), snap_overshoot outside (0, 1), snap_perturbation <= 0,
+  /// damped_landing_steps < 0, damped_landing_rate or damped_landing_move <= 0.
   void validate() const;
 };
 
@@ -178,6 +196,9 @@ struct ArclengthResult {
   double parameter = 0.0;
   std::vector<ArclengthPoint> path;     ///< The path, in order.
   std::vector<ArclengthEvent> events;   ///< Folds, bifurcations and snaps, in path order.
+  /// A limit of the system (ArclengthOptions::fold_limit, non-empty) that a snap's damped motion
+  /// ran into: beyond the fold the state moves into it (the run then stalls at the fold).
+  std::string limit;
   int steps = 0;             ///< Corrector solves of the path (accepted or not).
   int accepted_steps = 0;    ///< Accepted corrector solves.
   int newton_solves = 0;     ///< All Newton solves (path, refinements, snaps, start, target).

@@ -41,6 +41,21 @@ class ParameterizedSystem : public ResidualSystem {
     (void)x;
     return false;
   }
+  /// @brief Viscous damping, for snap landings by overdamped motion (ArclengthOptions::
+  /// damped_landing_steps). From this call on, the residual is
+  ///   F(x) + rate D (q(x) - q(x_ref)),
+  /// q the system's generalized coordinates (e.g. positions and rotations of bodies) in rows
+  /// where F is the gradient of a potential in q ("elastic forces minus loads"), D a positive
+  /// diagonal of the system's scales; other rows unchanged. Solving it is then one implicit
+  /// Euler step, of pseudo-time 1 / rate, of the overdamped motion dq/dt = -D^-1 F: a motion
+  /// that lowers the potential and comes to rest only at a stable equilibrium. The Jacobian the
+  /// system provides must include the term. rate = 0 removes it. Returns false (and changes
+  /// nothing) if the system cannot damp (default).
+  virtual bool set_damping(const Eigen::Ref<const Eigen::VectorXd>& x_ref, double rate) {
+    (void)x_ref;
+    (void)rate;
+    return false;
+  }
 };
 
 /// @brief Step control of continuation().
