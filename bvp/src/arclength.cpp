@@ -4,9 +4,9 @@
 #include "tdcr/bvp/arclength.hpp"
 
 #include <algorithm>
-#include <limits>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <utility>
 
 #include "bordered_system.hpp"
@@ -383,8 +383,8 @@ double Run::undamped_norm(const Eigen::VectorXd& x) {
 }
 
 // The snap's last resort: from the fold state at `landing`, implicit Euler steps of the
-// overdamped motion (ParameterizedSystem::set_damping) with switched evolution relaxation, until
-// the motion rests; then natural Newton. Where the vanished equilibrium leaves a slow passage or
+// overdamped motion (ParameterizedSystem::set_damping), the pseudo-time step steered by the move
+// per step (ArclengthOptions::damped_landing_move), until the motion rests; then natural Newton. Where the vanished equilibrium leaves a slow passage or
 // a local minimum of |F| that holds Newton's attempts, the motion still drifts through it, and it
 // comes to rest at a stable equilibrium (it lowers the potential), not at whichever root Newton
 // would find. xn_ gets the landing; true if it converged. The damping is off on return.
@@ -397,7 +397,8 @@ bool Run::damped_landing(const Point& fold, double landing, const NewtonOptions&
   sys_.residual_scale(f_scale_);
   sys_.set_parameter(landing);
   constexpr double kRestRate = 1e-6, kMaxRate = 1e12, kFactor = 4.0;
-  double rate = opt_.damped_landing_rate, norm = undamped_norm(ref_);
+  double rate = opt_.damped_landing_rate;
+  double norm = undamped_norm(ref_);  // infinite: the residual cannot be evaluated there
   bool landed = false;
   for (int k = 0; k < opt_.damped_landing_steps && !landed && std::isfinite(norm); ++k) {
     const bool at_rest = rate <= kRestRate;
