@@ -175,6 +175,7 @@ TEST(BvpArclength, SnapAtFoldLandsOnTheUpperBranch) {
   EXPECT_GT(x_land, 2.0 / std::sqrt(3.0));
   EXPECT_NEAR(r.events[1].jump, std::sqrt(3.0), 1e-3);
   EXPECT_EQ(r.events[1].index, r.events[0].index + 1);
+  EXPECT_EQ(r.events[1].damped_steps, 0);  // a Newton attempt landed
   for (const auto& p : r.path)  // lower branch up to the fold, then the upper branch
     EXPECT_TRUE(p.value <= -1.0 / std::sqrt(3.0) + 1e-6 || p.value >= 2.0 / std::sqrt(3.0)) << p.value;
 }
@@ -658,6 +659,8 @@ TEST(BvpArclength, DampedMotionLandsWhereNewtonAttemptsCannot) {
   ASSERT_EQ(r.count(ArclengthEventType::Fold), 1);
   ASSERT_EQ(r.count(ArclengthEventType::Snap), 1);
   EXPECT_NEAR(r.events[0].lambda, 2.0 / (3.0 * std::sqrt(3.0)), 1e-6);
+  EXPECT_GT(r.events[1].damped_steps, 1);  // the snap says how it landed
+  EXPECT_EQ(r.events[0].damped_steps, 0);
   EXPECT_NEAR(x[0], right_root, 1e-9);  // the stable branch the motion comes to rest on
   EXPECT_NEAR(x[1], 0.0, 1e-12);
   EXPECT_TRUE(r.limit.empty());

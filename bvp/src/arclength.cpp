@@ -129,13 +129,13 @@ class Run {
     return bordered_.tangent(p.y, border, p.t, p.det_sign, p.det_log);
   }
   int push(const Point& p);
-  void record(ArclengthEventType type, const Point& p, bool refined, double jump = 0.0);
+  void record(ArclengthEventType type, const Point& p, bool refined, double jump = 0.0, int damped_steps = 0);
   double test_value(ArclengthEventType type, const Point& p, double ref_log) const;
   bool refine(ArclengthEventType type, Point& event);
   bool finish(const Point& a, const Point& b, bool b_is_fold);
   bool snap(const Point& fold);
-  bool land(const Point& fold, double landing);
-  bool damped_landing(const Point& fold, double landing, const NewtonOptions& attempt);
+  bool land(const Point& fold, double landing, int damped_steps = 0);
+  int damped_landing(const Point& fold, double landing, const NewtonOptions& attempt);
   double undamped_norm(const Eigen::VectorXd& x);
   bool step_events(bool& done);
   void reach(const Point& p) {
@@ -202,13 +202,14 @@ int Run::push(const Point& p) {
   return static_cast<int>(res_.path.size()) - 1;
 }
 
-void Run::record(ArclengthEventType type, const Point& p, bool refined, double jump) {
+void Run::record(ArclengthEventType type, const Point& p, bool refined, double jump, int damped_steps) {
   ArclengthEvent e;
   e.type = type;
   e.lambda = lambda(p);
   e.index = push(p);
   e.jump = jump;
   e.refined = refined;
+  e.damped_steps = damped_steps;
   e.x = p.y.head(n_);
   if (opt_.event_output) e.output = opt_.event_output(e.x, e.lambda);
   res_.events.push_back(std::move(e));
@@ -349,14 +350,14 @@ bool Run::snap(const Point& fold) {
   if (!before_target(landing)) landing = opt_.target;
   NewtonOptions damped = nopt_;  // not the corrector's frozen Jacobians: each step damps anew
   damped.max_iterations = std::min(nopt_.max_iterations, opt_.corrector_max_iterations);
-  if (damped_landing(fold, landing, damped)) return land(fold, landing);
+  if (const int steps = damped_landing(fold, landing, damped)) return land(fold, landing, steps);
   if (!why_.empty()) return false;
   stall("snap: no Newton solve past the fold converged");
   return false;
 }
 
 // xn_ solves the system at `landing`: a new branch starts there.
-bool Run::land(const Point& fold, double landing) {
+bool Run::land(const Point& fold, double landing, int damped_steps) {
   const double jump = (xn_ - fold.y.head(n_)).cwiseProduct(w_.head(n_)).norm();
   cur_.y << xn_, landing;
   cur_.s = fold.s;
@@ -366,7 +367,7 @@ bool Run::land(const Point& fold, double landing) {
     stall("snap: singular augmented Jacobian at the landing point");
     return false;
   }
-  record(ArclengthEventType::Snap, cur_, true, jump);
+  record(ArclengthEventType::Snap, cur_, true, jump, damped_steps);
   if (landing == opt_.target) {
     sol_ = cur_.y;
     res_.status = ArclengthStatus::Reached;
@@ -387,11 +388,12 @@ double Run::undamped_norm(const Eigen::VectorXd& x) {
 // per step (ArclengthOptions::damped_landing_move), until the motion rests; then natural Newton. Where the vanished equilibrium leaves a slow passage or
 // a local minimum of |F| that holds Newton's attempts, the motion still drifts through it, and it
 // comes to rest at a stable equilibrium (it lowers the potential), not at whichever root Newton
-// would find. xn_ gets the landing; true if it converged. The damping is off on return.
-bool Run::damped_landing(const Point& fold, double landing, const NewtonOptions& attempt) {
-  if (opt_.damped_landing_steps == 0) return false;
+// would find. xn_ gets the landing; returns the number of steps if it converged, else 0. The
+// damping is off on return.
+int Run::damped_landing(const Point& fold, double landing, const NewtonOptions& attempt) {
+  if (opt_.damped_landing_steps == 0) return 0;
   ref_ = fold.y.head(n_);
-  if (!sys_.set_damping(ref_, 0.0)) return false;
+  if (!sys_.set_damping(ref_, 0.0)) return 0;
   f_.resize(n_);
   f_scale_.resize(n_);
   sys_.residual_scale(f_scale_);
@@ -400,7 +402,8 @@ bool Run::damped_landing(const Point& fold, double landing, const NewtonOptions&
   double rate = opt_.damped_landing_rate;
   double norm = undamped_norm(ref_);  // infinite: the residual cannot be evaluated there
   bool landed = false;
-  for (int k = 0; k < opt_.damped_landing_steps && !landed && std::isfinite(norm); ++k) {
+  int k = 0;
+  for (; k < opt_.damped_landing_steps && !landed && std::isfinite(norm); ++k) {
     const bool at_rest = rate <= kRestRate;
     sys_.set_damping(ref_, at_rest ? 0.0 : rate);
     xn_ = ref_;
@@ -422,15 +425,15 @@ bool Run::damped_landing(const Point& fold, double landing, const NewtonOptions&
     norm = next;
   }
   sys_.set_damping(ref_, 0.0);
-  if (landed) return true;
+  if (landed) return k;
   // Stuck: where the motion leads into a limit of the system, that is the answer.
   if (opt_.fold_limit) res_.limit = opt_.fold_limit(ref_, landing);
   if (!res_.limit.empty()) {
     stall("snap: the damped motion from the fold runs into a limit of the system (the result's limit)");
-    return false;
+    return 0;
   }
   stall("snap: no Newton solve past the fold converged, and the damped motion from the fold did not come to rest");
-  return false;
+  return 0;
 }
 
 // Events between prev_ and an accepted cur_; done = the run ended (reached or stalled).

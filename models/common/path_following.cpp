@@ -89,8 +89,9 @@ bvp::ArclengthResult follow_loading_path(ModelProblem& P, const TendonRouting& r
     if (e.type == bvp::ArclengthEventType::Snap) {
       const bool measured = fold_tip && fold_tip->size() == 3 && e.output.size() == 3;
       pe.tip_jump = measured ? (e.output - *fold_tip).norm() : 0.0;
-      std::snprintf(buf, sizeof buf, "snapped to another branch at %.2f %% of the load (tip jump %.3g mm)",
-                    100.0 * e.lambda, measured ? 1e3 * pe.tip_jump : -1.0);
+      std::snprintf(buf, sizeof buf, "snapped to another branch at %.2f %% of the load (tip jump %.3g mm%s)",
+                    100.0 * e.lambda, measured ? 1e3 * pe.tip_jump : -1.0,
+                    e.damped_steps > 0 ? "; landed by damped motion" : "");
       snaps += std::string(snaps.empty() ? "" : "; ") + buf;
     } else {
       std::snprintf(buf, sizeof buf, "%s at %.4g %% of the load%s", bvp::to_string(e.type).c_str(),

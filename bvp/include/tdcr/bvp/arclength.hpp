@@ -163,6 +163,9 @@ struct ArclengthEvent {
   /// Fold, Bifurcation: the test function converged to event_tolerance (false: best estimate
   /// within max_refine_iterations). Snap: true.
   bool refined = false;
+  /// Snap: implicit Euler steps of the damped motion that landed it (ArclengthOptions::
+  /// damped_landing_steps); 0: a Newton attempt landed. Fold, Bifurcation: 0.
+  int damped_steps = 0;
   Eigen::VectorXd x;     ///< State at the event (Snap: after the jump).
   /// ArclengthOptions::event_output at the event point (empty without one). A Snap follows
   /// the Fold it jumps from, so the jump of the output is the difference of the two.
