@@ -62,8 +62,8 @@ const std::vector<KnownFailure> kKnownFailures = {
      "model limitation: a fold at 96 % of the load next to the tendon limit; at n = 10 CCsub meets none and stays "
      "on the branch VC and PRB leave there (at n = 20 it folds at 96.5 % and snaps)"},
     // s1006 (n = 5): VCref folds at 99.2 % of the load and the damped motion of its snap runs
-    // tendon T3 into its geometric limit (named infeasible); at n = 10 and 20 no model folds and
-    // all four agree within 1.6 % of L.
+    // tendon T3 into its geometric limit (named infeasible); at n = 10 and 20 no model folds
+    // (tips against VCref's: n = 10 VC 2.9 %, CCsub 7.3 %, PRB 0.2 % of L; n = 20 at most 2.2 %).
     {"s1006", ModelKind::VC, "model disagreement at n = 5: VC's loading path has no fold (VCref's snap at 99.2 % "
                              "runs T3 into its limit)"},
     {"s1006", ModelKind::CCsub, "model disagreement at n = 5: CCsub's loading path has no fold (VCref's snap at "

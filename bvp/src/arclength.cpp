@@ -334,9 +334,13 @@ bool Run::snap(const Point& fold) {
   }
   NewtonOptions attempt = nopt_;
   attempt.max_iterations = std::min(nopt_.max_iterations, opt_.snap_max_iterations);
+  // Landing parameter `overshoot` of the span past the fold, at most the target.
+  auto landing_at = [&](double overshoot) {
+    const double l = lambda(fold) + dir_ * overshoot * std::abs(span_);
+    return before_target(l) ? l : opt_.target;
+  };
   for (double overshoot = opt_.snap_overshoot; overshoot <= std::max(0.1 + 1e-12, opt_.snap_overshoot); overshoot *= 10.0) {
-    double landing = lambda(fold) + dir_ * overshoot * std::abs(span_);
-    if (!before_target(landing)) landing = opt_.target;
+    const double landing = landing_at(overshoot);
     double amplitude = opt_.snap_perturbation;
     for (int k = 0; k < opt_.snap_tries; ++k, amplitude *= 2.0) {
       for (double sign : {1.0, -1.0}) {
@@ -346,8 +350,7 @@ bool Run::snap(const Point& fold) {
     }
     if (landing == opt_.target) break;
   }
-  double landing = lambda(fold) + dir_ * opt_.snap_overshoot * std::abs(span_);
-  if (!before_target(landing)) landing = opt_.target;
+  const double landing = landing_at(opt_.snap_overshoot);
   NewtonOptions damped = nopt_;  // not the corrector's frozen Jacobians: each step damps anew
   damped.max_iterations = std::min(nopt_.max_iterations, opt_.corrector_max_iterations);
   if (const int steps = damped_landing(fold, landing, damped)) return land(fold, landing, steps);

@@ -92,6 +92,7 @@ void LumpedProblem::bind(const ModelInput& input) {
   convention_ = input.actuation.convention;
   banded_ = body_.banded();
   reduced_ = body_.reduced(active());
+  damping_ = 0.0;  // a snap switches it off again; a new input never starts damped
   if (banded_ && pattern_J_ != active()) build_pattern();
 }
 

@@ -113,10 +113,11 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   int size() const final { return stride() * loads_.active; }
   void set_parameter(double lambda) final { loads_.set_load_factor(lambda); }
   bool residual(const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> f) final;
-  /// Viscous damping of the x_j (snap landings): the constitutive residuals are B Q, Q the
-  /// potential's gradient in the x_j and B a positive diagonal at rest (lumped_stability.cpp),
-  /// so r + rate s (x - x_ref) (s the unknowns' scales) is an implicit Euler step of an
-  /// overdamped motion. Recursive form without friction only (the Jacobian this class
+  /// Viscous damping of the x_j (snap landings): r + rate s (x - x_ref), s the unknowns' scales.
+  /// The joint laws (bending about a joint axis, twist) are components of the potential's
+  /// gradient, so this is an implicit Euler step of an overdamped motion in them; PRB's
+  /// bending-plane law (Eq. 52-53, the plane along the moment) is not, and is damped only
+  /// weakly (its scale 1e-4). Recursive form without friction only (the Jacobian this class
   /// assembles); false otherwise.
   bool set_damping(const Eigen::Ref<const Eigen::VectorXd>& x_ref, double rate) final;
   const bvp::SparsityPattern* sparsity() const final { return banded_ ? &pattern_ : nullptr; }

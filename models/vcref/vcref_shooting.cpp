@@ -34,6 +34,7 @@ VcrefShooting::VcrefShooting(const VcrefModel::Data& d)
 void VcrefShooting::bind(const ModelInput& input, const SolverOptions& options) {
   const TendonRouting& routing = *d_.routing;
   load_.bind(*d_.robot, routing, input);
+  damping_ = 0.0;  // a snap switches it off again; a new input never starts damped
   active_ = routing;
   active_.tendons.clear();
   for (const RoutedTendon& t : routing.tendons)
