@@ -463,6 +463,9 @@ void LumpedProblem::constitutive_all(const double* x, double* f) {
 void LumpedProblem::extract(const Eigen::VectorXd& y, bool evaluated, Solution& solution) {
   (void)evaluated;
   last_iterations_ = solution.summary.iterations;
+  // The tensions at full load: the path's limit test (follow_loading_path's fold_limit) finds a
+  // tendon at its limit only among tensioned ones.
+  solution.tensions = loads_.loads.full_tensions();
   gather_x(y, x_);
   Eigen::VectorXd full = Eigen::VectorXd::Zero(body_.per_subsegment * body_.N);
   full.head(x_.size()) = x_;

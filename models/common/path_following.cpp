@@ -115,9 +115,12 @@ bvp::ArclengthResult follow_loading_path(ModelProblem& P, const TendonRouting& r
                   100.0 * r.parameter);
     sum.message = buf + why;
     if (!r.limit.empty()) {
-      // The robot snaps at the fold and its motion runs into a tendon's geometric limit.
-      std::snprintf(buf, sizeof buf, ", met by the robot snapping from the fold at %.2f %% of the load; ",
-                    100.0 * r.parameter);
+      // The robot snaps at the fold and its motion runs into a tendon's geometric limit. The
+      // fold's own load (the last point kept can lie beyond it, on the branch turning back).
+      double fold = r.parameter;
+      for (const bvp::ArclengthEvent& e : r.events)
+        if (e.type == bvp::ArclengthEventType::Fold) fold = e.lambda;
+      std::snprintf(buf, sizeof buf, ", met by the robot snapping from the fold at %.2f %% of the load; ", 100.0 * fold);
       sum.termination = TerminationType::Infeasible;
       sum.message = r.limit + buf + sum.message;
     }
