@@ -196,3 +196,55 @@ TEST(LumpedJacobian, StructuredStepSolvesTheDenseSystemAndAllocatesNothingOnceWa
       EXPECT_LT((J * d - b).norm(), 1e-9 * b.norm() * std::max(1.0, J.norm()));
     }
 }
+
+// Snap landings damp the recursive unknowns (set_damping: r + rate s (x - x_ref), s the unknowns'
+// scales). In the reduced form (structured Newton steps, J = 40 here) the step must solve the
+// damped Jacobian: the undamped one plus rate s on its diagonal. Before, the reduced form could
+// not damp, and a snap of PRB or CCsub from 16 (30) loaded subsegments on had no damped landing.
+TEST(LumpedJacobian, DampedStructuredStepSolvesTheDampedDenseSystem) {
+  for (bool prb : {false, true}) {
+    SCOPED_TRACE(prb ? "prb" : "ccsub");
+    Scene s = paper::scene(20, 5, "ccsub");
+    s.loads.tip_force = Vec3(0.2, -0.1, 0.05);
+    std::unique_ptr<StaticModel> model;
+    if (prb) model = std::make_unique<PrbModel>(s.robot, s.effects, LumpedFormulation::Automatic);
+    else model = std::make_unique<CcsubModel>(s.robot, s.effects, LumpedFormulation::Automatic);
+    auto ws = model->make_workspace();
+    const Solution sol = solve(*model, *ws, s.input(), s.solver);
+    ASSERT_TRUE(sol.converged()) << sol.summary.message;
+    detail::LumpedProblem& P = *static_cast<detail::LumpedWorkspace&>(*ws).problem;
+    P.bind(s.input());
+    P.set_parameter(1.0);
+    ASSERT_TRUE(P.has_newton_step());
+    const int n = P.size();
+    const Eigen::VectorXd x_ref = sol.unknowns.head(n);
+    Eigen::VectorXd x = x_ref;
+    for (int i = 0; i < n; ++i) x[i] += 0.02 * (i % 3 ? -1.0 : 1.0);
+    Eigen::VectorXd f0(n), f(n), scale(n), b(n), d(n);
+    Eigen::MatrixXd J0(n, n), J(n, n);
+    P.unknown_scale(scale);
+    ASSERT_TRUE(P.residual(x, f0));
+    ASSERT_TRUE(P.jacobian(x, f0, J0));
+    const double rate = 3.0;
+    ASSERT_TRUE(P.set_damping(x_ref, rate));
+    ASSERT_TRUE(P.residual(x, f));
+    EXPECT_LT((f - f0 - rate * scale.cwiseProduct(x - x_ref)).norm(), 1e-12 * f.norm());
+    ASSERT_TRUE(P.jacobian(x, f, J));
+    Eigen::MatrixXd expected = J0;
+    expected.diagonal() += rate * scale;
+    EXPECT_LT((J - expected).norm(), 1e-9 * J.norm());
+    for (int i = 0; i < n; ++i) b[i] = std::sin(1.0 + i);
+    ASSERT_TRUE(P.setup_newton_step(x, f));
+    d = b;
+    ASSERT_TRUE(P.solve_newton_step(d));
+    EXPECT_LT((J * d - b).norm(), 1e-9 * b.norm() * std::max(1.0, J.norm()));
+    // The undamped step differs: the damping is really in the factors.
+    ASSERT_TRUE(P.set_damping(x_ref, 0.0));
+    ASSERT_TRUE(P.residual(x, f));
+    EXPECT_LT((f - f0).norm(), 1e-14 * f0.norm());
+    ASSERT_TRUE(P.setup_newton_step(x, f));
+    Eigen::VectorXd d0 = b;
+    ASSERT_TRUE(P.solve_newton_step(d0));
+    EXPECT_GT((d0 - d).norm(), 1e-3 * d.norm());
+  }
+}

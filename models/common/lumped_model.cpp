@@ -187,7 +187,7 @@ bool LumpedProblem::residual(const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::
 }
 
 bool LumpedProblem::set_damping(const Eigen::Ref<const Eigen::VectorXd>& x_ref, double rate) {
-  if (!has_jacobian() || reduced_) return false;
+  if (!has_jacobian()) return false;
   damping_ = rate;
   if (rate > 0.0) {
     damping_ref_ = x_ref;  // allocates at a snap only
@@ -423,14 +423,16 @@ bool LumpedProblem::structured_jacobian(const Eigen::Ref<const Eigen::VectorXd>&
          (!jac_external_ || (jac_Om_.allFinite() && jac_D_.allFinite()));
 }
 
+bool LumpedProblem::undamped_structured_jacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
+                                                 const Eigen::Ref<const Eigen::VectorXd>& f) {
+  if (!(damping_ > 0.0)) return structured_jacobian(x, f);
+  damping_f_ = f - damping_ * damping_scale_.cwiseProduct(x - damping_ref_);
+  return structured_jacobian(x, damping_f_);
+}
+
 bool LumpedProblem::jacobian(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& f,
                              Eigen::Ref<Eigen::MatrixXd> Jm) {
-  if (damping_ > 0.0) {  // structured_jacobian differences the undamped residual
-    damping_f_ = f - damping_ * damping_scale_.cwiseProduct(x - damping_ref_);
-    if (!structured_jacobian(x, damping_f_)) return false;
-  } else if (!structured_jacobian(x, f)) {
-    return false;
-  }
+  if (!undamped_structured_jacobian(x, f)) return false;
   const int m = body_.per_subsegment, n = size(), J = active();
   // Off-diagonal blocks: two small products (n x 6 by 6 x n, n x 3 by 3 x n), then the diagonal
   // blocks from the differences of structured_jacobian().

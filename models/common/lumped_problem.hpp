@@ -117,8 +117,9 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   /// The joint laws (bending about a joint axis, twist) are components of the potential's
   /// gradient, so this is an implicit Euler step of an overdamped motion in them; PRB's
   /// bending-plane law (Eq. 52-53, the plane along the moment) is not, and is damped only
-  /// weakly (its scale 1e-4). Recursive form without friction only (the Jacobian this class
-  /// assembles); false otherwise.
+  /// weakly (its scale 1e-4). Recursive form, with dense or structured (reduced) Newton steps,
+  /// without friction (the Jacobians this class assembles); false otherwise (banded form,
+  /// friction).
   bool set_damping(const Eigen::Ref<const Eigen::VectorXd>& x_ref, double rate) final;
   const bvp::SparsityPattern* sparsity() const final { return banded_ ? &pattern_ : nullptr; }
   void unknown_scale(Eigen::Ref<Eigen::VectorXd> s) const final;
@@ -250,6 +251,10 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   // The factors of the recursive Jacobian at x (f: the residual there): jac_diag_, jac_E_, jac_D_,
   // jac_dW_, jac_Om_ (see lumped_structured.cpp); false if a value is not finite.
   bool structured_jacobian(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& f);
+  // structured_jacobian() of the undamped residual, given the (possibly damped) f at x: the
+  // damping's diagonal is added by the caller (jacobian(), setup_newton_step()).
+  bool undamped_structured_jacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
+                                    const Eigen::Ref<const Eigen::VectorXd>& f);
   // jacobian(): the residuals' response to distal wrench changes and to distal rotations.
   void load_sensitivities();
   Eigen::MatrixXd jac_E_, jac_D_, jac_dW_, jac_Om_, jac_diag_, jac_prod_;

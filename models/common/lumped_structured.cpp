@@ -61,7 +61,7 @@ void LumpedProblem::build_structured_pattern() {
 
 bool LumpedProblem::setup_newton_step(const Eigen::Ref<const Eigen::VectorXd>& x,
                                       const Eigen::Ref<const Eigen::VectorXd>& f) {
-  if (!structured_jacobian(x, f)) return false;
+  if (!undamped_structured_jacobian(x, f)) return false;
   if (struct_J_ != active() || struct_external_ != jac_external_) build_structured_pattern();
   const int m = body_.per_subsegment, J = active();
   const bool ext = jac_external_;
@@ -71,7 +71,8 @@ bool LumpedProblem::setup_newton_step(const Eigen::Ref<const Eigen::VectorXd>& x
   auto put = [&](double value) { v[pos[i++]] = value; };
   for (int j = 0; j < J; ++j) {
     for (int c = 0; c < m; ++c)
-      for (int r = 0; r < m; ++r) put(jac_diag_(r, m * j + c));
+      for (int r = 0; r < m; ++r)
+        put(jac_diag_(r, m * j + c) + (r == c && damping_ > 0.0 ? damping_ * damping_scale_[m * j + c] : 0.0));
     for (int c = 0; c < 6; ++c)
       for (int r = 0; r < m; ++r) put(jac_E_(m * j + r, c));
     if (ext)
