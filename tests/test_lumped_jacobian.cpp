@@ -152,6 +152,15 @@ TEST(LumpedJacobian, BandedColouringIsValidAndAsSmallAsGreedy) {
   }
 }
 
+namespace {
+// PRB or CCsub in the automatic formulation (structured Newton steps from 16 / 30 loaded
+// subsegments on).
+std::unique_ptr<StaticModel> automatic_lumped(bool prb, const Scene& s) {
+  if (prb) return std::make_unique<PrbModel>(s.robot, s.effects, LumpedFormulation::Automatic);
+  return std::make_unique<CcsubModel>(s.robot, s.effects, LumpedFormulation::Automatic);
+}
+}  // namespace
+
 // The structured Newton step (lumped_structured.cpp) solves J d = b with the factors of the
 // recursive Jacobian: the same step as the dense Jacobian's LU. Once its buffers and pattern are
 // sized (first call per J), a Jacobian, a step setup and a step solve allocate nothing.
@@ -165,9 +174,7 @@ TEST(LumpedJacobian, StructuredStepSolvesTheDenseSystemAndAllocatesNothingOnceWa
         s.loads.gravity = Vec3(0.0, -9.81, 0.0);
         s.robot.backbone.density = 8000.0;
       }
-      std::unique_ptr<StaticModel> model;
-      if (prb) model = std::make_unique<PrbModel>(s.robot, s.effects, LumpedFormulation::Automatic);
-      else model = std::make_unique<CcsubModel>(s.robot, s.effects, LumpedFormulation::Automatic);
+      const std::unique_ptr<StaticModel> model = automatic_lumped(prb, s);
       auto ws = model->make_workspace();
       const Solution sol = solve(*model, *ws, s.input(), s.solver);
       ASSERT_TRUE(sol.converged()) << sol.summary.message;
@@ -206,9 +213,7 @@ TEST(LumpedJacobian, DampedStructuredStepSolvesTheDampedDenseSystem) {
     SCOPED_TRACE(prb ? "prb" : "ccsub");
     Scene s = paper::scene(20, 5, "ccsub");
     s.loads.tip_force = Vec3(0.2, -0.1, 0.05);
-    std::unique_ptr<StaticModel> model;
-    if (prb) model = std::make_unique<PrbModel>(s.robot, s.effects, LumpedFormulation::Automatic);
-    else model = std::make_unique<CcsubModel>(s.robot, s.effects, LumpedFormulation::Automatic);
+    const std::unique_ptr<StaticModel> model = automatic_lumped(prb, s);
     auto ws = model->make_workspace();
     const Solution sol = solve(*model, *ws, s.input(), s.solver);
     ASSERT_TRUE(sol.converged()) << sol.summary.message;
