@@ -60,8 +60,8 @@ const std::vector<KnownFailure> kKnownFailures = {
      "5.4 % at n = 10, 1.5 % at n = 20)"},
     {"s1001", ModelKind::VC, "VC: past the fold at 96 % (snap lands) a second fold at 99.5 % puts T3 at its limit (named infeasible)"},
     {"s1001", ModelKind::CCsub,
-     "model limitation: a fold at 96 % of the load next to the tendon limit; at n = 10 CCsub meets none and stays "
-     "on the branch VC and PRB leave there (at n = 20 it folds at 96.5 % and snaps)"},
+     "model limitation: a fold near 96 % of the load next to the tendon limit; at n = 10 CCsub's snap (97.7 %) "
+     "lands 13.9 % of L from VCref's tip, which meets no fold (at n = 20 all fold and snap: CCsub 6.9 %)"},
     // s1006 (n = 5): VCref (PRB) folds at 99.2 % (99.5 %) of the load and the damped motion of
     // its snap runs tendon T3 into its geometric limit (named infeasible); at n = 10 and 20 no
     // model folds (tips against VCref's: n = 10 VC 2.9 %, CCsub 7.3 %, PRB 0.2 % of L; n = 20 at
