@@ -116,8 +116,9 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   /// Viscous damping of the x_j (snap landings): r + rate s (x - x_ref), s the unknowns' scales.
   /// The joint laws (bending about a joint axis, twist) are components of the potential's
   /// gradient, so this is an implicit Euler step of an overdamped motion in them; PRB's
-  /// bending-plane law (Eq. 52-53, the plane along the moment) is not, and is damped only
-  /// weakly (its scale 1e-4). Recursive form, with dense or structured (reduced) Newton steps,
+  /// bending-plane law (Eq. 52-53, the plane along the moment) is that gradient component
+  /// divided by the subsegment's bend angle (so of the opposite sign where that angle is negative),
+  /// and is damped only weakly (its scale 1e-4). Recursive form, with dense or structured (reduced) Newton steps,
   /// without friction (the Jacobians this class assembles); false otherwise (banded form,
   /// friction).
   bool set_damping(const Eigen::Ref<const Eigen::VectorXd>& x_ref, double rate) final;
