@@ -686,3 +686,114 @@ TEST(BvpArclength, DampedMotionIntoALimitNamesIt) {
   EXPECT_LT(x[0], -1.0 / std::sqrt(3.0));
   EXPECT_NEAR(x[0] * x[0] * x[0] - x[0], r.parameter, 1e-9);
 }
+
+namespace {
+
+// F = grad V, V = x^4 / 4 - x^2 / 2 - lambda x + y^4 / 4 - x y^2 / 2 - eps y: the cubic's fold at
+// lambda = 2 / (3 sqrt 3), and past it, where x > 0, the equilibrium near y = 0 is a saddle (the
+// y-stiffness 3 y^2 - x is negative) between two minima at y^2 ~ x. eps, a small imperfection,
+// tips the structure's motion towards y > 0. Newton attempts from the fold, perturbed along the
+// null vector (along x), stay near y = 0 and converge to the saddle.
+class SaddleBeyondFold : public tdcr::bvp::ParameterizedSystem {
+ public:
+  static constexpr double kEps = 1e-3;
+  int size() const override { return 2; }
+  void set_parameter(double lambda) override { lambda_ = lambda; }
+  bool residual(const Eigen::Ref<const Vec>& x, Eigen::Ref<Vec> f) override {
+    f << x[0] * x[0] * x[0] - x[0] - lambda_ - 0.5 * x[1] * x[1], x[1] * x[1] * x[1] - x[0] * x[1] - kEps;
+    f += rate_ * (x - ref_);
+    return true;
+  }
+  bool set_damping(const Eigen::Ref<const Vec>& x_ref, double rate) override {
+    ref_ = x_ref;
+    rate_ = rate;
+    return true;
+  }
+  // The Hessian of V (the undamped Jacobian) is positive definite.
+  static bool stable(const Vec& x) {
+    Eigen::Matrix2d H;
+    H << 3.0 * x[0] * x[0] - 1.0, -x[1], -x[1], 3.0 * x[1] * x[1] - x[0];
+    return H.determinant() > 0.0 && H.trace() > 0.0;
+  }
+
+ private:
+  double lambda_ = 0.0, rate_ = 0.0;
+  Vec ref_ = Vec::Zero(2);
+};
+
+ArclengthOptions saddle_path() {
+  ArclengthOptions o;
+  o.start = -1.0;
+  o.target = 1.0;
+  o.at_fold = FoldAction::Snap;
+  return o;
+}
+
+Vec saddle_start() {  // the stable equilibrium at lambda = -1 near (kLeftRoot, 0), by Newton
+  SaddleBeyondFold s;
+  s.set_parameter(-1.0);
+  Vec x(2);
+  x << kLeftRoot, 0.0;
+  NewtonSolver newton;
+  EXPECT_TRUE(newton.solve(s, x, NewtonOptions()).converged());
+  return x;
+}
+
+}  // namespace
+
+// Without a landing test the snap lands on the saddle (Newton's nearest root) and the path goes
+// on along it to the target: an equilibrium the structure would not stay at.
+TEST(BvpArclength, SnapWithoutLandingTestCanLandOnASaddle) {
+  SaddleBeyondFold sys;
+  NewtonSolver newton;
+  Vec x = saddle_start();
+  const ArclengthResult r = tdcr::bvp::arclength_continuation(newton, sys, x, NewtonOptions(), saddle_path());
+  ASSERT_TRUE(r.converged()) << r.message;
+  ASSERT_EQ(r.count(ArclengthEventType::Snap), 1);
+  EXPECT_LT(std::abs(x[1]), 0.01);
+  EXPECT_FALSE(SaddleBeyondFold::stable(x));
+  EXPECT_EQ(r.rejected_landings, 0);
+}
+
+// With accept_landing rejecting unstable landings, every Newton attempt (all at the saddle) is
+// rejected, and the damped motion from the fold leaves the saddle towards y > 0 and lands on the
+// minimum there; the path reaches the target on that branch.
+TEST(BvpArclength, RejectedLandingsLeaveTheSnapToTheDampedMotion) {
+  SaddleBeyondFold sys;
+  NewtonSolver newton;
+  Vec x = saddle_start();
+  ArclengthOptions o = saddle_path();
+  int tests = 0;
+  o.accept_landing = [&tests](const Vec& xl, double) {
+    ++tests;
+    return SaddleBeyondFold::stable(xl) ? std::string() : std::string("a saddle");
+  };
+  const ArclengthResult r = tdcr::bvp::arclength_continuation(newton, sys, x, NewtonOptions(), o);
+  ASSERT_TRUE(r.converged()) << r.message;
+  ASSERT_EQ(r.count(ArclengthEventType::Snap), 1);
+  EXPECT_GE(r.rejected_landings, 1);
+  EXPECT_EQ(tests, r.rejected_landings + 1);  // the accepted landing was tested too
+  EXPECT_NE(r.message.find("snap landings rejected (last: a saddle)"), std::string::npos) << r.message;
+  EXPECT_GT(r.events[1].damped_steps, 0);
+  EXPECT_TRUE(SaddleBeyondFold::stable(x));
+  // The minimum at lambda = 1: y^3 - x y = eps and x^3 - x - 1 = y^2 / 2, y > 0.
+  EXPECT_GT(x[1], 1.0);
+  EXPECT_NEAR(x[1] * x[1] * x[1] - x[0] * x[1], SaddleBeyondFold::kEps, 1e-9);
+  EXPECT_NEAR(x[0] * x[0] * x[0] - x[0] - 1.0, 0.5 * x[1] * x[1], 1e-9);
+}
+
+// A test that rejects every landing: the snap stalls and says why, with the last reason.
+TEST(BvpArclength, EveryLandingRejectedStallsTheSnap) {
+  SaddleBeyondFold sys;
+  NewtonSolver newton;
+  Vec x = saddle_start();
+  ArclengthOptions o = saddle_path();
+  o.accept_landing = [](const Vec&, double) { return std::string("the test rejects it"); };
+  const ArclengthResult r = tdcr::bvp::arclength_continuation(newton, sys, x, NewtonOptions(), o);
+  EXPECT_EQ(r.status, ArclengthStatus::Stalled);
+  EXPECT_EQ(r.count(ArclengthEventType::Snap), 0);
+  EXPECT_GE(r.rejected_landings, 2);
+  EXPECT_NE(r.message.find("came to rest only at rejected landings (last: the test rejects it)"), std::string::npos)
+      << r.message;
+  EXPECT_LT(x[0], -1.0 / std::sqrt(3.0) + 1e-6);  // the last equilibrium before the fold
+}

@@ -135,6 +135,7 @@ class Run {
   bool finish(const Point& a, const Point& b, bool b_is_fold);
   bool snap(const Point& fold);
   bool land(const Point& fold, double landing, int damped_steps = 0);
+  bool accepted_landing(double landing);
   int damped_landing(const Point& fold, double landing, const NewtonOptions& attempt);
   double undamped_norm(const Eigen::VectorXd& x);
   bool step_events(bool& done);
@@ -161,6 +162,7 @@ class Run {
   Point prev_, cur_, probe_, best_, fold_, bif_, a_, b_;
   Eigen::VectorXd y_pred_, guess_, xn_, phi_, sol_, f_, f_scale_, ref_;
   std::string why_;
+  std::string rejected_;  // why the last snap landing was rejected (ArclengthOptions::accept_landing)
   bool start_ok = false;
 };
 
@@ -345,7 +347,7 @@ bool Run::snap(const Point& fold) {
     for (int k = 0; k < opt_.snap_tries; ++k, amplitude *= 2.0) {
       for (double sign : {1.0, -1.0}) {
         xn_ = fold.y.head(n_) + sign * amplitude * phi_.cwiseQuotient(w_.head(n_));
-        if (natural_solve(landing, xn_, &attempt)) return land(fold, landing);
+        if (natural_solve(landing, xn_, &attempt) && accepted_landing(landing)) return land(fold, landing);
       }
     }
     if (landing == opt_.target) break;
@@ -355,7 +357,20 @@ bool Run::snap(const Point& fold) {
   damped.max_iterations = std::min(nopt_.max_iterations, opt_.corrector_max_iterations);
   if (const int steps = damped_landing(fold, landing, damped)) return land(fold, landing, steps);
   if (!why_.empty()) return false;
-  stall("snap: no Newton solve past the fold converged");
+  stall(rejected_.empty() ? "snap: no Newton solve past the fold converged"
+                          : "snap: no Newton solve past the fold converged to an accepted landing (last rejected: " +
+                                rejected_ + ")");
+  return false;
+}
+
+// Whether xn_, converged at `landing`, passes ArclengthOptions::accept_landing.
+bool Run::accepted_landing(double landing) {
+  if (!opt_.accept_landing) return true;
+  const std::string why = opt_.accept_landing(xn_, landing);
+  sys_.set_parameter(landing);
+  if (why.empty()) return true;
+  rejected_ = why;
+  ++res_.rejected_landings;
   return false;
 }
 
@@ -402,40 +417,75 @@ int Run::damped_landing(const Point& fold, double landing, const NewtonOptions& 
   sys_.residual_scale(f_scale_);
   sys_.set_parameter(landing);
   constexpr double kRestRate = 1e-6, kMaxRate = 1e12, kFactor = 4.0;
-  double rate = opt_.damped_landing_rate;
+  // Implicit Euler steps longer than 2 / (a saddle's unstable rate) converge to the saddle, and
+  // the motion slows down near one, so its steps grow: after a rejected landing (a saddle,
+  // ArclengthOptions::accept_landing) the pseudo-time step stays below 1 / min_rate, 4 times
+  // shorter after each rejection, and the motion counts as at rest once a step moves less than
+  // kRestMove of damped_landing_move.
+  constexpr int kMaxRejections = 4;
+  constexpr double kRestMove = 1e-3;
+  // A snap can carry the structure far (VCref on s1004 of the loaded-scene suite with its loads
+  // x 1.05: about 9 scaled units before T3 reaches its limit, 460 steps at damped_landing_move),
+  // so the move per step grows while each step's Newton solve is easy (kEasyIterations) and
+  // shrinks back where it is not, between damped_landing_move and kMaxMoveGrowth times it.
+  constexpr int kEasyIterations = 3, kHardIterations = 10;
+  constexpr double kMaxMoveGrowth = 16.0;
+  double target_move = opt_.damped_landing_move;
+  double rate = opt_.damped_landing_rate, min_rate = 0.0;
   double norm = undamped_norm(ref_);  // infinite: the residual cannot be evaluated there
-  bool landed = false;
+  bool landed = false, resting = false;
+  int rejections = 0;
   int k = 0;
   for (; k < opt_.damped_landing_steps && !landed && std::isfinite(norm); ++k) {
-    const bool at_rest = rate <= kRestRate;
+    const bool at_rest = rate <= kRestRate || resting;
     sys_.set_damping(ref_, at_rest ? 0.0 : rate);
     xn_ = ref_;
     const bool ok = natural_solve(landing, xn_, &attempt);
-    if (at_rest) {
-      landed = ok;
-      if (!ok) rate = kRestRate * kFactor;  // not at rest yet: damp again
+    if (at_rest) {  // a natural Newton solve from the resting state: the landing, if accepted
+      resting = false;
+      landed = ok && accepted_landing(landing);
+      if (!ok) {
+        rate = std::max(min_rate, kRestRate * kFactor);  // not at rest yet: damp again
+      } else if (!landed) {
+        if (++rejections == kMaxRejections) break;
+        min_rate = opt_.damped_landing_rate * std::pow(kFactor, rejections);
+        rate = min_rate;
+      }
       continue;
     }
     const double next = ok ? undamped_norm(xn_) : std::numeric_limits<double>::infinity();
     if (!std::isfinite(next)) {
       rate *= kFactor;
+      target_move = opt_.damped_landing_move;
       if (rate > kMaxRate) break;
+      // A motion that has run into a limit of the system stops there (the steps would only
+      // fail on, with the pseudo-time step quartered each time).
+      sys_.set_damping(ref_, 0.0);
+      if (opt_.fold_limit && !(res_.limit = opt_.fold_limit(ref_, landing)).empty()) break;
       continue;
     }
     const double move = (xn_ - ref_).cwiseProduct(w_.head(n_)).norm();
     ref_ = xn_;  // no re-centring here: the path's points keep the system's charts
-    rate *= std::clamp(move / opt_.damped_landing_move, 1.0 / kFactor, kFactor);
+    rate = std::max(min_rate, rate * std::clamp(move / target_move, 1.0 / kFactor, kFactor));
+    if (res_.last.iterations <= kEasyIterations)
+      target_move = std::min(1.5 * target_move, kMaxMoveGrowth * opt_.damped_landing_move);
+    else if (res_.last.iterations > kHardIterations)
+      target_move = std::max(0.5 * target_move, opt_.damped_landing_move);
+    resting = min_rate > 0.0 && move < kRestMove * opt_.damped_landing_move;
     norm = next;
   }
   sys_.set_damping(ref_, 0.0);
   if (landed) return k;
   // Stuck: where the motion leads into a limit of the system, that is the answer.
-  if (opt_.fold_limit) res_.limit = opt_.fold_limit(ref_, landing);
+  if (opt_.fold_limit && res_.limit.empty()) res_.limit = opt_.fold_limit(ref_, landing);
   if (!res_.limit.empty()) {
     stall("snap: the damped motion from the fold runs into a limit of the system (the result's limit)");
     return 0;
   }
-  stall("snap: no Newton solve past the fold converged, and the damped motion from the fold did not come to rest");
+  stall(rejections > 0 ? "snap: no Newton solve past the fold converged, and the damped motion from the fold came to "
+                         "rest only at rejected landings (last: " + rejected_ + ")"
+                       : "snap: no Newton solve past the fold converged, and the damped motion from the fold did not "
+                         "come to rest");
   return 0;
 }
 
@@ -581,6 +631,8 @@ void Run::run(Eigen::VectorXd& x) {
                 res_.status == ArclengthStatus::Reached ? "reached" : "stopped at", res_.parameter, res_.steps,
                 res_.accepted_steps, folds, bifs, snaps);
   res_.message = buf;
+  if (res_.rejected_landings > 0)
+    res_.message += ", " + std::to_string(res_.rejected_landings) + " snap landings rejected (last: " + rejected_ + ")";
   if (res_.status != ArclengthStatus::Reached)
     res_.message = to_string(res_.status) + ": " + why_ + "; " + res_.message + "; last solve: " + res_.last.message;
 }

@@ -108,7 +108,7 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   bool warm_guess(const Solution& previous, Eigen::VectorXd& y) final;
   void extract(const Eigen::VectorXd& y, bool evaluated, Solution& solution) final;
   /// Eigenvalues of the Jacobian of the constitutive residuals in the x_j (lumped_stability.cpp).
-  Stability stability(const Eigen::VectorXd& y) final;
+  Stability stability(const Eigen::VectorXd& y, double load_factor) final;
 
   int size() const final { return stride() * loads_.active; }
   void set_parameter(double lambda) final { loads_.set_load_factor(lambda); }

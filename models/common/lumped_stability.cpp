@@ -31,10 +31,10 @@ constexpr double kUndecided = 1e-6;
 
 }  // namespace
 
-Stability LumpedProblem::stability(const Eigen::VectorXd& y) {
+Stability LumpedProblem::stability(const Eigen::VectorXd& y, double load_factor) {
   Stability out;
   out.method = "eigenvalues of d(constitutive residuals)/d(scaled x_j), smallest real part";
-  if (loads_.loads.load_factor() != 1.0) set_parameter(1.0);
+  if (loads_.loads.load_factor() != load_factor) set_parameter(load_factor);
   gather_x(y, x_);
   const int n = static_cast<int>(x_.size());
   if (n == 0) {

@@ -78,10 +78,13 @@ class ModelProblem {
   /// (`evaluated`: it succeeded), so a problem may reuse the state of that evaluation.
   /// May downgrade a converged summary (e.g. a final pass that fails to integrate).
   virtual void extract(const Eigen::VectorXd& x, bool evaluated, Solution& solution) = 0;
-  /// The stability of the converged answer at x (called after extract(), only for a converged
-  /// solve). Default: not computed (Undetermined).
-  virtual Stability stability(const Eigen::VectorXd& x) {
+  /// The stability of the equilibrium x at load factor `load_factor` (the system's parameter):
+  /// of the converged answer (1, called after extract(), only for a converged solve) and of a
+  /// snap's landing on the loading path (path_following.cpp). Leaves the system's parameter at
+  /// `load_factor`. Default: not computed (Undetermined).
+  virtual Stability stability(const Eigen::VectorXd& x, double load_factor) {
     (void)x;
+    (void)load_factor;
     return Stability{};
   }
   /// Called when loading from rest stopped short of full load, after extract() at x, the

@@ -66,6 +66,17 @@ bvp::ArclengthResult follow_loading_path(ModelProblem& P, const TendonRouting& r
       physics::tendon_limit(routing, at_fold, physics::kTendonLimitWarn, why);
     return why;
   };
+  // The answer is a stable equilibrium (docs/models.md, "The answer"): past a fold a Newton
+  // attempt converges to whichever root is nearest, which can be a saddle (s1006 of the
+  // loaded-scene suite with its loads x 1.05: VCref's first attempt landed on an equilibrium
+  // its stability test calls unstable, and the path went on from there to full load).
+  a.accept_landing = [&P](const Eigen::VectorXd& xl, double lambda) {
+    const Stability st = P.stability(xl, lambda);
+    if (st.status != StabilityStatus::Unstable) return std::string();
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "an unstable equilibrium, stability margin %.3g", st.margin);
+    return std::string(buf);
+  };
   system.set_parameter(0.0);
   P.rest_state(x);
   const bvp::ArclengthResult r = bvp::arclength_continuation(P.newton(), system, x, newton_options, a);

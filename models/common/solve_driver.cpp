@@ -468,7 +468,7 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
       history.guess.swap(unpredicted);
       history.unknowns = x;
     }
-    if (sum.converged() && options.stability) sol.stability = P.stability(x);
+    if (sum.converged() && options.stability) sol.stability = P.stability(x, 1.0);
   }
   if (sol.converged() && options.differential_kinematics)
     add_differential_kinematics(

@@ -172,7 +172,9 @@ class MultipleShooting final : public detail::ModelProblem {
     tendon_displacements(W_, W_.segment_lengths, sol.tendon_displacements);
   }
   // Node 0 holds the base wrench (states 12..17).
-  Stability stability(const Eigen::VectorXd& x) override { return conjugate_point_test(W_, Vec6(x.segment<6>(12))); }
+  Stability stability(const Eigen::VectorXd& x, double load_factor) override {
+    return conjugate_point_test(W_, Vec6(x.segment<6>(12)), load_factor);
+  }
   bool infeasibility(const Eigen::VectorXd&, double threshold, std::string& why) override {
     return tendon_limit(W_, threshold, why);
   }

@@ -139,11 +139,11 @@ class SingleShooting final : public detail::ModelProblem {
     tendon_displacements(W_, W_.segment_lengths, sol.tendon_displacements);
     if (W_.friction) sol.tendon_end_tensions = system_.end_tensions();
   }
-  Stability stability(const Eigen::VectorXd& x) override {
+  Stability stability(const Eigen::VectorXd& x, double load_factor) override {
     if (W_.friction)
       return Stability{StabilityStatus::Undetermined, NAN,
                        "tendon friction: the conjugate-point test assumes tensions independent of the shape"};
-    return conjugate_point_test(W_, Vec6(x));
+    return conjugate_point_test(W_, Vec6(x), load_factor);
   }
   bool infeasibility(const Eigen::VectorXd&, double threshold, std::string& why) override {
     return tendon_limit(W_, threshold, why);

@@ -99,10 +99,10 @@ bool sweep(VcWorkspace::Impl& W, const Vec6& base, std::vector<Frame>& frames, s
 
 }  // namespace
 
-Stability conjugate_point_test(VcWorkspace::Impl& W, const Vec6& base) {
+Stability conjugate_point_test(VcWorkspace::Impl& W, const Vec6& base, double load_factor) {
   Stability out;
   out.method = "conjugate points (Till & Rucker 2017): d(cut wrench)(s) / d(n, m)(0) at every disk";
-  set_load_factor(W, 1.0);
+  set_load_factor(W, load_factor);
   std::vector<Frame> frames;
   std::vector<BackboneSample> samples;
   std::vector<Vec6> nominal, perturbed;

@@ -142,11 +142,11 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
   void rest_state(Eigen::VectorXd& x) override { shape_guess(x, false); }
   std::string integrator_name() const override { return integrator_->name(); }
   // The reduced stiffness in the disk poses (vcref_stability.cpp).
-  Stability stability(const Eigen::VectorXd& x) override {
+  Stability stability(const Eigen::VectorXd& x, double load_factor) override {
     if (d_.friction)
       return Stability{StabilityStatus::Undetermined, NAN,
                        "tendon friction: the disk-pose stiffness test assumes tensions independent of the shape"};
-    if (problem_.loads().load_factor() != 1.0) system_.set_parameter(1.0);
+    if (problem_.loads().load_factor() != load_factor) system_.set_parameter(load_factor);
     if (!shooting_.evaluate(x)) return Stability{StabilityStatus::Undetermined, NAN, "the shots at the answer failed"};
     return disk_pose_stability(problem_, *integrator_, shooting_.nodes());
   }

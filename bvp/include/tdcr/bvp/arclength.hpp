@@ -109,10 +109,16 @@ struct ArclengthOptions {
   /// overdamped motion (ParameterizedSystem::set_damping) from the fold state at the first
   /// landing parameter, each a Newton solve of corrector_max_iterations at most. The pseudo-time
   /// step starts at 1 / damped_landing_rate and follows the motion: multiplied by
-  /// damped_landing_move / (scaled move of the step), by 1/4 to 4 per step, and quartered after
+  /// (target move) / (scaled move of the step), by 1/4 to 4 per step, and quartered after
   /// a failed step (the residual grows while the structure snaps, so it cannot steer the step).
-  /// Once the step has grown past 1e6 the motion has come to rest and a natural Newton solve
-  /// finishes. 0: no damped landing.
+  /// The target move starts at damped_landing_move and grows by 1.5 after each step whose Newton
+  /// solve took at most 3 iterations, up to 16 damped_landing_move; it halves after one of more
+  /// than 10 and is reset by a failed step. A failed step also asks fold_limit whether the motion
+  /// has run into a limit of the system (it stops there). Once the pseudo-time step has grown
+  /// past 1e6 the motion has come to rest and a natural Newton solve finishes; a landing that
+  /// accept_landing rejects (a saddle, to which long implicit Euler steps are drawn) damps on
+  /// with the pseudo-time step bounded, 4 times shorter after each rejection (at most 4). 0: no
+  /// damped landing.
   int damped_landing_steps = 300;
   /// Snap: first damping rate of the damped landing (scaled units: 1 / pseudo-time step).
   double damped_landing_rate = 1.0;
@@ -123,6 +129,12 @@ struct ArclengthOptions {
   /// fold with that reason, instead of spending up to 8 x 2 x 4 attempts of snap_max_iterations
   /// each). Empty function: every fold is snapped.
   std::function<std::string(const Eigen::VectorXd&, double)> fold_limit;
+  /// Snap: a test of each landing (x, lambda) a snap attempt converged to. A non-empty return
+  /// rejects it with that reason (e.g. "unstable": a Newton attempt converges to whichever root
+  /// is nearest, which past a fold can be a saddle the structure would not stay at); the next
+  /// attempt is tried, and a damped landing that comes to rest at a rejected point damps on from
+  /// it. Empty function: every converged attempt lands.
+  std::function<std::string(const Eigen::VectorXd&, double)> accept_landing;
   /// The scalar stored per path point, from (x, lambda); empty = the 2-norm of x.
   std::function<double(const Eigen::VectorXd&, double)> output;
   /// Outputs stored per event (ArclengthEvent::output), from (x, lambda) at the event point,
@@ -205,6 +217,8 @@ struct ArclengthResult {
   int steps = 0;             ///< Corrector solves of the path (accepted or not).
   int accepted_steps = 0;    ///< Accepted corrector solves.
   int newton_solves = 0;     ///< All Newton solves (path, refinements, snaps, start, target).
+  /// Snap landings that converged but ArclengthOptions::accept_landing rejected.
+  int rejected_landings = 0;
   int iterations = 0;        ///< Newton iterations summed over all solves.
   /// Residual evaluations of the inner system, finite-difference ones included.
   int residual_evaluations = 0;
