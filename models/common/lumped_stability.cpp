@@ -21,6 +21,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "common/least_stable_mode.hpp"
 #include "common/lumped_problem.hpp"
 
 namespace tdcr::detail {
@@ -68,7 +69,9 @@ Stability LumpedProblem::stability(const Eigen::VectorXd& y, double load_factor)
     out.method += "; the eigenvalue solver failed";
     return out;
   }
-  out.margin = eig.eigenvalues().real().minCoeff();
+  std::string mode;
+  out.margin = least_stable_mode(eig.eigenvalues(), mode);
+  out.method += mode;
   if (out.margin > kUndecided)
     out.status = StabilityStatus::Stable;
   else if (out.margin < -kUndecided)

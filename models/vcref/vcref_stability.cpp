@@ -44,6 +44,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 
+#include "common/least_stable_mode.hpp"
 #include "tdcr/core/lie.hpp"
 #include "tdcr/models/tendon_physics.hpp"
 
@@ -285,8 +286,9 @@ Stability disk_pose_stability(const VcrefShooting& problem, bvp::Integrator& int
                       " disks: undetermined";
         return out;
       }
-      out.margin = Eigen::EigenSolver<Eigen::MatrixXd>(full, false).eigenvalues().real().minCoeff();
-      out.method += "; indefinite: smallest real part of the eigenvalues of K (quasi-static divergence)";
+      std::string mode;
+      out.margin = detail::least_stable_mode(Eigen::EigenSolver<Eigen::MatrixXd>(full, false).eigenvalues(), mode);
+      out.method += "; indefinite: smallest real part of the eigenvalues of K" + mode;
     }
   }
   if (out.margin > kUndecided)
