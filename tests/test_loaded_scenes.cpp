@@ -355,3 +355,18 @@ TEST(LoadedSceneNeighbours, Probe) {
     }
   std::fclose(out);
 }
+
+// s1006 x 1.05, VC: its path (single shooting, load parameter 7.6 < 30) folds at 99.93 % and
+// no Newton attempt lands; single shooting cannot damp, so the solve ended no_convergence.
+// The path is now followed again in multiple shooting, which damps the inner disks' poses: the
+// motion runs a tendon into its limit, and VC names the scene infeasible, as VCref and PRB do.
+TEST(LoadedSceneNeighbours, S1006TimesOnePointZeroFiveVcDampsInMultipleShooting) {
+  const Solution sol = solve_cold(ModelKind::VC, scaled(suite_scene("s1006"), 1.05));
+  EXPECT_EQ(sol.summary.termination, TerminationType::Infeasible) << sol.summary.message;
+  const std::string& m = sol.summary.message;
+  EXPECT_NE(m.find("found no landing in this formulation, which cannot damp; followed again in one that can"),
+            std::string::npos)
+      << m;
+  EXPECT_NE(m.find("at its geometric limit"), std::string::npos) << m;
+  EXPECT_NE(m.find("met by the robot snapping from the fold at 99.9"), std::string::npos) << m;
+}

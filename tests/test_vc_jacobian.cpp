@@ -127,3 +127,47 @@ TEST(VcJacobian, CvodeKeepsFiniteDifferences) {
   ASSERT_TRUE(rk.converged()) << rk.summary.message;
   EXPECT_LT((cv.tip().p - rk.tip().p).norm(), 1e-6);
 }
+
+// Snap landings damp VC in multiple shooting (single shooting cannot): set_damping adds to the
+// force and moment rows of each inner disk's junction the viscous wrench -rate (F_s / L) (p - p_ref)
+// and -rate F_s L R_ref w, w the rotation from the reference (its skew part), and nothing
+// elsewhere; rate 0 removes it.
+TEST(VcMultipleShooting, DampingAddsTheViscousWrenchAtInnerDisksOnly) {
+  const Scene s = paper_loaded({0.3, 0.0, 0.5, 0.1}, Vec3(0.2, -0.3, 0.1));
+  VcOptions o;
+  o.formulation = VcFormulation::MultipleShooting;
+  const VcModel model(s.robot, s.effects, o);
+  auto ws = model.make_workspace();
+  const Solution sol = solve(model, *ws, s.input(), s.solver);
+  ASSERT_TRUE(sol.converged()) << sol.summary.message;
+  ASSERT_TRUE(static_cast<VcWorkspace&>(*ws).impl().multiple);  // bound to s's input by the solve
+  detail::ModelProblem& P = *static_cast<VcWorkspace&>(*ws).impl().multiple;
+  bvp::ParameterizedSystem& sys = *P.system();
+  sys.set_parameter(1.0);
+  const int n = sys.size();
+  constexpr int kDim = 18;
+  ASSERT_EQ(n % kDim, 0);
+  const Eigen::VectorXd x_ref = sol.unknowns;
+  ASSERT_EQ(x_ref.size(), n);
+  // Node 3 moved by dp, node 5 turned by a small angle about its own z axis.
+  const Vec3 dp(1e-4, -2e-4, 5e-5);
+  const double angle = 1e-3;
+  Eigen::VectorXd x = x_ref;
+  x.segment<3>(3 * kDim) += dp;
+  Eigen::Map<Mat3> R5(x.data() + 5 * kDim + 3);
+  const Mat3 R5_ref = R5;
+  R5 = R5_ref * Eigen::AngleAxisd(angle, Vec3::UnitZ()).toRotationMatrix();
+  Eigen::VectorXd f0(n), f(n), scale(n);
+  ASSERT_TRUE(sys.residual(x, f0));
+  sys.residual_scale(scale);
+  const double rate = 2.0, Fs = 1.0 / scale[3 * kDim + 12], L = s.robot.total_length();
+  ASSERT_TRUE(sys.set_damping(x_ref, rate));
+  ASSERT_TRUE(sys.residual(x, f));
+  Eigen::VectorXd expected = Eigen::VectorXd::Zero(n);
+  expected.segment<3>(3 * kDim + 12) = -rate * (Fs / L) * dp;
+  expected.segment<3>(5 * kDim + 15) = -rate * (Fs * L) * (R5_ref * Vec3(0.0, 0.0, std::sin(angle)));
+  EXPECT_LT((f - f0 - expected).norm(), 1e-9 * expected.norm()) << (f - f0 - expected).transpose();
+  ASSERT_TRUE(sys.set_damping(x_ref, 0.0));
+  ASSERT_TRUE(sys.residual(x, f));
+  EXPECT_EQ((f - f0).norm(), 0.0);
+}

@@ -356,7 +356,11 @@ bool Run::snap(const Point& fold) {
   NewtonOptions damped = nopt_;  // not the corrector's frozen Jacobians: each step damps anew
   damped.max_iterations = std::min(nopt_.max_iterations, opt_.corrector_max_iterations);
   if (const int steps = damped_landing(fold, landing, damped)) return land(fold, landing, steps);
-  if (!why_.empty()) return false;
+  if (!why_.empty()) {
+    res_.unlanded_snap = res_.limit.empty();
+    return false;
+  }
+  res_.unlanded_snap = true;
   stall(rejected_.empty() ? "snap: no Newton solve past the fold converged"
                           : "snap: no Newton solve past the fold converged to an accepted landing (last rejected: " +
                                 rejected_ + ")");

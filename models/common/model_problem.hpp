@@ -131,6 +131,14 @@ class ModelProblem {
   virtual double max_curvature() const { return -1.0; }
   /// The integrator's name for the summary ("rk4", "cvode", "none").
   virtual std::string integrator_name() const { return "none"; }
+  /// For a loading path whose snap found no landing because this formulation's system cannot
+  /// damp (bvp::ParameterizedSystem::set_damping): another formulation of the same model, bound
+  /// to the same input, whose system can (VC: multiple shooting for single shooting); the path
+  /// is then followed again in it (path_following.cpp). nullptr: none.
+  virtual ModelProblem* damping_formulation() { return nullptr; }
+  /// This formulation's unknowns x of the equilibrium whose unknowns in damping_formulation()
+  /// are y (called only where damping_formulation() is not null).
+  virtual void from_damping_formulation(const Eigen::VectorXd& y, Eigen::VectorXd& x) { x = y; }
 };
 
 }  // namespace tdcr::detail

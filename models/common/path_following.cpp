@@ -31,13 +31,10 @@ PathEvent::Type event_type(bvp::ArclengthEventType t) {
   return PathEvent::Type::Fold;
 }
 
-}  // namespace
-
-bvp::ArclengthResult follow_loading_path(ModelProblem& P, const TendonRouting& routing,
-                                         bvp::ParameterizedSystem& system, Eigen::VectorXd& x,
-                                         const bvp::NewtonOptions& newton_options, const SolverOptions& options,
-                                         SolverSummary& sum, std::vector<PathEvent>& events, double first_step,
-                                         const std::string& purpose) {
+// One loading path of problem P from rest (x: its unknowns), with snaps.
+bvp::ArclengthResult run_path(ModelProblem& P, const TendonRouting& routing, bvp::ParameterizedSystem& system,
+                              Eigen::VectorXd& x, const bvp::NewtonOptions& newton_options,
+                              const SolverOptions& options, double first_step) {
   bvp::ArclengthOptions a = bvp::ArclengthOptions::from(options);
   a.start = 0.0;
   a.target = 1.0;
@@ -79,11 +76,62 @@ bvp::ArclengthResult follow_loading_path(ModelProblem& P, const TendonRouting& r
   };
   system.set_parameter(0.0);
   P.rest_state(x);
-  const bvp::ArclengthResult r = bvp::arclength_continuation(P.newton(), system, x, newton_options, a);
+  return bvp::arclength_continuation(P.newton(), system, x, newton_options, a);
+}
+
+void add_counts(const bvp::ArclengthResult& r, SolverSummary& sum) {
   sum.iterations += r.iterations;
   sum.residual_evaluations += r.residual_evaluations;
   sum.jacobian_evaluations += r.jacobian_evaluations;
   sum.continuation_steps += r.steps;
+}
+
+}  // namespace
+
+bvp::ArclengthResult follow_loading_path(ModelProblem& P, const TendonRouting& routing,
+                                         bvp::ParameterizedSystem& system, Eigen::VectorXd& x,
+                                         const bvp::NewtonOptions& newton_options, const SolverOptions& options,
+                                         SolverSummary& sum, std::vector<PathEvent>& events, double first_step,
+                                         const std::string& purpose) {
+  bvp::ArclengthResult r = run_path(P, routing, system, x, newton_options, options, first_step);
+  add_counts(r, sum);
+  // A snap with no landing in a formulation that cannot damp (VC's single shooting): the path
+  // again in one that can, its answer polished in this one (a direct solve from it).
+  std::string again;
+  ModelProblem* D = !r.converged() && r.unlanded_snap ? P.damping_formulation() : nullptr;
+  if (D && D->system()) {
+    bvp::ParameterizedSystem& ds = *D->system();
+    bvp::NewtonOptions dn = bvp::NewtonOptions::from(options);
+    D->adjust(dn);
+    Eigen::VectorXd y;
+    bvp::ArclengthResult rd = run_path(*D, routing, ds, y, dn, options, first_step);
+    add_counts(rd, sum);
+    char buf[200];
+    std::snprintf(buf, sizeof buf,
+                  "the snap at %.2f %% of the load found no landing in this formulation, which cannot damp; "
+                  "followed again in one that can: ",
+                  100.0 * r.parameter);
+    again = buf;
+    Eigen::VectorXd xd;
+    if (rd.converged() || !rd.unlanded_snap) {  // an answer, or a stop the driver can name
+      P.from_damping_formulation(y, xd);
+      system.set_parameter(rd.parameter);
+      const bvp::NewtonResult polish = P.newton().solve(system, xd, newton_options);
+      sum.iterations += polish.iterations;
+      sum.residual_evaluations += polish.residual_evaluations + polish.fd_residual_evaluations;
+      sum.jacobian_evaluations += polish.jacobian_evaluations;
+      if (polish.converged() && xd.allFinite()) {
+        x = xd;
+        rd.last = polish;
+        r = std::move(rd);
+      } else {
+        again += "its answer did not converge in this formulation: " + polish.message + "; ";
+      }
+    } else {
+      again += rd.message + "; ";
+    }
+    if (D->system() != &system) system.set_parameter(r.parameter);
+  }
   sum.solver_flag = r.last.flag;
   sum.residual_norm = r.last.residual_norm;
   sum.physical_residual = r.last.physical_residual;
@@ -113,7 +161,7 @@ bvp::ArclengthResult follow_loading_path(ModelProblem& P, const TendonRouting& r
     events.push_back(pe);
   }
 
-  const std::string why = purpose + "; " + r.message;
+  const std::string why = purpose + "; " + again + r.message;
   if (r.converged()) {
     sum.termination = TerminationType::Converged;
     sum.message = r.last.message + " (by following the loading path from rest: " + why + ")";

@@ -46,6 +46,24 @@ class Intervals final : public bvp::ShootingProblem {
     const bool ok = disk_point_loads(W_, segment(i - 1), i, buf_);
     const double* yi = nodes.start(i);
     for (int k = 0; k < kDim; ++k) r[k] = ok ? yi[k] - buf_[k] : std::numeric_limits<double>::quiet_NaN();
+    if (damping_ > 0.0 && ok) {
+      // r's wrench rows are the net wrench on disk i (n_i^+ - n_i^- + its point loads); the
+      // damping adds the viscous wrench -c (pose - reference), as VCref's disk damping does.
+      const double Fs = W_.loads.force_scale(), L = W_.model->robot().total_length();
+      const Mat3 R = cosserat::rotation(yi);
+      const Mat3 D = damping_ref_[i].R.transpose() * R;  // R need not be orthonormal here: the skew part
+      const Vec3 w(0.5 * (D(2, 1) - D(1, 2)), 0.5 * (D(0, 2) - D(2, 0)), 0.5 * (D(1, 0) - D(0, 1)));
+      Eigen::Map<Vec3>(r + 12) -= damping_ * (Fs / L) * (cosserat::position(yi) - damping_ref_[i].p);
+      Eigen::Map<Vec3>(r + 15) -= damping_ * (Fs * L) * (damping_ref_[i].R * w);
+    }
+  }
+  // Viscous damping of the inner disks' poses (bvp::ParameterizedSystem::set_damping), the node
+  // states of `x` as reference; rate 0 removes it. The tip disk stays undamped (boundary rows).
+  void set_damping(const double* x, double rate) {
+    damping_ = rate;
+    if (rate == 0.0) return;
+    damping_ref_.resize(static_cast<std::size_t>(intervals()));  // once per workspace, at its first damped snap
+    for (int k = 1; k < intervals(); ++k) damping_ref_[k] = cosserat::frame_of(x + static_cast<long>(k) * kDim);
   }
   void state_scale(double* s) const override {
     const double length = W_.model->robot().total_length();
@@ -61,12 +79,15 @@ class Intervals final : public bvp::ShootingProblem {
   VcWorkspace::Impl& W_;
   std::vector<TendonRod> rods_;  // one per segment (no length states)
   mutable double buf_[kDim] = {};
+  double damping_ = 0.0;              // set_damping's rate, and its reference pose per node
+  std::vector<Frame> damping_ref_;
 };
 
 /// The multiple-shooting system with the load factor as its parameter.
 class IntervalSystem final : public bvp::ParameterizedSystem {
  public:
-  IntervalSystem(VcWorkspace::Impl& W, bvp::ShootingSystem& sys) : W_(W), sys_(sys) {}
+  IntervalSystem(VcWorkspace::Impl& W, Intervals& intervals, bvp::ShootingSystem& sys)
+      : W_(W), intervals_(intervals), sys_(sys) {}
   int size() const override { return sys_.size(); }
   bool residual(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> f) override {
     return sys_.residual(x, f) && f.allFinite();
@@ -81,16 +102,22 @@ class IntervalSystem final : public bvp::ParameterizedSystem {
   void unknown_scale(Eigen::Ref<Eigen::VectorXd> s) const override { sys_.unknown_scale(s); }
   double relative_noise() const override { return sys_.relative_noise(); }
   void set_parameter(double lambda) override { set_load_factor(W_, lambda); }
+  bool set_damping(const Eigen::Ref<const Eigen::VectorXd>& x, double rate) override {
+    intervals_.set_damping(x.data(), rate);
+    sys_.invalidate();
+    return true;
+  }
 
  private:
   VcWorkspace::Impl& W_;
+  Intervals& intervals_;
   bvp::ShootingSystem& sys_;
 };
 
 class MultipleShooting final : public detail::ModelProblem {
  public:
   explicit MultipleShooting(VcWorkspace::Impl& W)
-      : W_(W), intervals_(W), shooting_(intervals_, *W.shot_integrator), system_(W, shooting_) {}
+      : W_(W), intervals_(W), shooting_(intervals_, *W.shot_integrator), system_(W, intervals_, shooting_) {}
   bvp::ParameterizedSystem* system() override { return &system_; }
   bvp::NewtonSolver& newton() override { return newton_; }
   // From the straight robot, too, Newton lands on other (coiled, buckled) equilibria when the

@@ -148,6 +148,14 @@ class SingleShooting final : public detail::ModelProblem {
   bool infeasibility(const Eigen::VectorXd&, double threshold, std::string& why) override {
     return tendon_limit(W_, threshold, why);
   }
+  // Single shooting cannot damp a snap; multiple shooting damps the inner disks' poses. Its node
+  // 0 holds the base wrench, this formulation's unknowns. Not with friction (single shooting only).
+  detail::ModelProblem* damping_formulation() override {
+    if (W_.friction) return nullptr;
+    if (!W_.multiple) W_.multiple = make_multiple_shooting(W_);
+    return W_.multiple.get();
+  }
+  void from_damping_formulation(const Eigen::VectorXd& y, Eigen::VectorXd& x) override { x = y.segment<6>(12); }
   std::string integrator_name() const override { return W_.shot_integrator->name(); }
 
  private:

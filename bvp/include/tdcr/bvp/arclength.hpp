@@ -214,6 +214,9 @@ struct ArclengthResult {
   /// A limit of the system (ArclengthOptions::fold_limit, non-empty) that a snap's damped motion
   /// ran into: beyond the fold the state moves into it (the run then stalls at the fold).
   std::string limit;
+  /// The run stalled at a fold whose snap found no landing (no Newton attempt landed and the
+  /// damped motion was unavailable or did not come to rest) and ran into no limit.
+  bool unlanded_snap = false;
   int steps = 0;             ///< Corrector solves of the path (accepted or not).
   int accepted_steps = 0;    ///< Accepted corrector solves.
   int newton_solves = 0;     ///< All Newton solves (path, refinements, snaps, start, target).
