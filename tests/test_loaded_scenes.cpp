@@ -28,6 +28,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <initializer_list>
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -282,31 +283,31 @@ TEST(LoadedSceneS1006, VcrefSnapRunsTendonT3IntoItsLimit) { expect_snap_into_t3_
 TEST(LoadedSceneS1006, PrbSnapRunsTendonT3IntoItsLimit) { expect_snap_into_t3_limit(ModelKind::PRB, 0.995); }
 
 // Neighbours of the suite's scenes (tensions and tip force x 1.05), where a probe of the suite
-// found two snaps that ended wrongly (docs/hard-cases.md, "Neighbours of the suite's scenes").
+// found snaps that ended wrongly (docs/hard-cases.md, "Neighbours of the suite's scenes").
+namespace {
+// `model` on `scene` x 1.05 ends infeasible, with each of `phrases` in its message.
+void expect_infeasible_at_105(const char* scene, ModelKind model, std::initializer_list<const char*> phrases) {
+  const Solution sol = solve_cold(model, scaled(suite_scene(scene), 1.05));
+  EXPECT_EQ(sol.summary.termination, TerminationType::Infeasible) << sol.summary.message;
+  for (const char* phrase : phrases) EXPECT_NE(sol.summary.message.find(phrase), std::string::npos) << phrase;
+}
+}  // namespace
 
 // s1006 x 1.05, VCref: the snap's first Newton attempt converged to an equilibrium VCref's
 // stability test calls unstable (margin -1.73), and the path went on from it to a converged,
 // unstable answer (tip (-15.9, -22.8, -9.0) mm). Landings are now tested: that one is rejected,
 // and the damped motion runs T3 into its limit, as at the suite's own load.
 TEST(LoadedSceneNeighbours, S1006TimesOnePointZeroFiveRejectsTheUnstableLanding) {
-  const Solution sol = solve_cold(ModelKind::VCref, scaled(suite_scene("s1006"), 1.05));
-  EXPECT_EQ(sol.summary.termination, TerminationType::Infeasible) << sol.summary.message;
-  const std::string& m = sol.summary.message;
-  EXPECT_NE(m.find("tendon T3"), std::string::npos) << m;
-  EXPECT_NE(m.find("between disks 4 and 5"), std::string::npos) << m;
-  EXPECT_NE(m.find("snap landings rejected (last: an unstable equilibrium"), std::string::npos) << m;
+  expect_infeasible_at_105("s1006", ModelKind::VCref,
+                           {"tendon T3", "between disks 4 and 5", "snap landings rejected (last: an unstable equilibrium"});
 }
 
 // s1004 x 1.05, VCref: the snap's damped motion travels about 9 scaled units before T3 reaches
 // its limit; at a fixed move per step it spent its 300 steps on the way ("did not come to
 // rest", no_convergence). The move per step now grows while the steps are easy.
 TEST(LoadedSceneNeighbours, S1004TimesOnePointZeroFiveSnapsIntoTheT3Limit) {
-  const Solution sol = solve_cold(ModelKind::VCref, scaled(suite_scene("s1004"), 1.05));
-  EXPECT_EQ(sol.summary.termination, TerminationType::Infeasible) << sol.summary.message;
-  const std::string& m = sol.summary.message;
-  EXPECT_NE(m.find("tendon T3"), std::string::npos) << m;
-  EXPECT_NE(m.find("between disks 9 and 10"), std::string::npos) << m;
-  EXPECT_NE(m.find("met by the robot snapping from the fold at 99.9"), std::string::npos) << m;
+  expect_infeasible_at_105("s1004", ModelKind::VCref,
+                           {"tendon T3", "between disks 9 and 10", "met by the robot snapping from the fold at 99.9"});
 }
 
 namespace {
@@ -359,14 +360,10 @@ TEST(LoadedSceneNeighbours, Probe) {
 // s1006 x 1.05, VC: its path (single shooting, load parameter 7.6 < 30) folds at 99.93 % and
 // no Newton attempt lands; single shooting cannot damp, so the solve ended no_convergence.
 // The path is now followed again in multiple shooting, which damps the inner disks' poses: the
-// motion runs a tendon into its limit, and VC names the scene infeasible, as VCref and PRB do.
+// motion runs a tendon into its limit (T1 at the base; VCref's and PRB's run T3 into its limit
+// between disks 4 and 5), and VC names the scene infeasible.
 TEST(LoadedSceneNeighbours, S1006TimesOnePointZeroFiveVcDampsInMultipleShooting) {
-  const Solution sol = solve_cold(ModelKind::VC, scaled(suite_scene("s1006"), 1.05));
-  EXPECT_EQ(sol.summary.termination, TerminationType::Infeasible) << sol.summary.message;
-  const std::string& m = sol.summary.message;
-  EXPECT_NE(m.find("found no landing in this formulation, which cannot damp; followed again in one that can"),
-            std::string::npos)
-      << m;
-  EXPECT_NE(m.find("at its geometric limit"), std::string::npos) << m;
-  EXPECT_NE(m.find("met by the robot snapping from the fold at 99.9"), std::string::npos) << m;
+  expect_infeasible_at_105("s1006", ModelKind::VC,
+                           {"found no landing in this formulation, which cannot damp; followed again in one that can",
+                            "at its geometric limit", "met by the robot snapping from the fold at 99.9"});
 }
