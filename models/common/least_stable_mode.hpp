@@ -13,7 +13,7 @@
 namespace tdcr::detail {
 
 /// The eigenvalue of smallest real part of `eigenvalues` (of a real matrix, so complex ones come
-/// in conjugate pairs), and in `note` what kind of mode it is: a real eigenvalue (divergence:
+/// in conjugate pairs), and in `note` what kind of mode it is: a real eigenvalue (divergence-type:
 /// the equilibrium turns into a fold or a bifurcation where it crosses 0) or a complex pair
 /// (an oscillatory, flutter-type mode, which only non-conservative loads have: where its real
 /// part crosses 0 the loading path has no fold and no bifurcation, and the verdict depends on
@@ -27,11 +27,11 @@ inline double least_stable_mode(const Eigen::VectorXcd& eigenvalues, std::string
   char buf[200];
   if (std::abs(z.imag()) > 1e-9 * std::max(1.0, std::abs(z)))
     std::snprintf(buf, sizeof buf,
-                  "; least stable mode: a complex pair %.3g +- %.3gi (oscillatory, flutter-type: the loads are not "
-                  "conservative)",
+                  "; least stable mode: a complex pair %.3g +- %.3gi (oscillatory, flutter-type, as only "
+                  "non-conservative loads have)",
                   z.real(), std::abs(z.imag()));
   else
-    std::snprintf(buf, sizeof buf, "; least stable mode: a real eigenvalue %.3g (divergence)", z.real());
+    std::snprintf(buf, sizeof buf, "; least stable mode: a real eigenvalue %.3g (divergence-type)", z.real());
   note = buf;
   return z.real();
 }

@@ -106,11 +106,14 @@ bvp::ArclengthResult follow_loading_path(ModelProblem& P, const TendonRouting& r
     Eigen::VectorXd y;
     bvp::ArclengthResult rd = run_path(*D, routing, ds, y, dn, options, first_step);
     add_counts(rd, sum);
+    double fold = r.parameter;  // the fold's own load (the path's last point can lie past it)
+    for (const bvp::ArclengthEvent& e : r.events)
+      if (e.type == bvp::ArclengthEventType::Fold) fold = e.lambda;
     char buf[200];
     std::snprintf(buf, sizeof buf,
                   "the snap at %.2f %% of the load found no landing in this formulation, which cannot damp; "
                   "followed again in one that can: ",
-                  100.0 * r.parameter);
+                  100.0 * fold);
     again = buf;
     Eigen::VectorXd xd;
     if (rd.converged() || !rd.unlanded_snap) {  // an answer, or a stop the driver can name
