@@ -315,3 +315,34 @@ TEST(PrbModel, ColdGuessShortensDirectSolves) {
   }
   EXPECT_LT((sol.tip().p - path.tip().p).norm(), 1e-8);
 }
+
+// The stability verdict is a property of the shape, not of the chart: a subsegment's
+// (theta_1..3, phi, eps) and (-theta_1..3, phi + pi, eps) are the same rigid-link chain (the plane
+// turned by pi maps x' to -x', and Rz(pi) Ry(-a) Rz(-pi) = Ry(a)). A warm start from the answer
+// with one subsegment written in the other chart stays there (Newton has nothing to do) and must
+// give the same tip and the same margin. Without the stability test's own chart (every bend
+// positive), each flipped subsegment turned the smallest eigenvalue negative.
+TEST(PrbModel, StabilityDoesNotDependOnTheBendingPlaneChart) {
+  const double TM = paper::max_tension(paper::robot(5));
+  Scene s = paper_scene(5, {0.6 * TM, 0, 0.3 * TM, 0}, Vec3(0.2, -0.3, -0.1));
+  s.solver.stability = true;
+  const PrbModel model(s.robot, s.effects);
+  auto ws = model.make_workspace();
+  const Solution cold = tdcr::solve(model, *ws, s.input(), s.solver);
+  ASSERT_TRUE(cold.converged()) << cold.summary.message;
+  ASSERT_EQ(cold.stability.status, StabilityStatus::Stable) << cold.stability.method;
+  const int subsegments = static_cast<int>(cold.unknowns.size()) / 5;
+  ASSERT_EQ(subsegments, 10);
+  for (int j = 0; j < subsegments; j += 3) {
+    SCOPED_TRACE(j);
+    Solution flipped = cold;
+    for (int q = 0; q < 3; ++q) flipped.unknowns[5 * j + q] = -cold.unknowns[5 * j + q];
+    flipped.unknowns[5 * j + 3] = cold.unknowns[5 * j + 3] + M_PI;
+    const Solution warm = tdcr::solve(model, *ws, s.input(), s.solver, &flipped);
+    ASSERT_TRUE(warm.converged()) << warm.summary.message;
+    EXPECT_LT(warm.unknowns.segment(5 * j, 3).sum(), 0.0);  // still in the flipped chart
+    EXPECT_LT((warm.tip().p - cold.tip().p).norm(), 1e-9);
+    EXPECT_EQ(warm.stability.status, StabilityStatus::Stable) << warm.stability.method;
+    EXPECT_NEAR(warm.stability.margin, cold.stability.margin, 1e-4 * std::abs(cold.stability.margin));
+  }
+}

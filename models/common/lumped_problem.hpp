@@ -179,6 +179,12 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   void fixed_point_passes(Eigen::VectorXd& x, int passes);
   /// Called with the x_j of a warm start (e.g. to take gauge references from it).
   virtual void on_warm(const Eigen::VectorXd& x) { (void)x; }
+  /// The stability test's chart (lumped_stability.cpp): rewrites x (the x_j of every loaded
+  /// subsegment) as the same shape in the chart where the constitutive laws are B Q with B
+  /// positive, and moves any gauge reference along; leave_stability_chart() restores the
+  /// references. Default: x unchanged (CCsub's curvature components have one chart).
+  virtual void enter_stability_chart(Eigen::VectorXd& x) { (void)x; }
+  virtual void leave_stability_chart() {}
   /// Scale of x_j (per_subsegment values; default ones).
   virtual void x_scale(double* s) const;
 

@@ -6,7 +6,11 @@
 // conservative loads (tensions: potential sum T_k l_k over the tendon chords; dead tip force and
 // weights) they are r = B(x) Q(x), Q the gradient of the total potential and B a regular matrix
 // that is a positive diagonal at rest (each law is written along its own coordinate; PRB puts
-// its bending plane along the distal moment, so its bending angles stay positive). At an
+// its bending plane along the distal moment, so its bending angles are positive). B's entry of
+// PRB's bending-plane law has the sign of the subsegment's bend: a subsegment bent against its
+// plane (a solve can end there past an inflection of the bend, where the in-plane moment turns)
+// would give B H a negative eigenvalue for a stable equilibrium, so the test rewrites such a
+// subsegment as the same shape with its plane turned by pi (enter_stability_chart). At an
 // equilibrium dr/dx = B H, H the Hessian of the total potential: along the loading path from
 // rest, an eigenvalue of dr/dx crosses zero exactly where H becomes singular. The test takes
 // the eigenvalues of the Jacobian in the scaled unknowns (dimensionless) and
@@ -37,6 +41,12 @@ Stability LumpedProblem::stability(const Eigen::VectorXd& y, double load_factor)
   out.method = "eigenvalues of d(constitutive residuals)/d(scaled x_j), smallest real part";
   if (loads_.loads.load_factor() != load_factor) set_parameter(load_factor);
   gather_x(y, x_);
+  enter_stability_chart(x_);
+  // Every return below leaves the chart (the path goes on from a tested landing).
+  struct Leave {
+    LumpedProblem& p;
+    ~Leave() { p.leave_stability_chart(); }
+  } leave{*this};
   const int n = static_cast<int>(x_.size());
   if (n == 0) {
     // Nothing loaded: the straight robot held by its elastic stiffness alone.

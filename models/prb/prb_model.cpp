@@ -262,8 +262,24 @@ class PrbProblem final : public detail::LumpedProblem {
     return true;
   }
 
+  // A subsegment bent against its bending plane (theta_1 + theta_2 + theta_3 < 0) is the same
+  // shape as (phi + pi, -theta, eps): rotating the chain's plane by pi about z maps the in-plane
+  // coordinate x' to -x' and Rz(pi) Ry(-a) Rz(-pi) = Ry(a), so the twist eps is unchanged. Its
+  // gauge reference turns with it, so the gauge term keeps its sign.
+  void enter_stability_chart(Eigen::VectorXd& x) override {
+    saved_phi_ref_ = phi_ref_;
+    for (int j = 1; j <= active(); ++j) {
+      double* q = x.data() + kU * (j - 1);
+      if (q[0] + q[1] + q[2] >= 0.0) continue;
+      for (int i = 0; i < 3; ++i) q[i] = -q[i];
+      q[3] += M_PI;
+      phi_ref_[j] += M_PI;
+    }
+  }
+  void leave_stability_chart() override { phi_ref_.swap(saved_phi_ref_); }
+
   const PrbBody& body_;
-  std::vector<double> phi_ref_;
+  std::vector<double> phi_ref_, saved_phi_ref_;
 };
 
 std::unique_ptr<detail::LumpedProblem> PrbBody::make_problem() const { return std::make_unique<PrbProblem>(*this); }
