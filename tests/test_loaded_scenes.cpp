@@ -415,6 +415,26 @@ TEST(LoadedSceneDraws, S1158PrbSubsegmentsBentAgainstTheirPlanesAreStable) {
   EXPECT_LT(tip_distance(prb, ref), 0.01);
 }
 
+// s1135 (n = 5, E x 0.17, tendon-only bend 1.25: infeasible): VCref, CCsub and PRB name T1's
+// limit; VC ended integration_failed. Its loading path folds at 73.6 % and, single shooting
+// having no landing, the snap's damped motion in multiple shooting stalled: the kink fixed point
+// at disk 5 (T1 terminating, T4 continuing) failed at every state the motion tried (1393 times),
+// Newton cycling where a root exists (tests/test_vc_kinks.cpp). With backtracking the motion runs
+// T1 into its limit in segment 1, as in the other three models. About 5 s (Release).
+TEST(LoadedSceneDraws, S1135VcSnapRunsTendonT1IntoItsLimit) {
+  const LoadedScene ls = random_scene(135);
+  ASSERT_TRUE(ls.beyond_limit);
+  const Solution vc = solve_cold(ModelKind::VC, ls.scene);
+  EXPECT_EQ(vc.summary.termination, TerminationType::Infeasible) << vc.summary.message;
+  EXPECT_NE(vc.summary.message.find("tendon T1 (index 0) at its geometric limit"), std::string::npos)
+      << vc.summary.message;
+  EXPECT_NE(vc.summary.message.find("met by the robot snapping from the fold"), std::string::npos)
+      << vc.summary.message;
+  const Solution ref = solve_cold(ModelKind::VCref, ls.scene);
+  EXPECT_EQ(ref.summary.termination, TerminationType::Infeasible) << ref.summary.message;
+  EXPECT_NE(ref.summary.message.find("tendon T1 (index 0)"), std::string::npos) << ref.summary.message;
+}
+
 // The generator is what the table says: the draws keep their ranges, a quarter is drawn past the
 // tendon limit, and a seed gives the same scene twice.
 TEST(LoadedSceneGenerator, DrawsWithinTheStatedRanges) {

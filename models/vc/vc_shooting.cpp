@@ -21,13 +21,16 @@ VcWorkspace::Impl::~Impl() = default;
 
 namespace vc {
 
-namespace {
-
-/// Solve z = G(z), z in: the start. Fixed-point iteration while it contracts (its factor is about
+/// Fixed-point iteration while it contracts (its factor is about
 /// T r^2 / (EI |q_k|), small for moderate bends); once it stops contracting (a strong tendon
 /// continuing past a large point load on a strongly bent robot: the factor passes 1 and the
-/// iteration falls into a 2-cycle), Newton on z - G(z) from the start with a forward-difference
-/// Jacobian. False if neither settles.
+/// iteration falls into a 2-cycle), Newton on h(z) = z - G(z) from the start with a
+/// forward-difference Jacobian, each step backtracked until the scaled |h| decreases. Without the
+/// backtracking Newton fell into 2-cycles of its own where the root exists (1393 failed kinks
+/// at disk 5 of s1135, draw 135 beyond the loaded suite, stalled VC's damped snap). Where no root
+/// exists (the kink would put a continuing tendon past its geometric limit just distal of the
+/// disk, where t_k+ = q_k+ / |q_k+| flips), the backtracking ends on |h| > 0 at that limit:
+/// false, never a success.
 bool kink_fixed_point(const KinkMap<double>& G, double force_scale, double moment_scale, Vec6& z) {
   Vec6 scale;
   scale << Vec3::Constant(force_scale), Vec3::Constant(moment_scale);
@@ -42,8 +45,8 @@ bool kink_fixed_point(const KinkMap<double>& G, double force_scale, double momen
     previous = step;
   }
   z = start;
+  Vec6 h = z - G(z);
   for (int it = 0; it < 30; ++it) {
-    const Vec6 h = z - G(z);
     Eigen::Matrix<double, 6, 6> J;
     for (int c = 0; c < 6; ++c) {
       Vec6 zc = z;
@@ -53,11 +56,28 @@ bool kink_fixed_point(const KinkMap<double>& G, double force_scale, double momen
     }
     const Vec6 dz = J.partialPivLu().solve(-h);
     if (!dz.allFinite()) return false;
-    z += dz;
-    if (dz.cwiseQuotient(scale).cwiseAbs().maxCoeff() <= 1e-14) return z.allFinite();
+    if (dz.cwiseQuotient(scale).cwiseAbs().maxCoeff() <= 1e-14) {
+      z += dz;
+      return z.allFinite();
+    }
+    const double norm = h.cwiseQuotient(scale).norm();
+    double a = 1.0;
+    for (int halvings = 0;; ++halvings) {
+      const Vec6 zn = z + a * dz;
+      const Vec6 hn = zn - G(zn);
+      if (hn.allFinite() && hn.cwiseQuotient(scale).norm() <= (1.0 - 1e-4 * a) * norm) {
+        z = zn;
+        h = hn;
+        break;
+      }
+      if (halvings == 30) return false;  // no decrease along the Newton direction: no root here
+      a *= 0.5;
+    }
   }
   return false;
 }
+
+namespace {
 
 bool same_integration(const SolverOptions& a, const SolverOptions& b) {
   return a.integrator == b.integrator && a.rk4_steps == b.rk4_steps && a.rk4_max_step == b.rk4_max_step &&

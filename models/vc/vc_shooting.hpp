@@ -75,6 +75,11 @@ struct Record {
 void bind_input(VcWorkspace::Impl& W, const VcModel& model, const ModelInput& input, const SolverOptions& options);
 /// Scale every load by `lambda` (allocation-free).
 void set_load_factor(VcWorkspace::Impl& W, double lambda);
+/// The wrench z just distal of a disk's kinks, z = G(z) (vc_shooting.cpp says how); z in: the
+/// start. False, z unspecified, if it did not settle (no root near the start: a continuing
+/// tendon at its geometric limit just distal of the disk). force_scale and moment_scale scale
+/// the force and moment rows of the tests.
+bool kink_fixed_point(const KinkMap<double>& G, double force_scale, double moment_scale, Vec6& z);
 /// Point loads at disk j, the end of an interval of segment i, applied to the rod state y (its
 /// first 18 values): tendon terminations (Eq. 40-41), the disk's weight and the kink forces of
 /// passing tendons. False if the kink fixed-point iteration did not settle. T: double, or Dual
