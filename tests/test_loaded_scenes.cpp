@@ -459,6 +459,49 @@ TEST(LoadedSceneDraws, S1135VcSnapRunsTendonT1IntoItsLimit) {
   EXPECT_NE(ref.summary.message.find("tendon T1 (index 0)"), std::string::npos) << ref.summary.message;
 }
 
+// VC's conjugate-point test on the fixed-free family [s, L] (models/vc/vc_stability.cpp). With
+// the family [0, s] (the transmitted wrench held as a dead load at s) it called stable answers
+// unstable and accepted a saddle.
+//
+// s1193 (n = 10, E x 0.13, L^2 |F| / EI 15.9): VC ended no_convergence, every snap landing
+// rejected (margin -0.57 at 70.7 % of the load) where VCref with conservative disk forces at 40
+// disks per segment lands on the same shape and finds it stable. VC's answer now lies on that
+// branch: against VCref "kept" at 4n (the discrete model VC is the limit of) within 0.5 mm.
+TEST(LoadedSceneDraws, S1193VcLandsOnTheStableBranchOfVcrefKept) {
+  const LoadedScene ls = random_scene(193);
+  ASSERT_EQ(ls.disks, 10);
+  const Solution vc = solve_cold(ModelKind::VC, ls.scene);
+  ASSERT_TRUE(vc.converged()) << vc.summary.message;
+  EXPECT_EQ(vc.stability.status, StabilityStatus::Stable) << vc.stability.method;
+  Scene kept = ls.scene;
+  kept.effects.disk_normal_force = DiskNormalForce::Kept;
+  for (Segment& seg : kept.robot.segments) seg.disks = 40;
+  const Solution ref = solve_cold(ModelKind::VCref, kept);
+  ASSERT_TRUE(ref.converged()) << ref.summary.message;
+  EXPECT_EQ(ref.stability.status, StabilityStatus::Stable);
+  EXPECT_LT(tip_distance(vc, ref), 0.005);
+}
+
+// s1246 (n = 5, E x 0.43, L^2 |F| / EI 11.4): past VC's fold at 51.7 % the first Newton attempt
+// lands on a branch 97 mm away. The [0, s] family called it stable (margin 0.018) and VC ended
+// there, unstable at full load and 85 % of L from VCref's tip; the fixed-free test rejects that
+// landing as unstable and VC lands on the branch of VCref, PRB and CCsub (VCref at 4n: within
+// 0.5 mm).
+TEST(LoadedSceneDraws, S1246VcRejectsTheSaddleLandingOfItsSnap) {
+  const LoadedScene ls = random_scene(246);
+  ASSERT_EQ(ls.disks, 5);
+  const Solution vc = solve_cold(ModelKind::VC, ls.scene);
+  ASSERT_TRUE(vc.converged()) << vc.summary.message;
+  EXPECT_EQ(vc.stability.status, StabilityStatus::Stable) << vc.stability.method;
+  EXPECT_NE(vc.summary.message.find("1 snap landings rejected (last: an unstable equilibrium"), std::string::npos)
+      << vc.summary.message;
+  Scene fine = ls.scene;
+  for (Segment& seg : fine.robot.segments) seg.disks = 20;
+  const Solution ref = solve_cold(ModelKind::VCref, fine);
+  ASSERT_TRUE(ref.converged()) << ref.summary.message;
+  EXPECT_LT(tip_distance(vc, ref), 0.005);
+}
+
 // The generator is what the table says: the draws keep their ranges, a quarter is drawn past the
 // tendon limit, and a seed gives the same scene twice.
 TEST(LoadedSceneGenerator, DrawsWithinTheStatedRanges) {

@@ -291,18 +291,21 @@ void end(const VcWorkspace::Impl& W, const FrictionRod& rod, const double* y, co
 }  // namespace
 
 template <class Rod>
-bool shoot(VcWorkspace::Impl& W, bvp::Integrator& integ, Rod& rod, const Vec6& x, Vec6& res, const Record* rec) {
+bool shoot(VcWorkspace::Impl& W, bvp::Integrator& integ, Rod& rod, const Vec6& x, Vec6& res, const Record* rec,
+           const Frame* base) {
   double* y = W.y.data();
   const int dim = rod.dimension();
   for (int i = 0; i < dim; ++i) y[i] = 0.0;
-  cosserat::rotation(y) = Mat3::Identity();
+  const Frame f0 = base ? *base : Frame{};
+  cosserat::position(y) = f0.p;
+  cosserat::rotation(y) = f0.R;
   cosserat::force(y) = x.head<3>();
   cosserat::moment(y) = x.tail<3>();
   begin(W, rod, y);
   const TendonRouting& rt = W.model->routing();
   if (rec) {
-    rec->frames->push_back(Frame{});
-    rec->samples->push_back(BackboneSample{0.0, Frame{}, x.head<3>(), x.tail<3>()});
+    rec->frames->push_back(f0);
+    rec->samples->push_back(BackboneSample{0.0, f0, x.head<3>(), x.tail<3>()});
   }
   const int nseg = static_cast<int>(W.segments.size());
   const int K = W.tendon_count;
@@ -333,9 +336,10 @@ bool shoot(VcWorkspace::Impl& W, bvp::Integrator& integ, Rod& rod, const Vec6& x
   return res.allFinite();
 }
 
-template bool shoot<TendonRod>(VcWorkspace::Impl&, bvp::Integrator&, TendonRod&, const Vec6&, Vec6&, const Record*);
+template bool shoot<TendonRod>(VcWorkspace::Impl&, bvp::Integrator&, TendonRod&, const Vec6&, Vec6&, const Record*,
+                               const Frame*);
 template bool shoot<FrictionRod>(VcWorkspace::Impl&, bvp::Integrator&, FrictionRod&, const Vec6&, Vec6&,
-                                 const Record*);
+                                 const Record*, const Frame*);
 
 bool shoot(VcWorkspace::Impl& W, bool final, const Vec6& x, Vec6& res, const Record* rec) {
   bvp::Integrator& integ = final ? W.final_pass_integrator() : *W.shot_integrator;

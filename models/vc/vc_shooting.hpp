@@ -87,9 +87,11 @@ bool kink_fixed_point(const KinkMap<double>& G, double force_scale, double momen
 template <typename T>
 bool disk_point_loads(const VcWorkspace::Impl& W, int i, int j, T* y);
 /// One shot from the base with unknowns x = (n(0), m(0)) through W.y: false if the integration
-/// failed, else `res` = (n(L+) - F_tip, m(L+) - M_tip). Rod: TendonRod, or FrictionRod.
+/// failed, else `res` = (n(L+) - F_tip, m(L+) - M_tip). Rod: TendonRod, or FrictionRod. `base`:
+/// the base frame to start from (null: p = 0, R = I, the clamp; the stability test perturbs it).
 template <class Rod>
-bool shoot(VcWorkspace::Impl& W, bvp::Integrator& integrator, Rod& rod, const Vec6& x, Vec6& res, const Record* rec);
+bool shoot(VcWorkspace::Impl& W, bvp::Integrator& integrator, Rod& rod, const Vec6& x, Vec6& res, const Record* rec,
+           const Frame* base = nullptr);
 /// `shoot` with the shot (or, `final`, the final pass's) integrator and rod, with friction or not.
 bool shoot(VcWorkspace::Impl& W, bool final, const Vec6& x, Vec6& res, const Record* rec);
 /// Whether the exact Jacobian of `shoot` is available: with RK4 (the derivative of the discrete
