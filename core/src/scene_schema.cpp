@@ -406,9 +406,10 @@ const Schema<SolverOptions>& solver_schema() {
       boolean_field("stability", &S::stability,
                     {"", nullptr,
                      "decide the stability of every converged answer (`stability` in the JSON output): VC by "
-                     "the conjugate-point test, CCsub and PRB by the reduced stiffness; VCref and CC: "
-                     "undetermined",
-                     "VC, CCsub, PRB"}),
+                     "the conjugate-point test of the fixed-free rod, CCsub and PRB by the eigenvalues of "
+                     "their reduced stiffness, VCref by its reduced stiffness in the disk poses; CC: "
+                     "undetermined (docs/models.md, \"Stability\")",
+                     "VC, CCsub, PRB, VCref"}),
       boolean_field("reuse_jacobian", &S::reuse_jacobian,
                     {"", nullptr,
                      "a warm start may begin from the previous solve's Jacobian (modified Newton): faster "

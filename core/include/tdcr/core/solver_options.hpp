@@ -82,9 +82,10 @@ struct SolverOptions {
   /// Longest RK4 step of a coarse loading path (m; coarse_loading_path).
   static constexpr double kCoarsePathRk4MaxStep = 4e-3;
   /// Decide the stability of every converged answer (Solution::stability): VC by the
-  /// conjugate-point test (6 extra shots), CCsub and PRB by the eigenvalues of the reduced
-  /// stiffness (one extra Jacobian); VCref and CC report "undetermined". Off by default until the
-  /// check reuses the solve's own Jacobian (today it costs up to one Newton iteration per solve).
+  /// conjugate-point test of the fixed-free rod (12 extra shots), CCsub and PRB by the eigenvalues
+  /// of the reduced stiffness (one extra Jacobian), VCref by its reduced stiffness in the disk
+  /// poses; CC reports "undetermined" (docs/models.md, "Stability"). Off by default: it costs more
+  /// than a warm solve (VC on the paper robot, n = 10: 52.5 us without, 726 us with).
   bool stability = false;
   /// Differential kinematics of every converged answer (Solution::tip_jacobian,
   /// Solution::tip_compliance) by the implicit function theorem on the converged system: no
