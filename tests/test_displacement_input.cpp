@@ -92,8 +92,13 @@ class DisplacementInput : public ::testing::TestWithParam<ModelKind> {
       }
     }
     EXPECT_GT(back.summary.iterations, 0);
+    // Unknowns: the model's with every driven tendon acting, and one tension per driven tendon.
+    std::vector<double> acting = t;
+    for (std::size_t k = 0; k < t.size(); ++k)
+      if (kinds[k] == K::Displacements) acting[k] = 1.0;
+    const Solution all = solve(*m, *ws, tension_input(acting, loads));
     EXPECT_EQ(back.summary.unknowns,
-              ref.summary.unknowns + static_cast<int>(std::count(kinds.begin(), kinds.end(), K::Displacements)));
+              all.summary.unknowns + static_cast<int>(std::count(kinds.begin(), kinds.end(), K::Displacements)));
   }
 };
 
@@ -131,12 +136,12 @@ TEST_P(DisplacementInput, SlackTendon) {
   EXPECT_TRUE(sol.tendon_slack[1]);
   EXPECT_FALSE(sol.tendon_slack[0]);
   EXPECT_LT(max_relative(sol.tensions, ref.tensions), 1e-8);
-  EXPECT_NE(sol.summary.message.find("slack tendons: 1"), std::string::npos) << sol.summary.message;
+  EXPECT_NE(sol.summary.message.find("slack: 1"), std::string::npos) << sol.summary.message;
   // The slack tendon's path pulls more than commanded (it has length to spare).
   EXPECT_NEAR(sol.tendon_displacements[1], in.actuation.values[1] + 1e-3, 1e-9);
 }
 
-// A warm start from a previous displacement solve starts at its tensions: fewer tension solves.
+// A warm start from a previous displacement solve starts at its unknowns and tensions.
 TEST_P(DisplacementInput, WarmStart) {
   const auto m = model(robot());
   const auto ws = m->make_workspace();
@@ -149,8 +154,11 @@ TEST_P(DisplacementInput, WarmStart) {
   in.actuation.values[0] += 1e-5;
   const Solution warm = solve(*m, *ws, in, SolverOptions(), &cold);
   ASSERT_TRUE(warm.converged()) << warm.summary.message;
-  EXPECT_LE(warm.summary.iterations, cold.summary.iterations);
-  EXPECT_LE(warm.summary.residual_evaluations, cold.summary.residual_evaluations);
+  // From the previous answer and its Jacobian (modified Newton): no new Jacobian (the costly
+  // part, a Jacobian of the tensions' border is one residual per driven tendon and one pull per
+  // unknown), at most one more iteration than the cold solve took with fresh ones.
+  EXPECT_LT(warm.summary.jacobian_evaluations, cold.summary.jacobian_evaluations);
+  EXPECT_LE(warm.summary.iterations, cold.summary.iterations + 1);
   EXPECT_GT(warm.tensions[0], cold.tensions[0]);
 }
 
@@ -184,7 +192,12 @@ TEST_P(DisplacementInput, ElasticTendons) {
   const auto ws2 = soft->make_workspace();
   const Solution s2 = solve(*soft, *ws2, in);
   ASSERT_TRUE(s2.converged()) << s2.summary.message;
-  const double stretch = in.actuation.values[0] - s2.tendon_displacements[0];
+  // The motor sets the commanded pull: the path's pull plus the tendon's stretch. The path's
+  // pull at these tensions is the inextensible tendon's (a tension solve of the rigid model).
+  EXPECT_NEAR(s2.tendon_displacements[0], in.actuation.values[0], 1e-12);
+  const Solution path = solve(*rigid, *ws0, tension_input(s2.tensions));
+  ASSERT_TRUE(path.converged());
+  const double stretch = in.actuation.values[0] - path.tendon_displacements[0];
   EXPECT_GT(stretch, 1e-4);
   EXPECT_NEAR(s2.tensions[0], 200.0 / l_free * stretch, 1e-8 * s2.tensions[0]);
   EXPECT_LT(s2.tensions[0], 0.9 * ref.tensions[0]);
@@ -218,7 +231,15 @@ TEST_P(DisplacementInput, ElasticHelicalTendonStretchesOverTheHelixLength) {
   ASSERT_TRUE(s.converged()) << s.summary.message;
   const double L = r.total_length(), rho = std::hypot(t.x, t.y), rate = 2.0 * 3.14159265358979323846 * 0.25 / L;
   const double l_free = L * std::hypot(1.0, rho * rate);
-  const double stretch = in.actuation.values[2] - s.tendon_displacements[2];
+  // The path's pull at the answer's tensions: the same routing, inextensible.
+  Robot rigid_robot = r;
+  rigid_robot.segments[1].tendons[0].stiffness.reset();
+  const auto rigid = model(rigid_robot);
+  const auto ws_rigid = rigid->make_workspace();
+  const Solution path = solve(*rigid, *ws_rigid, tension_input(s.tensions));
+  ASSERT_TRUE(path.converged());
+  EXPECT_NEAR(s.tendon_displacements[2], in.actuation.values[2], 1e-12);
+  const double stretch = in.actuation.values[2] - path.tendon_displacements[2];
   EXPECT_GT(stretch, 1e-4);
   EXPECT_NEAR(s.tensions[2], 200.0 / l_free * stretch, 1e-8 * s.tensions[2]);
   EXPECT_GT(std::abs(s.tensions[2] - 200.0 / L * stretch), 1e-3 * s.tensions[2]);  // the helix length matters
@@ -231,11 +252,12 @@ TEST_P(DisplacementInput, NonConvergenceIsReported) {
   const Solution ref = solve(*m, *ws, tension_input({2.0, 0.5, 1.5, 0.3}, tip_load()));
   SolverOptions o;
   o.max_iterations = 1;
+  o.continuation = false;
   const Solution sol = solve(*m, *ws, from_solution(ref, kMixed, tip_load()), o);
   EXPECT_FALSE(sol.converged());
-  EXPECT_LE(sol.summary.iterations, 1);
+  EXPECT_GT(sol.summary.iterations, 0);
   EXPECT_GT(sol.summary.residual_norm, o.function_tolerance);
-  EXPECT_NE(sol.summary.message.find("displacement input failed"), std::string::npos) << sol.summary.message;
+  EXPECT_NE(sol.summary.message.find("displacement input"), std::string::npos) << sol.summary.message;
 }
 
 INSTANTIATE_TEST_SUITE_P(StaticModels, DisplacementInput,

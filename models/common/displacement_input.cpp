@@ -1,19 +1,16 @@
-// Displacement input by an outer semismooth Newton over tensions (displacement_input.hpp).
+// Displacement input: the driven tendons' tensions as unknowns of the model's own residual
+// system (displacement_input.hpp, docs/models.md "Displacement input").
 #include "common/displacement_input.hpp"
 
-#include "physics/tendon_path.hpp"
-
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <string>
 #include <vector>
 
-#include <Eigen/Core>
 #include <Eigen/LU>
-#include <Eigen/QR>
 
+#include "physics/tendon_path.hpp"
 #include "tdcr/models/model_registry.hpp"
 #include "tdcr/models/static_model.hpp"
 
@@ -21,146 +18,8 @@ namespace tdcr::detail {
 
 namespace {
 
-// Relative singular value below which the generalized Jacobian is taken as rank deficient (above
-// the forward differences' noise; VC's co-contraction, set by the axial stiffness EA, is 7e-4 on
-// the paper robot).
-constexpr double kRankThreshold = 1e-6;
-// Forward-difference increment of dd/dT relative to max(T, T_s).
-constexpr double kDifferenceStep = 1e-4;
-
-// A tendon given by displacement, with its scales.
-struct DrivenTendon {
-  int index = 0;         // global tendon index
-  double delta = 0.0;    // commanded displacement (m), positive when pulled
-  double r = 1.0;        // lever arm |r_k| (m): the displacement scale (d ~ r x bending angle)
-  double t_scale = 1.0;  // EI / (r L_free) (N): the tension that bends its path by about 1 rad
-  double c = 0.0;        // EA / L_free (N/m) of an elastic tendon; 0: inextensible
-};
-
-std::vector<DrivenTendon> driven_tendons(const StaticModel& model, const ModelInput& input) {
-  const Robot& robot = model.robot();
-  const double EI = robot.backbone.effective_stiffness().EI;
-  std::vector<DrivenTendon> out;
-  int k = 0;
-  for (const Segment& seg : robot.segments) {
-    for (const TendonSpec& spec : seg.tendons) {
-      if (input.actuation.kind_of(static_cast<std::size_t>(k)) == Actuation::Kind::Displacements) {
-        const RoutedTendon& rt = model.routing().tendons[static_cast<std::size_t>(k)];
-        // Free length: the tendon's path from the base to its end disk on the straight robot
-        // (its routing included: a helix is longer than the segments it spans).
-        const double l_free = physics::rest_length(rt, 0.0, model.routing().disk_s[static_cast<std::size_t>(rt.end_disk)]);
-        DrivenTendon t;
-        t.index = k;
-        t.delta = input.actuation.values[static_cast<std::size_t>(k)];
-        t.r = rt.r.norm();
-        t.t_scale = EI / (t.r * l_free);
-        t.c = spec.stiffness ? *spec.stiffness / l_free : 0.0;
-        out.push_back(t);
-      }
-      ++k;
-    }
-  }
-  return out;
-}
-
-// The outer problem: tensions T of the driven tendons -> their displacements d(T) by tension solves.
-class Outer {
- public:
-  Outer(const StaticModel& model, ModelWorkspace& ws, const ModelInput& input, const SolverOptions& options)
-      : model_(model), ws_(ws), tendons_(driven_tendons(model, input)), inner_(input), options_(options) {
-    inner_.actuation.kind = Actuation::Kind::Tensions;
-    inner_.actuation.kinds.clear();
-    options_.differential_kinematics = false;  // with respect to tensions: not this input's
-    options_.stability = false;                // only at the answer
-    // The outer Jacobian differences warm-started tension solves: their answers must not depend
-    // on the workspace's last solves (SolverOptions::reuse_jacobian, extrapolate_warm_starts),
-    // only on T.
-    options_.reuse_jacobian = false;
-    options_.extrapolate_warm_starts = false;
-  }
-
-  int size() const { return static_cast<int>(tendons_.size()); }
-  const DrivenTendon& tendon(int i) const { return tendons_[static_cast<std::size_t>(i)]; }
-
-  // Tension solve at T (warm-started from `warm` if given) into `sol`, its driven displacements into d.
-  bool evaluate(const Eigen::VectorXd& T, const Solution* warm, Solution& sol, Eigen::VectorXd& d) {
-    for (int i = 0; i < size(); ++i) inner_.actuation.values[static_cast<std::size_t>(tendon(i).index)] = T[i];
-    sol = tdcr::solve(model_, ws_, inner_, options_, warm);
-    ++solves;
-    newton_iterations += sol.summary.iterations;
-    if (!sol.converged() || sol.tendon_displacements.size() != inner_.actuation.values.size()) return false;
-    d.resize(size());
-    for (int i = 0; i < size(); ++i) d[i] = sol.tendon_displacements[static_cast<std::size_t>(tendon(i).index)];
-    return d.allFinite();
-  }
-
-  // (d_k + T_k / c_k - delta_k) / r_k: the path's pull plus the tendon's stretch minus the
-  // commanded pull, >= 0 (an elastic tendon's T = c max(0, delta - d) in complementarity form).
-  double gap(int i, const Eigen::VectorXd& T, const Eigen::VectorXd& d) const {
-    const DrivenTendon& t = tendon(i);
-    return (d[i] + (t.c > 0.0 ? T[i] / t.c : 0.0) - t.delta) / t.r;
-  }
-
-  // True if tendon i is slack at (T, d): the tension branch of its complementarity is active.
-  bool slack(int i, const Eigen::VectorXd& T, const Eigen::VectorXd& d) const {
-    return T[i] / tendon(i).t_scale <= gap(i, T, d);
-  }
-
-  // phi(T, d) (dimensionless, see the header).
-  Eigen::VectorXd phi(const Eigen::VectorXd& T, const Eigen::VectorXd& d) const {
-    Eigen::VectorXd f(size());
-    for (int i = 0; i < size(); ++i) f[i] = std::min(T[i] / tendon(i).t_scale, gap(i, T, d));
-    return f;
-  }
-
-  // An element of the generalized Jacobian of phi, with B = dd/dT.
-  Eigen::MatrixXd jacobian(const Eigen::VectorXd& T, const Eigen::VectorXd& d, const Eigen::MatrixXd& B) const {
-    Eigen::MatrixXd G = Eigen::MatrixXd::Zero(size(), size());
-    for (int i = 0; i < size(); ++i) {
-      const DrivenTendon& t = tendon(i);
-      if (slack(i, T, d)) {
-        G(i, i) = 1.0 / t.t_scale;
-      } else {
-        G.row(i) = B.row(i) / t.r;
-        if (t.c > 0.0) G(i, i) += 1.0 / (t.c * t.r);
-      }
-    }
-    return G;
-  }
-
-  // dd/dT by forward differences of tension solves warm-started from `at` (increments keep T >= 0).
-  bool difference_jacobian(const Eigen::VectorXd& T, const Eigen::VectorXd& d, const Solution& at,
-                           Eigen::MatrixXd& B) {
-    ++jacobians;
-    B.resize(size(), size());
-    Solution s;
-    Eigen::VectorXd Tp = T, dp;
-    for (int j = 0; j < size(); ++j) {
-      const double h = kDifferenceStep * std::max(T[j], tendon(j).t_scale);
-      Tp[j] = T[j] + h;
-      if (!evaluate(Tp, &at, s, dp)) return false;
-      B.col(j) = (dp - d) / h;
-      Tp[j] = T[j];
-    }
-    return B.allFinite();
-  }
-
-  int solves = 0, newton_iterations = 0, jacobians = 0;
-
- private:
-  const StaticModel& model_;
-  ModelWorkspace& ws_;
-  std::vector<DrivenTendon> tendons_;
-  ModelInput inner_;
-  SolverOptions options_;
-};
-
-std::string slack_list(const std::vector<bool>& slack) {
-  std::string s;
-  for (std::size_t k = 0; k < slack.size(); ++k)
-    if (slack[k]) s += (s.empty() ? "" : ", ") + std::to_string(k);
-  return s.empty() ? "none" : s;
-}
+// A taut tendon whose tension falls below this (in units of T_s) after a solve pushes: slack.
+constexpr double kPushes = 0.0;
 
 }  // namespace
 
@@ -169,115 +28,450 @@ bool needs_displacement_solve(const StaticModel& model, const ModelInput& input)
          model_info(model.kind()).capabilities.displacement_statics;
 }
 
-Solution solve_displacement_input(const StaticModel& model, ModelWorkspace& workspace, const ModelInput& input,
-                                  const SolverOptions& options, const Solution* warm_start) {
-  const auto t0 = std::chrono::steady_clock::now();
-  Outer P(model, workspace, input, options);
-  const int n = P.size();
-  const double tol = options.function_tolerance;
-  const int max_outer = std::min(options.max_iterations, 50);
+ModelInput tension_form(const ModelInput& input, const std::vector<double>& placeholder) {
+  ModelInput out = input;
+  out.actuation.kind = Actuation::Kind::Tensions;
+  out.actuation.kinds.clear();
+  for (std::size_t k = 0; k < out.actuation.values.size(); ++k)
+    if (input.actuation.kind_of(k) == Actuation::Kind::Displacements) out.actuation.values[k] = placeholder[k];
+  return out;
+}
 
-  // Start: a warm start's tensions (then its unknowns), else zero tension.
-  Eigen::VectorXd T = Eigen::VectorXd::Zero(n), d, dn, Tn;
-  if (warm_start && warm_start->tensions.size() == input.actuation.values.size())
-    for (int i = 0; i < n; ++i)
-      T[i] = std::max(0.0, warm_start->tensions[static_cast<std::size_t>(P.tendon(i).index)]);
-  Solution cur, trial;
-  bool ok = P.evaluate(T, warm_start, cur, d);
-  if (!ok && warm_start) ok = P.evaluate(T = Eigen::VectorXd::Zero(n), nullptr, cur, d);
+DisplacementProblem::DisplacementProblem() = default;
+DisplacementProblem::~DisplacementProblem() = default;
 
-  Eigen::MatrixXd B;
-  Eigen::VectorXd f = ok ? P.phi(T, d) : Eigen::VectorXd::Constant(n, INFINITY);
-  std::string stop = ok ? "" : "the tension solve at the starting tensions failed";
-  bool fresh = ok && P.difference_jacobian(T, d, cur, B);  // B = dd/dT evaluated, not updated
-  if (ok && !fresh) stop = "a tension solve of the difference Jacobian failed";
-  int iterations = 0;
-  while (stop.empty() && f.lpNorm<Eigen::Infinity>() > tol) {
-    if (iterations == max_outer) {
-      stop = "iteration limit";
-      break;
+std::vector<double> DisplacementProblem::placeholders(const StaticModel& model, const ModelInput& input) {
+  const double EI = model.robot().backbone.effective_stiffness().EI;
+  const TendonRouting& routing = model.routing();
+  std::vector<double> p(input.actuation.values.size(), 0.0);
+  for (std::size_t k = 0; k < p.size(); ++k) {
+    if (input.actuation.kind_of(k) != Actuation::Kind::Displacements) continue;
+    const RoutedTendon& t = routing.tendons[k];
+    p[k] = EI / (t.r.norm() * physics::rest_length(t, 0.0, routing.disk_s[static_cast<std::size_t>(t.end_disk)]));
+  }
+  return p;
+}
+
+void DisplacementProblem::bind(const StaticModel& model, ModelProblem& inner, const ModelInput& input,
+                               const Solution* warm) {
+  model_ = &model;
+  inner_ = &inner;
+  sys_ = inner.system();
+  n_ = sys_->size();
+  const Robot& robot = model.robot();
+  const TendonRouting& routing = model.routing();
+  const double EI = robot.backbone.effective_stiffness().EI;
+  index_.clear();
+  std::vector<double> stiffness;
+  {
+    std::size_t k = 0;
+    for (const Segment& seg : robot.segments)
+      for (const TendonSpec& spec : seg.tendons) {
+        if (input.actuation.kind_of(k) == Actuation::Kind::Displacements) {
+          index_.push_back(static_cast<int>(k));
+          stiffness.push_back(spec.stiffness ? *spec.stiffness : 0.0);
+        }
+        ++k;
+      }
+  }
+  k_ = static_cast<int>(index_.size());
+  delta_.resize(k_);
+  r_.resize(k_);
+  ts_.resize(k_);
+  stretch_.resize(k_);
+  std::vector<double> l_free(static_cast<std::size_t>(k_));
+  for (int i = 0; i < k_; ++i) {
+    const RoutedTendon& t = routing.tendons[static_cast<std::size_t>(index_[i])];
+    delta_[i] = input.actuation.values[static_cast<std::size_t>(index_[i])];
+    r_[i] = t.r.norm();
+    l_free[i] = physics::rest_length(t, 0.0, routing.disk_s[static_cast<std::size_t>(t.end_disk)]);
+    ts_[i] = EI / (r_[i] * l_free[i]);
+    stretch_[i] = stiffness[i] > 0.0 ? l_free[i] / stiffness[i] : 0.0;
+  }
+  // Linear beam theory on the straight robot: tendon j's tension bends every segment it spans
+  // with curvature T_j r_j / EI towards it, which pulls tendon i by (r_i . r_j) / EI per length
+  // they share (the base offsets: a guess, exact for straight routing).
+  linear_.resize(k_, k_);
+  for (int i = 0; i < k_; ++i)
+    for (int j = 0; j < k_; ++j) {
+      const RoutedTendon& a = routing.tendons[static_cast<std::size_t>(index_[i])];
+      const RoutedTendon& b = routing.tendons[static_cast<std::size_t>(index_[j])];
+      const double shared = routing.disk_s[static_cast<std::size_t>(std::min(a.end_disk, b.end_disk))];
+      linear_(i, j) = a.r.dot(b.r) * shared / EI * ts_[j] / r_[i];
     }
-    ++iterations;
-    // Minimum-norm step: with an inextensible backbone (CCsub, PRB) two antagonistic tendons of
-    // a segment pulled together leave the shape as it is, so G is singular along co-contraction.
-    Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(P.jacobian(T, d, B));
-    cod.setThreshold(kRankThreshold);
-    Eigen::VectorXd step = cod.solve(-f);
-    // At most one tension scale per step (about 1 rad of bending): the first difference Jacobian
-    // at zero tension can be far from the secant (PRB's straight subsegments).
-    double largest = 0.0;
-    for (int i = 0; i < n; ++i) largest = std::max(largest, std::abs(step[i]) / P.tendon(i).t_scale);
-    if (largest > 1.0) step /= largest;
-    std::vector<bool> tension_branch(static_cast<std::size_t>(n));
-    for (int i = 0; i < n; ++i) tension_branch[static_cast<std::size_t>(i)] = P.slack(i, T, d);
-    // Backtracking on max |phi|; T stays >= 0 (a tendon cannot push).
-    const double norm = f.lpNorm<Eigen::Infinity>();
-    bool accepted = false;
-    double alpha = 1.0;
-    for (int ls = 0; ls < 8 && step.allFinite(); ++ls, alpha *= 0.5) {
-      Tn = (T + alpha * step).cwiseMax(0.0);
-      for (int i = 0; i < n; ++i)  // on the tension branch the step is -T_i exactly (no round-off)
-        if (tension_branch[i]) Tn[i] = (1.0 - alpha) * T[i];
-      if (P.evaluate(Tn, &cur, trial, dn) && P.phi(Tn, dn).lpNorm<Eigen::Infinity>() < (1.0 - 1e-4 * alpha) * norm) {
-        accepted = true;
-        break;
+  // Which tendons start taut: a warm start's tensioned ones, else the pulled ones.
+  taut_.assign(static_cast<std::size_t>(k_), 0);
+  Eigen::VectorXd tau;
+  const bool from_warm = warm && tensions_of(*warm, tau);
+  for (int i = 0; i < k_; ++i) taut_[static_cast<std::size_t>(i)] = from_warm ? tau[i] > 0.0 : delta_[i] > 0.0;
+  lambda_ = 1.0;
+  T_.setZero(k_);
+  applied_valid_ = false;
+
+  // The Jacobian's pattern: the inner one bordered by k full rows (the pulls read every unknown
+  // that moves a disk) and k full columns (a tension loads every disk it passes).
+  const bvp::SparsityPattern* p = sys_->sparsity();
+  sparse_ = p != nullptr;
+  if (sparse_) {
+    const int m = n_ + k_;
+    pattern_.rows = pattern_.cols = m;
+    pattern_.col_ptr.assign(static_cast<std::size_t>(m) + 1, 0);
+    pattern_.row_idx.clear();
+    inner_pos_.resize(static_cast<std::size_t>(p->nnz()));
+    for (int j = 0; j < n_; ++j) {
+      for (int q = p->col_ptr[j]; q < p->col_ptr[j + 1]; ++q) {
+        inner_pos_[static_cast<std::size_t>(q)] = static_cast<int>(pattern_.row_idx.size());
+        pattern_.row_idx.push_back(p->row_idx[q]);
+      }
+      for (int i = 0; i < k_; ++i) pattern_.row_idx.push_back(n_ + i);
+      pattern_.col_ptr[static_cast<std::size_t>(j) + 1] = static_cast<int>(pattern_.row_idx.size());
+    }
+    for (int j = n_; j < m; ++j) {
+      for (int i = 0; i < m; ++i) pattern_.row_idx.push_back(i);
+      pattern_.col_ptr[static_cast<std::size_t>(j) + 1] = static_cast<int>(pattern_.row_idx.size());
+    }
+    inner_values_.assign(static_cast<std::size_t>(p->nnz()), 0.0);
+    fd_.prepare(*p);
+  } else {
+    fd_.prepare(n_);
+  }
+}
+
+bool DisplacementProblem::tensions_of(const Solution& s, Eigen::VectorXd& tau) const {
+  tau.resize(k_);
+  for (int i = 0; i < k_; ++i) {
+    const auto k = static_cast<std::size_t>(index_[i]);
+    if (k >= s.tensions.size() || !std::isfinite(s.tensions[k])) return false;
+    tau[i] = s.tensions[k] / ts_[i];
+  }
+  return true;
+}
+
+bool DisplacementProblem::apply(const Eigen::Ref<const Eigen::VectorXd>& tau) {
+  for (int i = 0; i < k_; ++i) T_[i] = taut_[static_cast<std::size_t>(i)] ? ts_[i] * tau[i] : 0.0;
+  if (applied_valid_ && T_ == applied_) return true;
+  if (!inner_->set_driven_tensions(index_, T_)) return false;
+  applied_ = T_;
+  applied_valid_ = true;
+  return true;
+}
+
+void DisplacementProblem::driven_rows(const Eigen::Ref<const Eigen::VectorXd>& tau,
+                                      Eigen::Ref<Eigen::VectorXd> r) const {
+  for (int i = 0; i < k_; ++i)
+    r[i] = taut_[static_cast<std::size_t>(i)]
+               ? (pulls_[index_[i]] + stretch_[i] * ts_[i] * tau[i] - lambda_ * delta_[i]) / r_[i]
+               : tau[i];
+}
+
+bool DisplacementProblem::residual(const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> f) {
+  if (!apply(y.tail(k_))) return false;
+  if (!sys_->residual(y.head(n_), f.head(n_))) return false;
+  x_ = y.head(n_);
+  if (!inner_->tendon_pulls(x_, pulls_)) return false;
+  driven_rows(y.tail(k_), f.tail(k_));
+  return f.allFinite();
+}
+
+bool DisplacementProblem::final_residual(const Eigen::VectorXd& y, Eigen::Ref<Eigen::VectorXd> f) {
+  if (!apply(y.tail(k_))) return false;
+  x_ = y.head(n_);
+  if (!inner_->final_residual(x_, f.head(n_))) return false;
+  if (!inner_->tendon_pulls(x_, pulls_)) return false;
+  driven_rows(y.tail(k_), f.tail(k_));
+  return f.allFinite();
+}
+
+bool DisplacementProblem::border(const Eigen::Ref<const Eigen::VectorXd>& y, const Eigen::Ref<const Eigen::VectorXd>& f) {
+  const double noise = sys_->relative_noise();
+  Eigen::VectorXd tau = y.tail(k_);
+  x_ = y.head(n_);
+  if (!apply(tau) || !inner_->tendon_pulls(x_, pulls_)) return false;
+  const Eigen::VectorXd p0 = pulls_;
+  // dF/dtau and d rows / dtau: one inner residual and one pull per taut tendon (the pulls move
+  // with the tensions at fixed unknowns where the unknowns do not fix the shape: VC's base wrench).
+  col_.setZero(n_, k_);
+  tt_.setZero(k_, k_);
+  fp_.resize(n_);
+  for (int j = 0; j < k_; ++j) {
+    if (taut_[static_cast<std::size_t>(j)]) {  // a slack tendon's tension is held at zero
+      const double h = bvp::finite_difference_step(tau[j], 1.0, noise);
+      tau[j] += h;
+      if (!apply(tau) || !sys_->residual(x_, fp_) || !inner_->tendon_pulls(x_, dp_)) return false;
+      col_.col(j) = (fp_ - f.head(n_)) / h;
+      for (int i = 0; i < k_; ++i)
+        if (taut_[static_cast<std::size_t>(i)]) tt_(i, j) = (dp_[index_[i]] - p0[index_[i]]) / (h * r_[i]);
+      tau[j] = y[n_ + j];
+    }
+    tt_(j, j) += taut_[static_cast<std::size_t>(j)] ? stretch_[j] * ts_[j] / r_[j] : 1.0;
+  }
+  if (!apply(tau)) return false;
+  // d rows / dx: the pulls with each unknown moved.
+  Eigen::VectorXd uscale(n_);
+  sys_->unknown_scale(uscale);
+  row_.setZero(k_, n_);
+  for (int j = 0; j < n_; ++j) {
+    const double h = bvp::finite_difference_step(x_[j], uscale[j], noise);
+    const double xj = x_[j];
+    x_[j] = xj + h;
+    const bool ok = inner_->tendon_pulls(x_, dp_);
+    x_[j] = xj;
+    if (!ok) return false;
+    for (int i = 0; i < k_; ++i)
+      if (taut_[static_cast<std::size_t>(i)]) row_(i, j) = (dp_[index_[i]] - p0[index_[i]]) / (h * r_[i]);
+  }
+  pulls_ = p0;
+  return col_.allFinite() && row_.allFinite() && tt_.allFinite();
+}
+
+bool DisplacementProblem::jacobian(const Eigen::Ref<const Eigen::VectorXd>& y, const Eigen::Ref<const Eigen::VectorXd>& f,
+                                   Eigen::Ref<Eigen::MatrixXd> J) {
+  if (!apply(y.tail(k_))) return false;
+  x_ = y.head(n_);
+  J.setZero();
+  auto Jxx = J.topLeftCorner(n_, n_);
+  const bool ok = sys_->has_jacobian() ? bvp::analytic_jacobian_dense(*sys_, x_, f.head(n_), Jxx)
+                                       : bvp::finite_difference_jacobian(*sys_, x_, f.head(n_), Jxx, &fd_);
+  if (!ok || !border(y, f)) return false;
+  J.topRightCorner(n_, k_) = col_;
+  J.bottomLeftCorner(k_, n_) = row_;
+  J.bottomRightCorner(k_, k_) = tt_;
+  return J.allFinite();
+}
+
+bool DisplacementProblem::sparse_jacobian(const Eigen::Ref<const Eigen::VectorXd>& y,
+                                          const Eigen::Ref<const Eigen::VectorXd>& f, double* values) {
+  if (!apply(y.tail(k_))) return false;
+  x_ = y.head(n_);
+  const bvp::SparsityPattern& p = *sys_->sparsity();
+  const bool ok = sys_->has_jacobian()
+                      ? sys_->sparse_jacobian(x_, f.head(n_), inner_values_.data())
+                      : bvp::finite_difference_sparse_jacobian(*sys_, x_, f.head(n_), p, inner_values_.data(), &fd_);
+  if (!ok || !border(y, f)) return false;
+  std::fill(values, values + pattern_.nnz(), 0.0);
+  for (std::size_t q = 0; q < inner_pos_.size(); ++q) values[inner_pos_[q]] = inner_values_[q];
+  for (int j = 0; j < n_; ++j) {
+    const int end = pattern_.col_ptr[static_cast<std::size_t>(j) + 1];
+    for (int i = 0; i < k_; ++i) values[end - k_ + i] = row_(i, j);
+  }
+  for (int j = 0; j < k_; ++j) {
+    const int start = pattern_.col_ptr[static_cast<std::size_t>(n_ + j)];
+    for (int i = 0; i < n_; ++i) values[start + i] = col_(i, j);
+    for (int i = 0; i < k_; ++i) values[start + n_ + i] = tt_(i, j);
+  }
+  return true;
+}
+
+void DisplacementProblem::residual_scale(Eigen::Ref<Eigen::VectorXd> s) const {
+  sys_->residual_scale(s.head(n_));
+  s.tail(k_).setOnes();
+}
+
+void DisplacementProblem::unknown_scale(Eigen::Ref<Eigen::VectorXd> s) const {
+  sys_->unknown_scale(s.head(n_));
+  s.tail(k_).setOnes();
+}
+
+double DisplacementProblem::relative_noise() const { return sys_->relative_noise(); }
+
+void DisplacementProblem::set_parameter(double lambda) {
+  lambda_ = lambda;
+  sys_->set_parameter(lambda);
+}
+
+void DisplacementProblem::accept_step(Eigen::VectorXd& y) {
+  x_ = y.head(n_);
+  sys_->accept_step(x_);
+  y.head(n_) = x_;
+}
+
+bool DisplacementProblem::recenter(Eigen::Ref<Eigen::VectorXd> y) { return sys_->recenter(y.head(n_)); }
+
+void DisplacementProblem::adjust(bvp::NewtonOptions& options) const {
+  inner_->adjust(options);
+  if (!sparse_ && options.linear_solver == LinearSolverKind::SparseKLU) options.linear_solver = LinearSolverKind::Dense;
+}
+
+void DisplacementProblem::adjust_warm(bvp::NewtonOptions& options, bool same_input) const {
+  constexpr int kReuseSetupCalls = 10;
+  constexpr int kStaleAfterIterations = 3;
+  options.reuse_jacobian = same_input || last_iterations_ <= kStaleAfterIterations;
+  options.max_setup_calls = kReuseSetupCalls;
+}
+
+void DisplacementProblem::linear_guess(Eigen::VectorXd& tau) const {
+  // The linear complementarity problem w = L tau - delta / r >= 0, tau >= 0, tau . w = 0, by
+  // moving tendons between the taut set (w = 0, minimum-norm) and the slack set (tau = 0).
+  tau.setZero(k_);
+  if (k_ == 0) return;
+  Eigen::VectorXd q(k_);
+  for (int i = 0; i < k_; ++i) q[i] = delta_[i] / r_[i];
+  std::vector<char> taut(static_cast<std::size_t>(k_));
+  for (int i = 0; i < k_; ++i) taut[static_cast<std::size_t>(i)] = q[i] > 0.0;
+  for (int pass = 0; pass < 2 * k_ + 2; ++pass) {
+    std::vector<int> A;
+    for (int i = 0; i < k_; ++i)
+      if (taut[static_cast<std::size_t>(i)]) A.push_back(i);
+    tau.setZero();
+    if (!A.empty()) {
+      Eigen::MatrixXd M(A.size(), A.size());
+      Eigen::VectorXd b(A.size());
+      for (std::size_t a = 0; a < A.size(); ++a) {
+        b[static_cast<Eigen::Index>(a)] = q[A[a]];
+        for (std::size_t c = 0; c < A.size(); ++c)
+          M(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(c)) = linear_(A[a], A[c]);
+      }
+      const Eigen::VectorXd t = M.completeOrthogonalDecomposition().solve(b);
+      for (std::size_t a = 0; a < A.size(); ++a) tau[A[a]] = t[static_cast<Eigen::Index>(a)];
+    }
+    const Eigen::VectorXd w = linear_ * tau - q;
+    bool moved = false;
+    for (int i = 0; i < k_; ++i) {
+      char& ti = taut[static_cast<std::size_t>(i)];
+      if ((ti && tau[i] < 0.0) || (!ti && w[i] < -1e-12)) {
+        ti = !ti;
+        moved = true;
       }
     }
-    if (!accepted) {
-      if (fresh) {
-        stop = "no decrease of the displacement residual along the Newton direction";
-        break;
-      }
-      fresh = P.difference_jacobian(T, d, cur, B);  // Broyden's B went stale: difference again
-      if (!fresh) stop = "a tension solve of the difference Jacobian failed";
-      continue;
+    if (!moved) break;
+  }
+  tau = tau.cwiseMax(0.0);
+}
+
+void DisplacementProblem::cold_guess(Eigen::VectorXd& y) {
+  Eigen::VectorXd tau;
+  linear_guess(tau);
+  for (int i = 0; i < k_; ++i) taut_[static_cast<std::size_t>(i)] = tau[i] > 0.0 || delta_[i] > 0.0;
+  apply(tau);
+  inner_->cold_guess(x_);
+  y.resize(n_ + k_);
+  y.head(n_) = x_;
+  y.tail(k_) = tau;
+}
+
+bool DisplacementProblem::alternative_guess(Eigen::VectorXd& y) {
+  Eigen::VectorXd tau;
+  linear_guess(tau);
+  apply(tau);
+  if (!inner_->alternative_guess(x_)) return false;
+  y.resize(n_ + k_);
+  y.head(n_) = x_;
+  y.tail(k_) = tau;
+  return true;
+}
+
+void DisplacementProblem::rest_state(Eigen::VectorXd& y) {
+  // The straight robot, with every driven tension 0. A model whose rest state has a gauge set by
+  // the loads (PRB's bending planes of straight subsegments) takes it from the tensions the
+  // commanded pulls will need (the linear guess): zero tensions leave it undecided, and the
+  // loading path's Jacobian singular.
+  Eigen::VectorXd tau;
+  linear_guess(tau);
+  apply(tau);
+  inner_->rest_state(x_);
+  y.resize(n_ + k_);
+  y.head(n_) = x_;
+  y.tail(k_).setZero();
+}
+
+bool DisplacementProblem::warm_guess(const Solution& previous, Eigen::VectorXd& y) {
+  Eigen::VectorXd tau;
+  if (!tensions_of(previous, tau)) return false;
+  for (int i = 0; i < k_; ++i) taut_[static_cast<std::size_t>(i)] = tau[i] > 0.0 || (previous.tendon_slack.empty() && delta_[i] > 0.0);
+  apply(tau);
+  if (!inner_->warm_guess(previous, x_)) return false;
+  y.resize(n_ + k_);
+  y.head(n_) = x_;
+  y.tail(k_) = tau;
+  return true;
+}
+
+void DisplacementProblem::extract(const Eigen::VectorXd& y, bool evaluated, Solution& solution) {
+  last_iterations_ = solution.summary.iterations;
+  Eigen::VectorXd tau = y.tail(k_);
+  for (int i = 0; i < k_; ++i)
+    if (!taut_[static_cast<std::size_t>(i)]) tau[i] = 0.0;
+  apply(tau);
+  x_ = y.head(n_);
+  solution.unknowns = x_;
+  inner_->extract(x_, evaluated, solution);
+  solution.tendon_slack.assign(solution.tensions.size(), false);
+  std::string slack;
+  for (int i = 0; i < k_; ++i) {
+    const auto k = static_cast<std::size_t>(index_[i]);
+    if (k >= solution.tensions.size()) continue;
+    const bool taut = taut_[static_cast<std::size_t>(i)];
+    solution.tensions[k] = taut ? ts_[i] * tau[i] : 0.0;
+    solution.tendon_slack[k] = !taut;
+    if (!taut) slack += (slack.empty() ? "" : ", ") + std::to_string(k);
+  }
+  solution.summary.message += "; displacement input: " + std::to_string(k_) + " driven tendons, slack: " +
+                              (slack.empty() ? "none" : slack);
+}
+
+Stability DisplacementProblem::stability(const Eigen::VectorXd& y, double load_factor) {
+  if (!apply(y.tail(k_))) return Stability{};
+  Stability s = inner_->stability(y.head(n_), load_factor);
+  // The test holds the driven tensions fixed. A tendon held at its length instead only adds a
+  // constraint, which cannot make a stable equilibrium unstable, but can stabilise an unstable
+  // one: stable stays stable, unstable is not decided.
+  if (s.status == StabilityStatus::Unstable) {
+    s.status = StabilityStatus::Undetermined;
+    s.method += " (unstable at the answer's tensions held fixed; the displacement-driven tendons, held at their "
+                "lengths, may stabilise it: not decided)";
+  } else if (s.status == StabilityStatus::Stable) {
+    s.method += " (at the answer's tensions held fixed; the displacement-driven tendons held at their lengths can "
+                "only stiffen it)";
+  }
+  return s;
+}
+
+bool DisplacementProblem::infeasibility(const Eigen::VectorXd& y, double threshold, std::string& why) {
+  if (!apply(y.tail(k_))) return false;
+  return inner_->infeasibility(y.head(n_), threshold, why);
+}
+
+bool DisplacementProblem::update_constraints(const Eigen::VectorXd& y) {
+  // At the converged answer: the pulls of its unknowns.
+  if (!apply(y.tail(k_))) return false;
+  x_ = y.head(n_);
+  if (!inner_->tendon_pulls(x_, pulls_)) return false;
+  bool changed = false;
+  for (int i = 0; i < k_; ++i) {
+    char& t = taut_[static_cast<std::size_t>(i)];
+    const double gap = (pulls_[index_[i]] - lambda_ * delta_[i]) / r_[i];
+    if (t && y[n_ + i] < kPushes) {
+      t = 0;  // it would push: slack
+      changed = true;
+    } else if (!t && gap < -1e-12) {
+      t = 1;  // its path is too long for it: taut
+      changed = true;
     }
-    // Broyden update of dd/dT with the accepted step.
-    const Eigen::VectorXd s = Tn - T, y = dn - d;
-    if (s.squaredNorm() > 0.0) B += (y - B * s) * s.transpose() / s.squaredNorm();
-    fresh = false;
-    T = Tn;
-    d = dn;
-    std::swap(cur, trial);
-    f = P.phi(T, d);
   }
+  if (changed) applied_valid_ = false;
+  return changed;
+}
 
-  const double mismatch = f.lpNorm<Eigen::Infinity>();
-  const bool converged = stop.empty() && cur.converged() && mismatch <= tol;
-  if (converged && options.stability) {
-    SolverOptions so = options;
-    so.differential_kinematics = false;
-    ModelInput in = input;
-    in.actuation.kind = Actuation::Kind::Tensions;
-    in.actuation.kinds.clear();
-    in.actuation.values = cur.tensions;
-    cur.stability = tdcr::solve(model, workspace, in, so, &cur).stability;
-  }
-  cur.tendon_slack.assign(input.actuation.values.size(), false);
-  if (ok)
-    for (int i = 0; i < n; ++i) cur.tendon_slack[static_cast<std::size_t>(P.tendon(i).index)] = P.slack(i, T, d);
+}  // namespace tdcr::detail
 
-  SolverSummary& sum = cur.summary;
-  const std::string inner = sum.message;
-  if (!converged)
-    sum.termination = !cur.converged()                ? sum.termination
-                      : stop == "iteration limit"     ? TerminationType::MaxIterations
-                                                      : TerminationType::NoConvergence;
-  char buf[256];
-  std::snprintf(buf, sizeof buf,
-                "displacement input%s: %d outer iterations, max |phi| = %.3g (tolerance %.3g), %d tension solves "
-                "(%d Newton iterations, %d difference Jacobians); slack tendons: ",
-                converged ? "" : " failed", iterations, mismatch, tol, P.solves, P.newton_iterations,
-                P.jacobians);
-  sum.message = buf + slack_list(cur.tendon_slack) + (stop.empty() ? "" : "; stopped: " + stop) +
-                "; last tension solve: " + inner;
-  sum.iterations = iterations;
-  sum.residual_evaluations = P.solves;
-  sum.jacobian_evaluations = P.jacobians;
-  sum.residual_norm = std::max(sum.residual_norm, mismatch);
-  sum.unknowns += n;
-  sum.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  return cur;
+namespace tdcr {
+
+detail::DisplacementProblem& ModelWorkspace::displacement_problem() {
+  if (!displacement_) displacement_ = std::make_unique<detail::DisplacementProblem>();
+  return *displacement_;
+}
+
+}  // namespace tdcr
+
+namespace tdcr::detail {
+
+ModelProblem& bind_displacement_problem(const StaticModel& model, ModelWorkspace& workspace, const ModelInput& input,
+                                        const SolverOptions& options, const Solution* warm_start) {
+  const ModelInput tensions = tension_form(input, DisplacementProblem::placeholders(model, input));
+  ModelProblem& inner = model.bind(workspace, tensions, options);
+  DisplacementProblem& D = workspace.displacement_problem();
+  D.bind(model, inner, input, warm_start);
+  return D;
 }
 
 }  // namespace tdcr::detail

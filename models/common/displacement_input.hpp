@@ -1,11 +1,20 @@
-// Private to models/: displacement input for the static models (CCsub, PRB, VC, VCref) by an
-// outer semismooth Newton over the tensions of the displacement-driven tendons, each residual
-// evaluation a warm-started tension solve (docs/models.md, "Displacement input").
+// Private to models/: displacement input for the static models (CCsub, PRB, VC, VCref). The
+// tensions of the displacement-driven tendons join the model's unknowns and their displacement
+// conditions join its residuals: one residual system that the solve driver solves as it solves
+// a tension input (direct solve, loading path from rest, final check, stability, infeasibility);
+// docs/models.md, "Displacement input".
 #pragma once
 
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "common/model_problem.hpp"
+#include "tdcr/bvp/continuation.hpp"
+#include "tdcr/bvp/newton_solver.hpp"
 #include "tdcr/core/scene.hpp"
-#include "tdcr/core/solution.hpp"
-#include "tdcr/core/solver_options.hpp"
 
 namespace tdcr {
 class StaticModel;
@@ -14,19 +23,124 @@ class ModelWorkspace;
 
 namespace tdcr::detail {
 
-/// True if `model` solves `input` with the outer solve: some tendon is given by displacement
-/// and the model has statics (ModelCapabilities::displacement_statics; CC maps displacements
-/// kinematically instead).
+/// True if `model` solves `input` with the tensions of displacement-driven tendons as unknowns:
+/// some tendon is given by displacement and the model has statics
+/// (ModelCapabilities::displacement_statics; CC maps displacements kinematically instead).
 bool needs_displacement_solve(const StaticModel& model, const ModelInput& input);
 
-/// The answer to `input` with the tensions of its displacement-driven tendons as unknowns:
-/// phi_k = min(T_k / T_s, (d_k(T) + T_k / c_k - delta_k) / r_k) = 0, d_k the pull of the
-/// tendon's path, c_k = EA_k / L_k of an elastic tendon (TendonSpec::stiffness; infinite:
-/// inextensible). A tendon cannot push: slack (T_k = 0) when its path at T_k = 0 pulls more than
-/// commanded; an elastic tendon's T_k = c_k max(0, delta_k - d_k) in complementarity form.
-/// Converged only if the last tension solve converged and max |phi_k| <=
-/// options.function_tolerance. A warm start's tensions start the iteration.
-Solution solve_displacement_input(const StaticModel& model, ModelWorkspace& workspace, const ModelInput& input,
-                                  const SolverOptions& options, const Solution* warm_start);
+/// The tension form of a displacement input: every tendon by tension, the given tensions kept,
+/// each displacement-driven tendon at `placeholder` (N; > 0 so that the model binds it as
+/// acting: its actual tension is set per evaluation, ModelProblem::set_driven_tensions).
+ModelInput tension_form(const ModelInput& input, const std::vector<double>& placeholder);
+
+/// The model's problem with the driven tendons' tensions as unknowns.
+///
+/// Unknowns y = (x, tau): the model's unknowns x at the driven tensions T = T_s tau (T_s,k =
+/// EI / (r_k L_k), the tension that bends tendon k's path by about one radian; r_k its lever arm,
+/// L_k its free length from the base to its end disk). Residuals: the model's F(x; T, lambda),
+/// then one row per driven tendon k:
+///   taut:  (d_k(x) + T_k L_k / EA_k - lambda delta_k) / r_k = 0   (its path plus its stretch is
+///          the commanded pull; 1 / EA_k = 0 for an inextensible tendon);
+///   slack: tau_k = 0                                               (no tension).
+/// d_k(x) is the pull of its path (ModelProblem::tendon_pulls), delta_k the commanded pull. The
+/// parameter lambda is the model's load factor (loads and given tensions) and scales the
+/// commanded pulls too, so lambda = 0 is the robot at rest with every tension 0: the driver's
+/// loading path from rest is the motors and the loads brought on together. Which tendons are
+/// taut is decided by complementarity (a tendon cannot push, T >= 0, and cannot be longer than
+/// its path, d + T L / EA >= delta, one of them tight): after a converged solve
+/// update_constraints() moves a taut tendon with T < 0 to slack and a slack one whose path is
+/// too long to taut, and the driver solves again.
+class DisplacementProblem final : public ModelProblem, public bvp::ParameterizedSystem {
+ public:
+  DisplacementProblem();
+  ~DisplacementProblem() override;
+
+  /// Bind to `inner`, the model's problem bound to tension_form(input, placeholders) (see
+  /// placeholders()), for `input`'s commanded displacements. `warm`: a previous Solution whose
+  /// tensions decide which tendons start taut (else: the pulled ones, delta > 0).
+  void bind(const StaticModel& model, ModelProblem& inner, const ModelInput& input, const Solution* warm);
+  /// The tensions to bind the driven tendons with (their T_s), by global index (0 elsewhere).
+  static std::vector<double> placeholders(const StaticModel& model, const ModelInput& input);
+
+  // --- bvp::ParameterizedSystem ---
+  int size() const override { return n_ + k_; }
+  bool residual(const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> f) override;
+  const bvp::SparsityPattern* sparsity() const override { return sparse_ ? &pattern_ : nullptr; }
+  bool has_jacobian() const override { return true; }
+  bool jacobian_is_forward_difference() const override { return true; }
+  bool jacobian(const Eigen::Ref<const Eigen::VectorXd>& y, const Eigen::Ref<const Eigen::VectorXd>& f,
+                Eigen::Ref<Eigen::MatrixXd> J) override;
+  bool sparse_jacobian(const Eigen::Ref<const Eigen::VectorXd>& y, const Eigen::Ref<const Eigen::VectorXd>& f,
+                       double* values) override;
+  void residual_scale(Eigen::Ref<Eigen::VectorXd> s) const override;
+  void unknown_scale(Eigen::Ref<Eigen::VectorXd> s) const override;
+  double relative_noise() const override;
+  void set_parameter(double lambda) override;
+  void accept_step(Eigen::VectorXd& y) override;
+  bool recenter(Eigen::Ref<Eigen::VectorXd> y) override;
+
+  // --- ModelProblem ---
+  bvp::ParameterizedSystem* system() override { return this; }
+  bvp::NewtonSolver& newton() override { return newton_; }
+  void adjust(bvp::NewtonOptions& options) const override;
+  void adjust_warm(bvp::NewtonOptions& options, bool same_input) const override;
+  ColdStart cold_start() const override { return inner_->cold_start(); }
+  bool determinant_marks_bifurcations() const override { return inner_->determinant_marks_bifurcations(); }
+  void cold_guess(Eigen::VectorXd& y) override;
+  bool alternative_guess(Eigen::VectorXd& y) override;
+  void rest_state(Eigen::VectorXd& y) override;
+  bool warm_guess(const Solution& previous, Eigen::VectorXd& y) override;
+  bool final_residual(const Eigen::VectorXd& y, Eigen::Ref<Eigen::VectorXd> f) override;
+  void extract(const Eigen::VectorXd& y, bool evaluated, Solution& solution) override;
+  Stability stability(const Eigen::VectorXd& y, double load_factor) override;
+  bool infeasibility(const Eigen::VectorXd& y, double threshold, std::string& why) override;
+  bool differentiable(const Eigen::VectorXd& y) const override { return inner_->differentiable(y.head(n_)); }
+  double max_curvature() const override { return inner_->max_curvature(); }
+  std::string integrator_name() const override { return inner_->integrator_name(); }
+  bool update_constraints(const Eigen::VectorXd& y) override;
+
+  /// Which driven tendons are taut (by driven index) and their global indices.
+  const std::vector<char>& taut() const { return taut_; }
+  const std::vector<int>& driven() const { return index_; }
+
+ private:
+  // Set the inner problem's driven tensions to T_s tau (if they changed).
+  bool apply(const Eigen::Ref<const Eigen::VectorXd>& tau);
+  // The rows of the driven tendons at y (pulls d_ evaluated at x): into r.
+  void driven_rows(const Eigen::Ref<const Eigen::VectorXd>& tau, Eigen::Ref<Eigen::VectorXd> r) const;
+  // The border of the Jacobian at y (f = F(y)): col_, row_, tt_.
+  bool border(const Eigen::Ref<const Eigen::VectorXd>& y, const Eigen::Ref<const Eigen::VectorXd>& f);
+  // T_s-scaled tensions of a Solution's driven tendons (false if it has none).
+  bool tensions_of(const Solution& s, Eigen::VectorXd& tau) const;
+  // The minimum-norm non-negative tensions that meet the commanded pulls on the straight robot
+  // in linear beam theory: the cold guess's tensions.
+  void linear_guess(Eigen::VectorXd& tau) const;
+
+  ModelProblem* inner_ = nullptr;
+  bvp::ParameterizedSystem* sys_ = nullptr;
+  const StaticModel* model_ = nullptr;
+  int n_ = 0, k_ = 0;
+  std::vector<int> index_;           // global index of driven tendon i
+  Eigen::VectorXd delta_, r_, ts_, stretch_;  // commanded pull, lever arm, T_s, L / EA (0: inextensible)
+  Eigen::MatrixXd linear_;           // linear beam theory's d pull_i / d tau_j on the straight robot
+  std::vector<char> taut_;
+  double lambda_ = 1.0;
+  Eigen::VectorXd T_, applied_;      // tensions to apply, last applied
+  bool applied_valid_ = false;
+  Eigen::VectorXd pulls_;            // every tendon's pull at the last evaluated x
+  Eigen::VectorXd x_, f_, fp_, dp_;  // scratch
+  Eigen::MatrixXd col_, row_, tt_;  // Jacobian border: dF/dtau, d rows/dx, d rows/dtau
+  std::vector<double> inner_values_;
+  bvp::FiniteDifferenceWorkspace fd_;
+  bool sparse_ = false;
+  bvp::SparsityPattern pattern_;
+  std::vector<int> inner_pos_;       // bordered CSC position of every inner entry
+  bvp::NewtonSolver newton_;
+  int last_iterations_ = 0;
+};
+
+/// bind_displacement_problem (declared in tdcr/models/static_model.hpp, a friend of the model
+/// and the workspace): the workspace's DisplacementProblem, bound for `input` on the model's
+/// problem bound to its tension form (made on first use; belongs to the workspace, reused after).
 
 }  // namespace tdcr::detail

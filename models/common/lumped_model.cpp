@@ -482,6 +482,24 @@ void LumpedProblem::extract(const Eigen::VectorXd& y, bool evaluated, Solution& 
   solution.unknowns = std::move(full);
 }
 
+bool LumpedProblem::set_driven_tensions(const std::vector<int>& index, const Eigen::VectorXd& T) {
+  for (std::size_t i = 0; i < index.size(); ++i)
+    loads_.loads.set_fixed_tension(index[i], T[static_cast<Eigen::Index>(i)]);
+  loads_.set_load_factor(loads_.loads.load_factor());
+  return true;
+}
+
+bool LumpedProblem::tendon_pulls(const Eigen::VectorXd& y, Eigen::VectorXd& d) {
+  gather_x(y, x_);
+  pull_x_.setZero(body_.per_subsegment * body_.N);
+  pull_x_.head(x_.size()) = x_;
+  pull_frames_.resize(body_.N + 1);
+  body_.compute_frames(pull_x_.data(), active(), pull_frames_.data());
+  const std::vector<double> pulls = tendon::chord_displacements(pull_frames_, body_.statics.routing(), convention_);
+  d = Eigen::Map<const Eigen::VectorXd>(pulls.data(), static_cast<Eigen::Index>(pulls.size()));
+  return d.allFinite();
+}
+
 }  // namespace detail
 
 LumpedModel::LumpedModel(const Robot& robot, const Effects& effects, LumpedFormulation formulation,

@@ -107,6 +107,9 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   void rest_state(Eigen::VectorXd& y) final;
   bool warm_guess(const Solution& previous, Eigen::VectorXd& y) final;
   void extract(const Eigen::VectorXd& y, bool evaluated, Solution& solution) final;
+  bool set_driven_tensions(const std::vector<int>& index, const Eigen::VectorXd& T) final;
+  /// The disk frames of the x_j and the chords between them (no residual).
+  bool tendon_pulls(const Eigen::VectorXd& y, Eigen::VectorXd& d) final;
   /// Eigenvalues of the Jacobian of the constitutive residuals in the x_j (lumped_stability.cpp).
   Stability stability(const Eigen::VectorXd& y, double load_factor) final;
 
@@ -249,6 +252,8 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   std::vector<int> groups_;  // column colouring of pattern_ (banded formulation; tests)
   int pattern_J_ = -1;
   Eigen::VectorXd x_;  // x_j of the loaded subsegments (guesses, lifting)
+  Eigen::VectorXd pull_x_;          // tendon_pulls(): the x_j of all N subsegments
+  std::vector<Frame> pull_frames_;  // and their disk frames
   std::vector<Vec3> disk_f_, disk_m_;  // disk loads of the banded residual
   int last_iterations_ = 0;  // Newton iterations of the last solve (adjust_warm)
   Eigen::VectorXd jac_x_, jac_f_, jac_uscale_;  // jacobian(): perturbed x, its residual, scales

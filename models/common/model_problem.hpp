@@ -7,6 +7,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -111,6 +112,39 @@ class ModelProblem {
     if (!evaluated || scratch.disk_frames.empty()) return false;
     tip = scratch.disk_frames.back();
     return tip.p.allFinite() && tip.R.allFinite();
+  }
+  /// Displacement input (displacement_input.hpp): tendon index[i] pulls with T[i] (N) at every
+  /// load factor from now on until the next bind (its tension is an unknown of the solve, not a
+  /// load that continuation scales). The problem must have been bound with these tendons
+  /// tensioned (what the bind derives from which tendons act, e.g. active subsegments or the
+  /// Jacobian pattern, then includes them; their bound values only set scales). False if the
+  /// model cannot take it (then it takes no displacement input).
+  virtual bool set_driven_tensions(const std::vector<int>& index, const Eigen::VectorXd& T) {
+    (void)index;
+    (void)T;
+    return false;
+  }
+  /// The pull of every tendon (global order; Solution::tendon_displacements in the bound
+  /// input's displacement convention, without an elastic tendon's stretch) at unknowns x and the
+  /// system's current parameter. Default: final_residual() and extract() into a scratch
+  /// Solution, a full output pass; models override it with what the pulls need (the disk frames).
+  virtual bool tendon_pulls(const Eigen::VectorXd& x, Eigen::VectorXd& d) {
+    Eigen::VectorXd f(x.size());
+    Solution scratch;
+    const bool evaluated = system() ? final_residual(x, f) : true;
+    if (!evaluated) return false;
+    extract(x, evaluated, scratch);
+    d = Eigen::Map<const Eigen::VectorXd>(scratch.tendon_displacements.data(),
+                                          static_cast<Eigen::Index>(scratch.tendon_displacements.size()));
+    return d.size() > 0 && d.allFinite();
+  }
+  /// After a converged solve at unknowns x (system parameter 1): true if the problem changed
+  /// its own equations because x violates a condition they assume (displacement input: a taut
+  /// tendon that would push, or a slack one whose path became too long), so that the driver
+  /// solves again from x. Default: never.
+  virtual bool update_constraints(const Eigen::VectorXd& x) {
+    (void)x;
+    return false;
   }
   /// The tip position of tip_pose().
   bool tip_position(const Eigen::VectorXd& x, Vec3& tip) {

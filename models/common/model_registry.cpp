@@ -1,6 +1,8 @@
 // The registry table, the StaticModel and ModelWorkspace base classes, and the scene front door.
 #include "tdcr/models/model_registry.hpp"
 
+#include "common/displacement_input.hpp"
+
 #include <algorithm>
 #include <cctype>
 #include <cstdio>

@@ -15,6 +15,7 @@
 #include "physics/load_case.hpp"
 #include "tdcr/core/error.hpp"
 #include "tdcr/models/static_model.hpp"
+#include "tdcr/models/tendon_physics.hpp"
 
 namespace tdcr {
 
@@ -195,6 +196,38 @@ double solve_on_loading_path(const StaticModel& model, const ModelInput& input, 
     why += "; then the input path from the warm start failed: " + sum.message;
   }
   return detail::follow_loading_path(P, model.routing(), sys, x, nopt, options, sum, sol.path_events, cold.first_step, why).parameter;
+}
+
+// After a converged solve the problem may change its equations (ModelProblem::update_constraints:
+// displacement input's slack and taut tendons); each change is solved again from the answer, and
+// if that fails, along the loading path from rest. At most this many changes.
+constexpr int kMaxConstraintUpdates = 8;
+
+void add_work(const SolverSummary& from, SolverSummary& to);
+
+void update_constraints(const StaticModel& model, const ModelInput& input, detail::ModelProblem& P,
+                        bvp::ParameterizedSystem& sys, const bvp::NewtonOptions& nopt, const SolverOptions& options,
+                        const detail::Rebind& rebind, Eigen::VectorXd& x, double& reached, Solution& sol) {
+  SolverSummary& sum = sol.summary;
+  int updates = 0;
+  while (sum.converged() && P.update_constraints(x)) {
+    if (++updates > kMaxConstraintUpdates) {
+      sum.termination = TerminationType::NoConvergence;
+      sum.message += "; the constraints changed more than " + std::to_string(kMaxConstraintUpdates) +
+                     " times (slack and taut tendons cycling)";
+      return;
+    }
+    const SolverSummary before = sum;
+    const Eigen::VectorXd answer = x;
+    sys.set_parameter(1.0);
+    direct_solve(P, sys, nopt, true, options.reuse_jacobian, x, sum);
+    add_work(before, sum);
+    if (sum.converged()) continue;
+    x = answer;
+    reached = solve_on_loading_path(model, input, P, sys, nopt, options, nullptr, rebind, x, nullptr, sol);
+    add_work(before, sum);
+  }
+  if (updates > 0) sum.message += "; constraints changed " + std::to_string(updates) + " times";
 }
 
 // --- The secant predictor of warm starts (SolverOptions::extrapolate_warm_starts). ---
@@ -395,10 +428,14 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
     throw InputError("workspace", "a workspace of another model",
                      "use the workspace made by this model's make_workspace() (" + model.name() + ")");
   if (warm_start) check_warm_start(model, *warm_start);
-  if (detail::needs_displacement_solve(model, input))  // tensions of displaced tendons as unknowns
-    return detail::solve_displacement_input(model, workspace, input, options, warm_start);
+  // Displacement input: the driven tendons' tensions join the model's unknowns.
+  const bool displacement = detail::needs_displacement_solve(model, input);
+  const auto bind_problem = [&]() -> detail::ModelProblem& {
+    return displacement ? detail::bind_displacement_problem(model, workspace, input, options, warm_start)
+                        : model.bind(workspace, input, options);
+  };
 
-  detail::ModelProblem* bound = &model.bind(workspace, input, options);
+  detail::ModelProblem* bound = &bind_problem();
   std::string coarse_failure;  // why a coarse loading path was not the answer ("" if none was tried)
   SolverSummary coarse_work;   // the work it took (counted in this solve's summary)
   if (bound->system() &&
@@ -410,7 +447,7 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
       return answer;
     }
     coarse_work = answer.summary;
-    bound = &model.bind(workspace, input, options);  // back to the requested mesh: the whole path there
+    bound = &bind_problem();  // back to the requested mesh: the whole path there
   }
   detail::ModelProblem& P = *bound;
   Solution sol;
@@ -441,7 +478,7 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
       input_vector(warm_start->tensions, warm_start->loads, from);
       if (options.reuse_jacobian) P.adjust_warm(nopt, from == u);
       unpredicted = x;
-      if (options.extrapolate_warm_starts) predicted = extrapolate(history, from, u, x);
+      if (options.extrapolate_warm_starts && !displacement) predicted = extrapolate(history, from, u, x);
     }
     if (sys->size() == 0) {
       x.resize(0);
@@ -454,6 +491,7 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
       };
       reached = solve_on_loading_path(model, input, P, *sys, nopt, options, warm ? warm_start : nullptr, rebind, x,
                                       predicted ? &unpredicted : nullptr, sol);
+      update_constraints(model, input, P, *sys, nopt, options, rebind, x, reached, sol);
     }
     if (sum.converged()) reached = 1.0;
     const bool evaluated = final_check(P, *sys, x, reached, options.function_tolerance, sum);
@@ -470,11 +508,13 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
     }
     if (sum.converged() && options.stability) sol.stability = P.stability(x, 1.0);
   }
-  if (sol.converged() && options.differential_kinematics)
+  if (sol.converged() && options.differential_kinematics && !displacement)
     add_differential_kinematics(
         model, [&](const ModelInput& in) -> detail::ModelProblem& { return model.bind(workspace, in, options); },
         input, options.function_tolerance, x, sol);
   if (sol.tensions.empty() && input.actuation.kind == Actuation::Kind::Tensions) sol.tensions = input.actuation.values;
+  // The displacement a motor sets: the path's pull plus an elastic tendon's stretch.
+  tendon::add_elastic_stretch(model.robot(), model.routing(), sol.tensions, sol.tendon_displacements);
   sol.loads = input.loads;
   if (!sum.converged() && reached < 1.0) name_infeasibility(P, model.routing(), sol.unknowns, reached, sol);
   physics::check_geometry(model.robot(), model.routing(), sol, P.max_curvature());

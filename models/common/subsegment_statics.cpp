@@ -9,8 +9,7 @@ namespace tdcr::detail {
 
 void SubsegmentLoads::set_load_factor(double lambda) {
   loads.set_load_factor(lambda);
-  const std::vector<double>& full = loads.full_tensions();
-  for (std::size_t k = 0; k < full.size(); ++k) tensions[k] = lambda * full[k];
+  for (std::size_t k = 0; k < tensions.size(); ++k) tensions[k] = loads.tension(static_cast<int>(k));
 }
 
 SubsegmentStatics::SubsegmentStatics(const Robot& robot, const TendonRouting& routing, const Effects& effects)

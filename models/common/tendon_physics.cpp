@@ -126,4 +126,18 @@ std::vector<double> chord_displacements(const std::vector<Frame>& frames, const 
   return d;
 }
 
+void add_elastic_stretch(const Robot& robot, const TendonRouting& routing, const std::vector<double>& tensions,
+                         std::vector<double>& displacements) {
+  if (tensions.size() != routing.tendons.size() || displacements.size() != routing.tendons.size()) return;
+  std::size_t k = 0;
+  for (const Segment& seg : robot.segments)
+    for (const TendonSpec& spec : seg.tendons) {
+      if (spec.stiffness && tensions[k] != 0.0) {
+        const RoutedTendon& t = routing.tendons[k];
+        displacements[k] += tensions[k] * physics::rest_length(t, 0.0, routing.disk_s[t.end_disk]) / *spec.stiffness;
+      }
+      ++k;
+    }
+}
+
 }  // namespace tdcr::tendon

@@ -9,6 +9,8 @@ void LoadCase::bind(const Robot& robot, const TendonRouting& routing, const Mode
   const int N = routing.disk_count() - 1;
   const bool tensions = input.actuation.kind == Actuation::Kind::Tensions;
   tensions_.assign(robot.tendon_count(), 0.0);
+  fixed_.clear();
+  fixed_tension_.clear();
   if (tensions) std::copy(input.actuation.values.begin(), input.actuation.values.end(), tensions_.begin());
   any_tension_ = std::any_of(tensions_.begin(), tensions_.end(), [](double t) { return t != 0.0; });
   tip_force_ = input.loads.tip_force;

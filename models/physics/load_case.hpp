@@ -22,10 +22,23 @@ class LoadCase {
   void set_load_factor(double lambda);
   double load_factor() const { return lambda_; }
 
-  /// Tension of tendon k at the current load factor (N).
-  double tension(int k) const { return lambda_ * tensions_[k]; }
-  /// Tensions at full load (N), by global index.
+  /// Tension of tendon k at the current load factor (N); a fixed tension is not scaled.
+  double tension(int k) const { return fixed_.empty() || !fixed_[k] ? lambda_ * tensions_[k] : fixed_tension_[k]; }
+  /// Tensions at full load (N), by global index, as bound (a fixed tension's bound value: the
+  /// models decide at bind which tendons act from these).
   const std::vector<double>& full_tensions() const { return tensions_; }
+  /// Displacement input: tendon k pulls with `T` (N) at every load factor from now on (its
+  /// tension is an unknown of the displacement solve, not a load that continuation scales) until
+  /// the next bind. The model that owns this LoadCase must refresh what it derived from the
+  /// tensions (ModelProblem::set_driven_tensions).
+  void set_fixed_tension(int k, double T) {
+    if (fixed_.empty()) {
+      fixed_.assign(tensions_.size(), 0);
+      fixed_tension_.assign(tensions_.size(), 0.0);
+    }
+    fixed_[k] = 1;
+    fixed_tension_[k] = T;
+  }
   /// Tip force and moment at the current load factor (N, N m; base frame).
   Vec3 tip_force() const { return lambda_ * tip_force_; }
   Vec3 tip_moment() const { return lambda_ * tip_moment_; }
@@ -56,6 +69,8 @@ class LoadCase {
 
  private:
   std::vector<double> tensions_;
+  std::vector<char> fixed_;             // set_fixed_tension (empty: none)
+  std::vector<double> fixed_tension_;
   std::vector<Vec3> disk_weight_;  // index 0..N (0 unused)
   Vec3 tip_force_ = Vec3::Zero(), tip_moment_ = Vec3::Zero();
   Vec3 backbone_weight_ = Vec3::Zero(), total_weight_ = Vec3::Zero();

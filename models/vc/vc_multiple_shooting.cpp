@@ -137,6 +137,10 @@ class MultipleShooting final : public detail::ModelProblem {
       cosserat::rotation(y) = Mat3::Identity();
     }
   }
+  bool set_driven_tensions(const std::vector<int>& index, const Eigen::VectorXd& T) override {
+    vc::set_driven_tensions(W_, index, T);
+    return true;
+  }
   bool warm_guess(const Solution& previous, Eigen::VectorXd& x) override {
     const int N = intervals_.intervals();
     if (previous.unknowns.size() == static_cast<long>(N) * kDim && previous.unknowns.allFinite()) {

@@ -164,6 +164,13 @@ void bind_input(VcWorkspace::Impl& W, const VcModel& model, const ModelInput& in
   W.multiple.reset();
 }
 
+void set_driven_tensions(VcWorkspace::Impl& W, const std::vector<int>& index, const Eigen::VectorXd& T) {
+  for (std::size_t i = 0; i < index.size(); ++i) W.loads.set_fixed_tension(index[i], T[static_cast<Eigen::Index>(i)]);
+  const double lambda = W.lambda;
+  W.lambda = NAN;  // set_load_factor then refreshes the segments' tensions at the same factor
+  set_load_factor(W, lambda);
+}
+
 void set_load_factor(VcWorkspace::Impl& W, double lambda) {
   if (W.lambda == lambda) return;
   W.loads.set_load_factor(lambda);

@@ -75,6 +75,9 @@ struct Record {
 void bind_input(VcWorkspace::Impl& W, const VcModel& model, const ModelInput& input, const SolverOptions& options);
 /// Scale every load by `lambda` (allocation-free).
 void set_load_factor(VcWorkspace::Impl& W, double lambda);
+/// Displacement input: tendon index[i] pulls with T[i] (N) at every load factor until the next
+/// bind (detail::ModelProblem::set_driven_tensions); the bound input must tension them.
+void set_driven_tensions(VcWorkspace::Impl& W, const std::vector<int>& index, const Eigen::VectorXd& T);
 /// The wrench z just distal of a disk's kinks, z = G(z) (vc_shooting.cpp says how); z in: the
 /// start. False, z unspecified, if it did not settle (no root near the start: a continuing
 /// tendon at its geometric limit just distal of the disk). force_scale and moment_scale scale

@@ -119,6 +119,19 @@ class SingleShooting final : public detail::ModelProblem {
     }
     return false;
   }
+  bool set_driven_tensions(const std::vector<int>& index, const Eigen::VectorXd& T) override {
+    vc::set_driven_tensions(W_, index, T);
+    return true;
+  }
+  // Every shot records the tendon lengths at the segment ends (memoised: after Newton's residual
+  // at x this shoots nothing).
+  bool tendon_pulls(const Eigen::VectorXd& x, Eigen::VectorXd& d) override {
+    Vec6 f;
+    if (!system_.residual(x, f)) return false;
+    tendon_displacements(W_, W_.segment_lengths, pulls_);
+    d = Eigen::Map<const Eigen::VectorXd>(pulls_.data(), static_cast<Eigen::Index>(pulls_.size()));
+    return d.allFinite();
+  }
   // The final pass records frames, samples and tendon lengths, and its end wrench is the residual
   // (usually the memoised last shot of Newton).
   bool final_residual(const Eigen::VectorXd& x, Eigen::Ref<Eigen::VectorXd> f) override {
@@ -237,6 +250,7 @@ class SingleShooting final : public detail::ModelProblem {
   ShootingSystem system_;
   bvp::NewtonSolver newton_;
   int last_iterations_ = 0;  ///< Newton iterations of the last solve (Jacobian reuse).
+  std::vector<double> pulls_;  ///< tendon_pulls()
 };
 
 }  // namespace

@@ -166,6 +166,30 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
     return true;
   }
 
+  bool set_driven_tensions(const std::vector<int>& index, const Eigen::VectorXd& T) override {
+    problem_.set_driven_tensions(index, T);
+    shooting_.invalidate();
+    return true;
+  }
+  // The disk frames from the nodes' poses (unknowns, no integration) and the tip from one shot
+  // of the last interval: a finite difference of the pulls in one unknown costs one interval.
+  bool tendon_pulls(const Eigen::VectorXd& x, Eigen::VectorXd& d) override {
+    const int N = d_.N;
+    pull_frames_.assign(N + 1, Frame{});
+    double y[cosserat::kStateSize];
+    auto node = [&](int k) { return x.data() + (k == 0 ? 0 : 6 + 12 * (k - 1)); };
+    for (int j = 1; j < N; ++j) {
+      problem_.start_state(j, node(j), y);
+      pull_frames_[j] = cosserat::frame_of(y);
+    }
+    problem_.start_state(N - 1, node(N - 1), y);
+    if (!integrator_->integrate(problem_.ode(N - 1), problem_.node(N - 1), problem_.node(N), y)) return false;
+    pull_frames_[N] = cosserat::frame_of(y);
+    const std::vector<double> pulls = tendon::chord_displacements(pull_frames_, *d_.routing, convention_);
+    d = Eigen::Map<const Eigen::VectorXd>(pulls.data(), static_cast<Eigen::Index>(pulls.size()));
+    return d.allFinite();
+  }
+
   void extract(const Eigen::VectorXd& x, bool evaluated, Solution& sol) override {
     const int N = d_.N;
     const TendonRouting& routing = *d_.routing;
@@ -196,6 +220,7 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
   }
 
  private:
+  std::vector<Frame> pull_frames_;  // tendon_pulls()
   // The Jacobian structure of the bound input's pass-through mask: the model's (every routed
   // tendon) when they agree, else the last or second-last one built here (a trajectory rebuilds
   // it only when its mask changes).

@@ -65,6 +65,11 @@ void VcrefShooting::bind(const ModelInput& input, const SolverOptions& options) 
   set_load_factor(1.0);
 }
 
+void VcrefShooting::set_driven_tensions(const std::vector<int>& index, const Eigen::VectorXd& T) {
+  for (std::size_t i = 0; i < index.size(); ++i) load_.set_fixed_tension(index[i], T[static_cast<Eigen::Index>(i)]);
+  set_load_factor(load_.load_factor());
+}
+
 void VcrefShooting::set_load_factor(double lambda) {
   load_.set_load_factor(lambda);
   tension_.resize(load_.full_tensions().size());

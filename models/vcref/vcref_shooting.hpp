@@ -45,6 +45,9 @@ class VcrefShooting final : public bvp::ShootingProblem {
   void bind(const ModelInput& input, const SolverOptions& options);
   // Scale every load (tensions, tip wrench, weights) by `lambda`.
   void set_load_factor(double lambda);
+  // Displacement input: tendon index[i] pulls with T[i] (N) at every load factor until the next
+  // bind (bound tensioned, so that it is active).
+  void set_driven_tensions(const std::vector<int>& index, const Eigen::VectorXd& T);
   const VcrefModel::Data& data() const { return d_; }
   const physics::LoadCase& loads() const { return load_; }
   const std::vector<double>& tensions() const { return tension_; }

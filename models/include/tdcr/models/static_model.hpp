@@ -52,6 +52,7 @@ class StaticModel;
 
 namespace detail {
 class ModelProblem;
+class DisplacementProblem;
 
 /// The last warm-started solve of a workspace, for the secant predictor of the next warm start
 /// (SolverOptions::extrapolate_warm_starts): its warm start's input and its own (each as one
@@ -61,6 +62,14 @@ struct SolveHistory {
   Eigen::VectorXd from, input, guess, unknowns;
   bool valid = false;  ///< A converged warm solve is held (anything else clears it).
 };
+}  // namespace detail
+
+class ModelWorkspace;
+namespace detail {
+/// Displacement input (models/common/displacement_input.hpp): the workspace's problem with the
+/// driven tendons' tensions as unknowns, bound for `input`.
+ModelProblem& bind_displacement_problem(const StaticModel& model, ModelWorkspace& workspace, const ModelInput& input,
+                                        const SolverOptions& options, const Solution* warm_start);
 }  // namespace detail
 
 /// @brief Mutable memory of one model's solves. Made by StaticModel::make_workspace(), it
@@ -81,8 +90,14 @@ class ModelWorkspace {
  private:
   friend Solution solve(const StaticModel&, ModelWorkspace&, const ModelInput&, const SolverOptions&,
                         const Solution*);
+  friend detail::ModelProblem& detail::bind_displacement_problem(const StaticModel&, ModelWorkspace&,
+                                                                 const ModelInput&, const SolverOptions&,
+                                                                 const Solution*);
+  // Made on the first displacement-input solve.
+  detail::DisplacementProblem& displacement_problem();
   std::weak_ptr<const int> owner_;
   detail::SolveHistory history_;
+  std::unique_ptr<detail::DisplacementProblem> displacement_;
 };
 
 /// @brief An immutable model of a robot with the effects it simulates.
@@ -126,6 +141,9 @@ class StaticModel {
   friend class ModelWorkspace;
   friend Solution solve(const StaticModel&, ModelWorkspace&, const ModelInput&, const SolverOptions&,
                         const Solution*);
+  friend detail::ModelProblem& detail::bind_displacement_problem(const StaticModel&, ModelWorkspace&,
+                                                                 const ModelInput&, const SolverOptions&,
+                                                                 const Solution*);
   /// @brief Bind the workspace to one input and options: the problem the solve driver works on.
   /// `workspace` belongs to this model (checked by the caller).
   virtual detail::ModelProblem& bind(ModelWorkspace& workspace, const ModelInput& input,

@@ -66,4 +66,13 @@ double chord_length(const Frame* frames, const TendonRouting& routing, int k, in
 std::vector<double> chord_displacements(const std::vector<Frame>& frames, const TendonRouting& routing,
                                         Actuation::DisplacementConvention convention);
 
+/// @brief Add every elastic tendon's stretch (TendonSpec::stiffness EA) to its displacement:
+/// the pull a motor at the base sets is the path's pull plus T L_free / EA, L_free the tendon's
+/// path length from the base to its end disk on the straight robot (its routing included) and T
+/// its tension at the base (with tendon friction the base tension over the whole length: the
+/// stretch of a tendon that friction holds back is overestimated by at most the capstan loss).
+/// Inextensible tendons are left as they are.
+void add_elastic_stretch(const Robot& robot, const TendonRouting& routing, const std::vector<double>& tensions,
+                         std::vector<double>& displacements);
+
 }  // namespace tdcr::tendon
