@@ -5,22 +5,26 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <string>
 #include <vector>
 
 #include <Eigen/LU>
 
+#include "common/newton_summary.hpp"
 #include "physics/tendon_path.hpp"
+#include "tdcr/core/error.hpp"
 #include "tdcr/models/model_registry.hpp"
 #include "tdcr/models/static_model.hpp"
 
 namespace tdcr::detail {
 
 namespace {
-
-// A taut tendon whose tension falls below this (in units of T_s) after a solve pushes: slack.
-constexpr double kPushes = 0.0;
-
+// The homotopy compliance a cold solve starts with (DisplacementProblem::bind), and below which
+// the next step is zero.
+constexpr double kStartCompliance = 1e-2;
+constexpr double kMinCompliance = 1e-12;
+constexpr int kMaxConstraintUpdates = 8;
 }  // namespace
 
 bool needs_displacement_solve(const StaticModel& model, const ModelInput& input) {
@@ -53,8 +57,9 @@ std::vector<double> DisplacementProblem::placeholders(const StaticModel& model, 
 }
 
 void DisplacementProblem::bind(const StaticModel& model, ModelProblem& inner, const ModelInput& input,
-                               const Solution* warm) {
+                               const SolverOptions& options, const Solution* warm) {
   model_ = &model;
+  tolerance_ = options.function_tolerance;
   inner_ = &inner;
   sys_ = inner.system();
   n_ = sys_->size();
@@ -80,8 +85,12 @@ void DisplacementProblem::bind(const StaticModel& model, ModelProblem& inner, co
   ts_.resize(k_);
   stretch_.resize(k_);
   std::vector<double> l_free(static_cast<std::size_t>(k_));
+  longest_.resize(k_);
   for (int i = 0; i < k_; ++i) {
     const RoutedTendon& t = routing.tendons[static_cast<std::size_t>(index_[i])];
+    const bool per_segment = input.actuation.convention == Actuation::DisplacementConvention::PerSegment && t.segment > 0;
+    const double s0 = per_segment ? routing.segment_end_s[static_cast<std::size_t>(t.segment - 1)] : 0.0;
+    longest_[i] = physics::rest_length(t, s0, routing.disk_s[static_cast<std::size_t>(t.end_disk)]);
     delta_[i] = input.actuation.values[static_cast<std::size_t>(index_[i])];
     r_[i] = t.r.norm();
     l_free[i] = physics::rest_length(t, 0.0, routing.disk_s[static_cast<std::size_t>(t.end_disk)]);
@@ -99,14 +108,21 @@ void DisplacementProblem::bind(const StaticModel& model, ModelProblem& inner, co
       const double shared = routing.disk_s[static_cast<std::size_t>(std::min(a.end_disk, b.end_disk))];
       linear_(i, j) = a.r.dot(b.r) * shared / EI * ts_[j] / r_[i];
     }
-  // Which tendons start taut: a warm start's tensioned ones, else the pulled ones.
+  // Which tendons start taut: a warm start's tensioned ones, else those the linear guess
+  // tensions (a tendon it leaves slack is moved to taut after the solve if its path is too long:
+  // update_constraints; starting it taut at zero tension can make the loading path's first
+  // Jacobian singular, PRB's bending planes set by the external load alone).
   taut_.assign(static_cast<std::size_t>(k_), 0);
   Eigen::VectorXd tau;
   const bool from_warm = warm && tensions_of(*warm, tau);
-  for (int i = 0; i < k_; ++i) taut_[static_cast<std::size_t>(i)] = from_warm ? tau[i] > 0.0 : delta_[i] > 0.0;
+  if (!from_warm) linear_guess(tau);
+  for (int i = 0; i < k_; ++i) taut_[static_cast<std::size_t>(i)] = tau[i] > 0.0;
   lambda_ = 1.0;
   T_.setZero(k_);
   applied_valid_ = false;
+  // A cold solve starts with every taut tendon compliant (complete() takes it to zero): co-
+  // contraction that the pulls decide only weakly is then held down on the way, not sent far.
+  compliance_ = from_warm ? 0.0 : kStartCompliance;
 
   // The Jacobian's pattern: the inner one bordered by k full rows (the pulls read every unknown
   // that moves a disk) and k full columns (a tension loads every disk it passes).
@@ -160,7 +176,7 @@ void DisplacementProblem::driven_rows(const Eigen::Ref<const Eigen::VectorXd>& t
                                       Eigen::Ref<Eigen::VectorXd> r) const {
   for (int i = 0; i < k_; ++i)
     r[i] = taut_[static_cast<std::size_t>(i)]
-               ? (pulls_[index_[i]] + stretch_[i] * ts_[i] * tau[i] - lambda_ * delta_[i]) / r_[i]
+               ? (pulls_[index_[i]] + stretch_[i] * ts_[i] * tau[i] - lambda_ * delta_[i]) / r_[i] + compliance_ * tau[i]
                : tau[i];
 }
 
@@ -203,7 +219,7 @@ bool DisplacementProblem::border(const Eigen::Ref<const Eigen::VectorXd>& y, con
         if (taut_[static_cast<std::size_t>(i)]) tt_(i, j) = (dp_[index_[i]] - p0[index_[i]]) / (h * r_[i]);
       tau[j] = y[n_ + j];
     }
-    tt_(j, j) += taut_[static_cast<std::size_t>(j)] ? stretch_[j] * ts_[j] / r_[j] : 1.0;
+    tt_(j, j) += taut_[static_cast<std::size_t>(j)] ? stretch_[j] * ts_[j] / r_[j] + compliance_ : 1.0;
   }
   if (!apply(tau)) return false;
   // d rows / dx: the pulls with each unknown moved.
@@ -341,7 +357,6 @@ void DisplacementProblem::linear_guess(Eigen::VectorXd& tau) const {
 void DisplacementProblem::cold_guess(Eigen::VectorXd& y) {
   Eigen::VectorXd tau;
   linear_guess(tau);
-  for (int i = 0; i < k_; ++i) taut_[static_cast<std::size_t>(i)] = tau[i] > 0.0 || delta_[i] > 0.0;
   apply(tau);
   inner_->cold_guess(x_);
   y.resize(n_ + k_);
@@ -361,17 +376,34 @@ bool DisplacementProblem::alternative_guess(Eigen::VectorXd& y) {
 }
 
 void DisplacementProblem::rest_state(Eigen::VectorXd& y) {
-  // The straight robot, with every driven tension 0. A model whose rest state has a gauge set by
-  // the loads (PRB's bending planes of straight subsegments) takes it from the tensions the
-  // commanded pulls will need (the linear guess): zero tensions leave it undecided, and the
-  // loading path's Jacobian singular.
-  Eigen::VectorXd tau;
-  linear_guess(tau);
-  apply(tau);
+  // The straight robot with every driven tension 0.
+  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(k_);
+  apply(zero);
   inner_->rest_state(x_);
   y.resize(n_ + k_);
   y.head(n_) = x_;
   y.tail(k_).setZero();
+  // A model whose rest state has a gauge that the loads set (PRB's bending planes of straight
+  // subsegments) takes it from the tensions the commanded pulls will need (the linear guess):
+  // from the external loads alone the plane can lie across a driven tendon, whose pull then does
+  // not move to first order and the loading path's first Jacobian is singular. Kept where it is a
+  // rest state at zero tension as well (the shape is straight either way).
+  Eigen::VectorXd tau;
+  linear_guess(tau);
+  if (!(tau.array() > 0.0).any()) return;
+  apply(tau);
+  Eigen::VectorXd xg;
+  inner_->rest_state(xg);
+  Eigen::VectorXd yg(n_ + k_), f(n_ + k_), s(n_ + k_);
+  yg.head(n_) = xg;
+  yg.tail(k_).setZero();
+  residual_scale(s);
+  if (residual(yg, f) && f.cwiseProduct(s).lpNorm<Eigen::Infinity>() <= 1e-14) {
+    y = yg;
+    return;
+  }
+  apply(zero);  // its gauge state back to the zero-tension rest state's
+  inner_->rest_state(x_);
 }
 
 bool DisplacementProblem::warm_guess(const Solution& previous, Eigen::VectorXd& y) {
@@ -401,7 +433,7 @@ void DisplacementProblem::extract(const Eigen::VectorXd& y, bool evaluated, Solu
     const auto k = static_cast<std::size_t>(index_[i]);
     if (k >= solution.tensions.size()) continue;
     const bool taut = taut_[static_cast<std::size_t>(i)];
-    solution.tensions[k] = taut ? ts_[i] * tau[i] : 0.0;
+    solution.tensions[k] = taut ? std::max(0.0, ts_[i] * tau[i]) : 0.0;
     solution.tendon_slack[k] = !taut;
     if (!taut) slack += (slack.empty() ? "" : ", ") + std::to_string(k);
   }
@@ -431,25 +463,129 @@ bool DisplacementProblem::infeasibility(const Eigen::VectorXd& y, double thresho
   return inner_->infeasibility(y.head(n_), threshold, why);
 }
 
-bool DisplacementProblem::update_constraints(const Eigen::VectorXd& y) {
-  // At the converged answer: the pulls of its unknowns.
+bool DisplacementProblem::impossible_input(std::string& why) const {
+  for (int i = 0; i < k_; ++i) {
+    if (stretch_[i] > 0.0 || !(delta_[i] >= longest_[i])) continue;
+    const int k = index_[i];
+    why = "infeasible actuation: tendon T" + std::to_string(k + 1) + " (index " + std::to_string(k) +
+          ") commanded a pull of " + format_value(delta_[i]) + " m, not less than its path's length " +
+          format_value(longest_[i]) + " m on the straight robot: no shape shortens its path that much";
+    return true;
+  }
+  return false;
+}
+
+bool DisplacementProblem::stiffen(Eigen::VectorXd& y, const bvp::NewtonOptions& options, SolverSummary& summary) {
+  double factor = 1e-2;
+  Eigen::VectorXd last = y;
+  bvp::NewtonOptions o = options;
+  while (compliance_ > 0.0) {
+    const double from = compliance_;
+    compliance_ = from * factor < kMinCompliance ? 0.0 : from * factor;
+    const bvp::NewtonResult res = newton_.solve(*this, y, o);
+    copy_newton_result(res, summary);
+    o.reuse_jacobian = true;  // the next compliance changes only the diagonal
+    if (res.converged()) {
+      last = y;
+      continue;
+    }
+    y = last;
+    compliance_ = from;
+    factor = std::sqrt(factor);
+    o.reuse_jacobian = false;
+    if (factor > 0.9) {
+      summary.message += "; the taut tendons' homotopy compliance could not be taken below " + format_value(from);
+      compliance_ = 0.0;
+      return false;
+    }
+  }
+  return true;
+}
+
+bool DisplacementProblem::flip(const Eigen::VectorXd& y) {
   if (!apply(y.tail(k_))) return false;
   x_ = y.head(n_);
   if (!inner_->tendon_pulls(x_, pulls_)) return false;
   bool changed = false;
   for (int i = 0; i < k_; ++i) {
     char& t = taut_[static_cast<std::size_t>(i)];
-    const double gap = (pulls_[index_[i]] - lambda_ * delta_[i]) / r_[i];
-    if (t && y[n_ + i] < kPushes) {
+    const double gap = (pulls_[index_[i]] + stretch_[i] * ts_[i] * std::max(0.0, y[n_ + i]) - lambda_ * delta_[i]) / r_[i];
+    if (t && y[n_ + i] < -tolerance_) {
       t = 0;  // it would push: slack
       changed = true;
-    } else if (!t && gap < -1e-12) {
+    } else if (!t && gap < -tolerance_) {
       t = 1;  // its path is too long for it: taut
       changed = true;
     }
   }
   if (changed) applied_valid_ = false;
   return changed;
+}
+
+bool DisplacementProblem::complete(Eigen::VectorXd& y, const bvp::NewtonOptions& options, SolverSummary& summary) {
+  const std::string path = summary.message;
+  std::string what;
+  bvp::NewtonOptions fresh = options;  // exact Newton: the last Jacobian is of other equations
+  fresh.reuse_jacobian = false;
+  fresh.max_setup_calls = 1;
+  if (compliance_ > 0.0) {
+    if (!stiffen(y, options, summary)) return false;
+    what = "homotopy compliance " + format_value(kStartCompliance) + " taken to zero";
+  }
+  int updates = 0;
+  while (flip(y)) {
+    if (++updates > kMaxConstraintUpdates) {
+      summary.termination = TerminationType::NoConvergence;
+      summary.message = path + "; slack and taut tendons changed more than " + std::to_string(kMaxConstraintUpdates) +
+                        " times (cycling)";
+      return false;
+    }
+    // A direct solve from the last answer; where it fails, from the same answer with the taut
+    // tendons compliant and the compliance taken to zero (a tendon moved to taut at zero
+    // tension may need co-contraction that its pull decides only weakly).
+    const Eigen::VectorXd start = y;
+    constexpr int kDirectIterations = 20;
+    bvp::NewtonOptions first = fresh;
+    first.max_iterations = std::min(options.max_iterations, kDirectIterations);
+    bvp::NewtonResult res = newton_.solve(*this, y, first);
+    copy_newton_result(res, summary);
+    if (!res.converged()) {
+      y = start;
+      compliance_ = kStartCompliance;
+      res = newton_.solve(*this, y, fresh);
+      copy_newton_result(res, summary);
+      if (!res.converged() || !stiffen(y, fresh, summary)) {
+        compliance_ = 0.0;
+        summary.message = path + "; after tendons changed between slack and taut: " + summary.message;
+        return false;
+      }
+    }
+  }
+  if (updates > 0) what += (what.empty() ? "" : ", ") + std::string("slack and taut tendons changed ") +
+                           std::to_string(updates) + (updates == 1 ? " time" : " times");
+  refine(y, options);
+  if (!what.empty()) summary.message = path + "; then " + what + ": " + summary.message;
+  return summary.converged();
+}
+
+void DisplacementProblem::refine(Eigen::VectorXd& y, const bvp::NewtonOptions& options) {
+  constexpr double kRefineTighter = 1e-3;
+  constexpr double kRefineFloor = 1e-15;
+  constexpr int kRefineIterations = 3;
+  Eigen::VectorXd f(size()), s(size());
+  residual_scale(s);
+  if (!residual(y, f)) return;
+  const double before = f.cwiseProduct(s).lpNorm<Eigen::Infinity>();
+  bvp::NewtonOptions o = options;
+  o.function_tolerance = std::max(kRefineTighter * options.function_tolerance, kRefineFloor);
+  if (before <= o.function_tolerance) return;
+  o.max_iterations = kRefineIterations;
+  o.reuse_jacobian = false;
+  o.max_setup_calls = 1;
+  o.freeze_jacobian_below = 0.0;
+  Eigen::VectorXd z = y;
+  newton_.solve(*this, z, o);
+  if (residual(z, f) && f.cwiseProduct(s).lpNorm<Eigen::Infinity>() < before) y = z;
 }
 
 }  // namespace tdcr::detail
@@ -470,7 +606,7 @@ ModelProblem& bind_displacement_problem(const StaticModel& model, ModelWorkspace
   const ModelInput tensions = tension_form(input, DisplacementProblem::placeholders(model, input));
   ModelProblem& inner = model.bind(workspace, tensions, options);
   DisplacementProblem& D = workspace.displacement_problem();
-  D.bind(model, inner, input, warm_start);
+  D.bind(model, inner, input, options, warm_start);
   return D;
 }
 

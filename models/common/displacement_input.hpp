@@ -58,7 +58,8 @@ class DisplacementProblem final : public ModelProblem, public bvp::Parameterized
   /// Bind to `inner`, the model's problem bound to tension_form(input, placeholders) (see
   /// placeholders()), for `input`'s commanded displacements. `warm`: a previous Solution whose
   /// tensions decide which tendons start taut (else: the pulled ones, delta > 0).
-  void bind(const StaticModel& model, ModelProblem& inner, const ModelInput& input, const Solution* warm);
+  void bind(const StaticModel& model, ModelProblem& inner, const ModelInput& input, const SolverOptions& options,
+            const Solution* warm);
   /// The tensions to bind the driven tendons with (their T_s), by global index (0 elsewhere).
   static std::vector<double> placeholders(const StaticModel& model, const ModelInput& input);
 
@@ -97,7 +98,15 @@ class DisplacementProblem final : public ModelProblem, public bvp::Parameterized
   bool differentiable(const Eigen::VectorXd& y) const override { return inner_->differentiable(y.head(n_)); }
   double max_curvature() const override { return inner_->max_curvature(); }
   std::string integrator_name() const override { return inner_->integrator_name(); }
-  bool update_constraints(const Eigen::VectorXd& y) override;
+  /// An inextensible tendon commanded a pull not shorter than its path's length on the straight
+  /// robot (from the base, or over its own segment with the per-segment convention): its path
+  /// would have to be shorter than nothing.
+  bool impossible_input(std::string& why) const override;
+  /// From the driver's answer: the homotopy compliance taken to zero, then complementarity
+  /// (a taut tendon that would push goes slack, a slack one whose path is too long goes taut,
+  /// each change solved again from the last answer, at most kMaxConstraintUpdates), then
+  /// refined (see refine()).
+  bool complete(Eigen::VectorXd& y, const bvp::NewtonOptions& options, SolverSummary& summary) override;
 
   /// Which driven tendons are taut (by driven index) and their global indices.
   const std::vector<char>& taut() const { return taut_; }
@@ -110,6 +119,16 @@ class DisplacementProblem final : public ModelProblem, public bvp::Parameterized
   void driven_rows(const Eigen::Ref<const Eigen::VectorXd>& tau, Eigen::Ref<Eigen::VectorXd> r) const;
   // The border of the Jacobian at y (f = F(y)): col_, row_, tt_.
   bool border(const Eigen::Ref<const Eigen::VectorXd>& y, const Eigen::Ref<const Eigen::VectorXd>& f);
+  // complete()'s parts. stiffen(): the compliance from its value down to zero in Newton solves
+  // from the last answer (decades, shorter steps where one fails). flip(): move the tendons whose
+  // complementarity y violates (true if any moved). refine(): Newton iterations (fresh Jacobians,
+  // at most 3) towards 1e-3 of the tolerance, kept if they lower the residual: the driven
+  // tensions then carry the precision of the pulls (co-contraction of an antagonistic pair moves
+  // the pulls by 1e-3 (VC, VCref, PRB) to 1e-8 (CCsub) of what a differential pull does, so a
+  // residual at the tolerance leaves it loose).
+  bool stiffen(Eigen::VectorXd& y, const bvp::NewtonOptions& options, SolverSummary& summary);
+  bool flip(const Eigen::VectorXd& y);
+  void refine(Eigen::VectorXd& y, const bvp::NewtonOptions& options);
   // T_s-scaled tensions of a Solution's driven tendons (false if it has none).
   bool tensions_of(const Solution& s, Eigen::VectorXd& tau) const;
   // The minimum-norm non-negative tensions that meet the commanded pulls on the straight robot
@@ -122,9 +141,12 @@ class DisplacementProblem final : public ModelProblem, public bvp::Parameterized
   int n_ = 0, k_ = 0;
   std::vector<int> index_;           // global index of driven tendon i
   Eigen::VectorXd delta_, r_, ts_, stretch_;  // commanded pull, lever arm, T_s, L / EA (0: inextensible)
+  Eigen::VectorXd longest_;          // the longest pull any shape gives an inextensible tendon
   Eigen::MatrixXd linear_;           // linear beam theory's d pull_i / d tau_j on the straight robot
   std::vector<char> taut_;
   double lambda_ = 1.0;
+  double tolerance_ = 1e-10;         // SolverOptions::function_tolerance: the complementarity's slack
+  double compliance_ = 0.0;          // the homotopy compliance c of the taut rows (driven_rows)
   Eigen::VectorXd T_, applied_;      // tensions to apply, last applied
   bool applied_valid_ = false;
   Eigen::VectorXd pulls_;            // every tendon's pull at the last evaluated x

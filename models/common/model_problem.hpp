@@ -138,12 +138,22 @@ class ModelProblem {
                                           static_cast<Eigen::Index>(scratch.tendon_displacements.size()));
     return d.size() > 0 && d.allFinite();
   }
-  /// After a converged solve at unknowns x (system parameter 1): true if the problem changed
-  /// its own equations because x violates a condition they assume (displacement input: a taut
-  /// tendon that would push, or a slack one whose path became too long), so that the driver
-  /// solves again from x. Default: never.
-  virtual bool update_constraints(const Eigen::VectorXd& x) {
+  /// After the driver's solve converged at unknowns x (system parameter 1): the problem may go
+  /// on from x with problems of its own, e.g. displacement input takes the tendons' homotopy
+  /// compliance to zero and moves tendons between slack and taut by complementarity, each a
+  /// Newton solve from the last answer (its Newton solver, `options`). x and `summary` (its work
+  /// added, its status and message) are the result; false if it failed. Default: nothing, true.
+  virtual bool complete(Eigen::VectorXd& x, const bvp::NewtonOptions& options, SolverSummary& summary) {
     (void)x;
+    (void)options;
+    (void)summary;
+    return true;
+  }
+  /// True and the reason if the bound input asks for what no shape of the robot gives (a pull of
+  /// an inextensible tendon not shorter than its free length): the driver then returns the rest
+  /// state as an infeasible answer without solving. Default: false.
+  virtual bool impossible_input(std::string& why) const {
+    (void)why;
     return false;
   }
   /// The tip position of tip_pose().

@@ -198,38 +198,6 @@ double solve_on_loading_path(const StaticModel& model, const ModelInput& input, 
   return detail::follow_loading_path(P, model.routing(), sys, x, nopt, options, sum, sol.path_events, cold.first_step, why).parameter;
 }
 
-// After a converged solve the problem may change its equations (ModelProblem::update_constraints:
-// displacement input's slack and taut tendons); each change is solved again from the answer, and
-// if that fails, along the loading path from rest. At most this many changes.
-constexpr int kMaxConstraintUpdates = 8;
-
-void add_work(const SolverSummary& from, SolverSummary& to);
-
-void update_constraints(const StaticModel& model, const ModelInput& input, detail::ModelProblem& P,
-                        bvp::ParameterizedSystem& sys, const bvp::NewtonOptions& nopt, const SolverOptions& options,
-                        const detail::Rebind& rebind, Eigen::VectorXd& x, double& reached, Solution& sol) {
-  SolverSummary& sum = sol.summary;
-  int updates = 0;
-  while (sum.converged() && P.update_constraints(x)) {
-    if (++updates > kMaxConstraintUpdates) {
-      sum.termination = TerminationType::NoConvergence;
-      sum.message += "; the constraints changed more than " + std::to_string(kMaxConstraintUpdates) +
-                     " times (slack and taut tendons cycling)";
-      return;
-    }
-    const SolverSummary before = sum;
-    const Eigen::VectorXd answer = x;
-    sys.set_parameter(1.0);
-    direct_solve(P, sys, nopt, true, options.reuse_jacobian, x, sum);
-    add_work(before, sum);
-    if (sum.converged()) continue;
-    x = answer;
-    reached = solve_on_loading_path(model, input, P, sys, nopt, options, nullptr, rebind, x, nullptr, sol);
-    add_work(before, sum);
-  }
-  if (updates > 0) sum.message += "; constraints changed " + std::to_string(updates) + " times";
-}
-
 // --- The secant predictor of warm starts (SolverOptions::extrapolate_warm_starts). ---
 
 // An input as one vector: actuation values, tip force, tip moment, gravity.
@@ -459,7 +427,20 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
   bvp::ParameterizedSystem* sys = P.system();
   double reached = 1.0;  // load factor of the answer (< 1: loading from rest stopped there)
   Eigen::VectorXd x;     // the system's unknowns (none for a closed form)
-  if (!sys) {
+  std::string impossible;
+  if (sys && P.impossible_input(impossible)) {
+    // The robot at rest, named infeasible: nothing to solve.
+    sys->set_parameter(0.0);
+    P.rest_state(x);
+    reached = 0.0;
+    sum.unknowns = sys->size();
+    sum.termination = TerminationType::Infeasible;
+    sum.message = impossible + " (the robot at rest returned, nothing solved)";
+    Eigen::VectorXd f(sys->size());
+    sol.unknowns = x;
+    P.extract(x, P.final_residual(x, f), sol);
+    sys->set_parameter(1.0);
+  } else if (!sys) {
     // Closed form: the problem computes the answer and its summary.
     sum.linear_solver = "none";
     P.extract(Eigen::VectorXd(), true, sol);
@@ -491,7 +472,7 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
       };
       reached = solve_on_loading_path(model, input, P, *sys, nopt, options, warm ? warm_start : nullptr, rebind, x,
                                       predicted ? &unpredicted : nullptr, sol);
-      update_constraints(model, input, P, *sys, nopt, options, rebind, x, reached, sol);
+      if (sum.converged()) P.complete(x, nopt, sum);
     }
     if (sum.converged()) reached = 1.0;
     const bool evaluated = final_check(P, *sys, x, reached, options.function_tolerance, sum);
@@ -516,7 +497,8 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
   // The displacement a motor sets: the path's pull plus an elastic tendon's stretch.
   tendon::add_elastic_stretch(model.robot(), model.routing(), sol.tensions, sol.tendon_displacements);
   sol.loads = input.loads;
-  if (!sum.converged() && reached < 1.0) name_infeasibility(P, model.routing(), sol.unknowns, reached, sol);
+  if (!sum.converged() && reached < 1.0 && impossible.empty())
+    name_infeasibility(P, model.routing(), sol.unknowns, reached, sol);
   physics::check_geometry(model.robot(), model.routing(), sol, P.max_curvature());
   if (!coarse_failure.empty()) {
     sum.message += " (followed on the requested mesh because " + coarse_failure + ")";
