@@ -152,8 +152,12 @@ for scene, p in pts.items():
         slope = sum((x - mx) * (y - my) for x, y in p) / sum((x - mx) ** 2 for x, _ in p)
         slopes.append(f"{slope:.2f} ({scene})")
 tables["vcref_slope"] = ", ".join(slopes) if slopes else "-"
-ns = [int(r["n"]) for r in vcref if r["part"] == "b"]
-tables["vcref_max_n"] = f"{max(ns):,}" if ns else "-"
+# The stamp of bench_vcref's own run (vcref_machine.txt beside vcref.csv), else run_all's.
+stamp = os.path.join(res, "vcref_machine.txt")
+if not os.path.exists(stamp):
+    stamp = os.path.join(res, "machine.txt")
+with open(stamp) as fh:
+    tables["vcref_run"] = "; ".join(line.lstrip("# ").rstrip() for line in fh if line.strip())
 
 # Effects.
 names = []
