@@ -290,6 +290,40 @@ TEST(Vcref, SparseJacobianMatchesFiniteDifferences) {
   }
 }
 
+// The disk loads' exact derivatives (vcref_tangent.cpp) for tendons whose hole offsets change
+// from disk to disk (helical routing, half a turn per segment), Eq. 58 on and off, against central
+// differences as above, at the cold guess moved off the answer and at the answer.
+TEST(Vcref, SparseJacobianMatchesFiniteDifferencesForHelicalTendons) {
+  for (DiskNormalForce dn : {DiskNormalForce::Removed, DiskNormalForce::Kept}) {
+    Scene s = paper::scene(6, 6);  // T2 and T3: a tendon ending at each segment
+    s.effects.disk_normal_force = dn;
+    for (Segment& seg : s.robot.segments)
+      for (TendonSpec& t : seg.tendons) {
+        t.routing.type = TendonRoutingSpec::Type::Helical;
+        t.routing.turns = 0.5;
+      }
+    s.loads.tip_force = Vec3(0.1, -0.2, 0.0);
+    VcrefModel model(s.robot, s.effects);
+    auto ws = model.make_workspace();
+    double Fs = 1e-3 + s.loads.tip_force.norm();
+    for (double t : s.actuation.values) Fs += t;
+    const int n = model.unknowns();
+    Eigen::VectorXd cs(n);
+    cs.head<3>().setConstant(Fs);
+    cs.segment<3>(3).setConstant(Fs * 0.1);
+    for (int i = 6; i < n; ++i) {
+      const int k = (i - 6) % 12;
+      cs[i] = k < 3 ? 0.1 : k < 6 ? 1.0 : k < 9 ? Fs : Fs * 0.1;
+    }
+    const bvp::JacobianCheck c = model.check_jacobian(*ws, s.input(), s.solver, nullptr, 0.05);
+    ASSERT_TRUE(c.evaluated);
+    EXPECT_LT(row_relative_error(c, cs), 1e-5);
+    const Solution sol = tdcr::solve(model, *ws, s.input(), s.solver);
+    ASSERT_TRUE(sol.converged()) << sol.summary.message;
+    EXPECT_LT(row_relative_error(model.check_jacobian(*ws, s.input(), s.solver, &sol, 0.0), cs), 1e-5);
+  }
+}
+
 // 7. Eq. 58 (frictionless disks, paper Section 9.1): the normal component of a pass-through
 // tendon's two chord forces vanishes when the neighbouring subsegments bend equally, i.e. at
 // constant curvature, which holds without external load inside a segment whose tendon

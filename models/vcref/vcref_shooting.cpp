@@ -180,8 +180,8 @@ tendon::DiskWrench VcrefShooting::linearized_wrench(int j) const {
       saved[i] = frames_[j - 1 + i];
       l->frames[i] = frames_[j - 1 + i] = nominal_frame(j - 1 + i);
     }
-    tendon::DiskWrench unused;
-    disk_wrench_derivative(j, frames_.data(), unused, l->D);
+    tendon::DiskWrench same_up_to_rounding;
+    disk_wrench_derivative(j, frames_.data(), same_up_to_rounding, l->D);
     l->wrench = tendon::disk_wrench(j, frames_.data(), active_, tension_.data(), d_.remove_normal);
     for (int i = 0; i < read; ++i) frames_[j - 1 + i] = saved[i];
   }
