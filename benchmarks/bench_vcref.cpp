@@ -3,22 +3,34 @@
 //      median and min time, tip difference to a tightly converged CVODE solve, speed-up over the
 //      paper code (127 ms median, reference/paper_code_timing.csv), for several RK4 step counts
 //      and both initial guesses;
-//  (b) cost against the number of disks per segment (10 ... 1000): time, Newton iterations,
-//      unknowns, Jacobian nonzeros, peak RSS, and the log-log slope of time against n.
-// Usage: bench_vcref [--quick] [--csv <path>]
+//  (b) cost against the number of disks per segment n (10 ... 100000), default solver options,
+//      on two scenes: examples/paper_robot_vcref.json (configuration 2, tendons only) and
+//      examples/paper_robot_tip_force.json with model vcref (T_M / 2 and a 0.5 N tip force).
+//      A cold solve as `tdcr solve` makes it (model, workspace, solve), timed whole (wall and CPU
+//      time); Newton iterations, unknowns, Jacobian nonzeros, CPU time per disk, peak RSS and the
+//      part of it the solve added, per disk.
+//      Every (scene, n) runs in a child process of its own, so that its peak RSS is its own.
+// Usage: bench_vcref [--quick] [--max-disks N] [--csv <path>]
+//   --quick: part (a) at 4 RK4 steps, part (b) at n = 10 and 30 (the ctest smoke run);
+//   --max-disks: the largest n of part (b) (default 100000: about 4.3 GB and two minutes).
 #include <sys/resource.h>
+#include <time.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <string>
 #include <vector>
 
 #include "tdcr/core/paper_robot.hpp"
+#include "tdcr/core/scene_io.hpp"
 #include "tdcr/models/vcref.hpp"
 
 using namespace tdcr;
@@ -54,21 +66,109 @@ double peak_rss_mb() {
   return u.ru_maxrss / 1024.0;
 }
 
+// VmHWM (peak) or VmRSS (now) of this process in MB, from /proc/self/status (-1 if unreadable).
+double proc_status_mb(const char* key) {
+  std::ifstream in("/proc/self/status");
+  std::string line;
+  while (std::getline(in, line))
+    if (line.compare(0, std::strlen(key), key) == 0) return std::atof(line.c_str() + std::strlen(key) + 1) / 1024.0;
+  return -1.0;
+}
+
+struct ScalingRow {
+  int iterations = 0, unknowns = 0, nnz = 0;
+  bool converged = false;
+  double median_ms = 0, min_ms = 0, cpu_ms = 0, rss_mb = 0, base_mb = 0, tip_y = 0;
+};
+
+// CPU time of this process (user + system) in ms: on a shared machine a solve's wall time also
+// counts the other processes' turns.
+double cpu_ms() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return 1e3 * t.tv_sec + 1e-6 * t.tv_nsec;
+}
+
+// Part (b), one disk count: `reps` cold solves (model, workspace, solve) of `scene` with n disks
+// per segment. Runs in a child process; the peak RSS is the child's, base_mb its RSS before.
+ScalingRow scaling_point(Scene s, int n, int reps) {
+  for (Segment& seg : s.robot.segments) seg.disks = n;
+  ScalingRow r;
+  r.base_mb = proc_status_mb("VmRSS:");
+  std::vector<double> t, c;
+  Solution sol;
+  for (int i = 0; i < reps; ++i) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const double c0 = cpu_ms();
+    VcrefModel model(s.robot, s.effects);
+    auto ws = model.make_workspace();
+    sol = tdcr::solve(model, *ws, s.input(), s.solver);
+    c.push_back(cpu_ms() - c0);
+    t.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    if (i == 0) {
+      r.unknowns = model.unknowns();
+      r.nnz = model.jacobian_nonzeros(s.input());
+    }
+  }
+  std::sort(t.begin(), t.end());
+  std::sort(c.begin(), c.end());
+  r.median_ms = t[t.size() / 2];
+  r.min_ms = t.front();
+  r.cpu_ms = c[c.size() / 2];
+  r.iterations = sol.summary.iterations;
+  r.converged = sol.converged();
+  r.tip_y = sol.tip().p.y();
+  r.rss_mb = proc_status_mb("VmHWM:");
+  if (r.rss_mb < 0) r.rss_mb = peak_rss_mb();
+  return r;
+}
+
+// scaling_point in a child process (fork), its result sent back through a pipe.
+bool scaling_point_in_child(const Scene& s, int n, int reps, ScalingRow& out) {
+  int fd[2];
+  if (pipe(fd) != 0) return false;
+  std::fflush(stdout);
+  const pid_t pid = fork();
+  if (pid < 0) return false;
+  if (pid == 0) {
+    close(fd[0]);
+    const ScalingRow r = scaling_point(s, n, reps);
+    const ssize_t w = write(fd[1], &r, sizeof r);
+    _exit(w == static_cast<ssize_t>(sizeof r) ? 0 : 1);
+  }
+  close(fd[1]);
+  ssize_t got = 0;
+  char* buf = reinterpret_cast<char*>(&out);
+  for (ssize_t k; got < static_cast<ssize_t>(sizeof out) && (k = read(fd[0], buf + got, sizeof out - got)) > 0;) got += k;
+  close(fd[0]);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  return got == static_cast<ssize_t>(sizeof out) && WIFEXITED(status) && WEXITSTATUS(status) == 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   bool quick = false;
+  int max_disks = 100000;
   std::string csv;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--quick")) quick = true;
     else if (!std::strcmp(argv[i], "--csv") && i + 1 < argc) csv = argv[++i];
+    else if (!std::strcmp(argv[i], "--max-disks") && i + 1 < argc) max_disks = std::atoi(argv[++i]);
     else {
-      std::fprintf(stderr, "usage: %s [--quick] [--csv <path>]\n", argv[0]);
+      std::fprintf(stderr, "usage: %s [--quick] [--max-disks N] [--csv <path>]\n", argv[0]);
       return 2;
     }
   }
+  if (max_disks < 1) {
+    std::fprintf(stderr, "--max-disks must be a positive disk count\n");
+    return 2;
+  }
   std::vector<std::string> rows;
-  rows.push_back("part,n,initial_guess,integrator,rk4_steps,median_ms,min_ms,iterations,unknowns,nnz,peak_rss_mb,tip_error_m,speedup_vs_paper");
+  rows.push_back(
+      "part,scene,n,initial_guess,integrator,rk4_steps,median_ms,min_ms,cpu_ms,iterations,unknowns,nnz,peak_rss_mb,"
+      "us_per_disk,kb_per_disk,tip_error_m,speedup_vs_paper");
 
   // (a) Paper robot, n = 10, configuration 2.
   Scene ref_scene = paper::scene(10, 2);
@@ -101,47 +201,64 @@ int main(int argc, char** argv) {
       std::printf("%-9s %-6s %6d %10.3f %10.3f %6d %12.3e %8.1fx%s\n", g, "rk4", steps, t.median_ms, t.min_ms,
                   t.sol.summary.iterations, err, kPaperMedianMs / t.median_ms, t.sol.converged() ? "" : "  FAILED");
       char line[512];
-      std::snprintf(line, sizeof line, "a,10,%s,rk4,%d,%.4f,%.4f,%d,%d,,%.1f,%.3e,%.2f", g, steps, t.median_ms,
+      std::snprintf(line, sizeof line, "a,tendons,10,%s,rk4,%d,%.4f,%.4f,,%d,%d,,%.1f,,,%.3e,%.2f", g, steps, t.median_ms,
                     t.min_ms, t.sol.summary.iterations, t.sol.summary.unknowns, peak_rss_mb(), err,
                     kPaperMedianMs / t.median_ms);
       rows.push_back(line);
     }
   }
 
-  // (b) Scaling with the number of disks per segment.
-  std::vector<int> ns = quick ? std::vector<int>{10, 30} : std::vector<int>{10, 30, 100, 300, 1000};
-  const int steps_b = 2;
-  std::printf("\n(b) cost against disks per segment, configuration 2, rk4 %d steps per interval\n", steps_b);
-  std::printf("%6s %9s %7s %10s %10s %6s %10s %12s\n", "n", "unknowns", "nnz", "median_ms", "min_ms", "iters",
-              "rss_mb", "tip_y_m");
-  std::vector<double> logn, logt;
-  for (int n : ns) {
-    Scene s = paper::scene(n, 2);
-    s.solver.rk4_steps = steps_b;
-    s.solver.rk4_max_step = std::numeric_limits<double>::infinity();  // exactly rk4_steps per interval
-    VcrefModel model(s.robot, s.effects);
-    const int r = quick ? 2 : (n <= 30 ? 21 : n <= 100 ? 11 : n <= 300 ? 5 : 3);
-    const Timing t = time_solves(s, r);
-    std::printf("%6d %9d %7d %10.2f %10.2f %6d %10.1f %12.6f%s\n", n, model.unknowns(), model.jacobian_nonzeros(s.input()),
-                t.median_ms, t.min_ms, t.sol.summary.iterations, peak_rss_mb(), t.sol.tip().p.y(),
-                t.sol.converged() ? "" : "  FAILED");
-    char line[512];
-    std::snprintf(line, sizeof line, "b,%d,cc_arcs,rk4,%d,%.4f,%.4f,%d,%d,%d,%.1f,,", n, steps_b, t.median_ms, t.min_ms,
-                  t.sol.summary.iterations, model.unknowns(), model.jacobian_nonzeros(s.input()), peak_rss_mb());
-    rows.push_back(line);
-    if (n >= 30) {
-      logn.push_back(std::log(n));
-      logt.push_back(std::log(t.median_ms));
+  // (b) Scaling with the number of disks per segment: default options, two scenes.
+  struct Case {
+    const char* name;
+    const char* file;
+  };
+  const Case cases[] = {{"tendons", "paper_robot_vcref.json"}, {"tip force", "paper_robot_tip_force.json"}};
+  std::vector<int> ns = quick ? std::vector<int>{10, 30}
+                              : std::vector<int>{10, 30, 100, 300, 1000, 3000, 10000, 30000, 100000};
+  ns.erase(std::remove_if(ns.begin(), ns.end(), [&](int n) { return n > max_disks; }), ns.end());
+  std::printf("\n(b) cost against disks per segment n, default options (RK4, %d steps per interval, at most %g mm each),\n"
+              "    cold solves (model, workspace, solve) in a child process per row\n",
+              SolverOptions().rk4_steps, 1e3 * SolverOptions().rk4_max_step);
+  for (const Case& c : cases) {
+    Scene s = load_scene(std::string(TDCR_SOURCE_DIR) + "/examples/" + c.file);
+    s.model = "vcref";
+    std::printf("  %s (examples/%s, model vcref)\n", c.name, c.file);
+    std::printf("%7s %9s %9s %6s %11s %11s %11s %11s %9s %10s\n", "n", "unknowns", "nnz", "iters", "median_ms",
+                "min_ms", "cpu_ms", "us_per_disk", "rss_mb", "kb_per_disk");
+    std::vector<double> logn, logt;
+    for (int n : ns) {
+      const int reps = quick ? 2 : n <= 100 ? 11 : n <= 1000 ? 5 : n <= 10000 ? 3 : 1;
+      ScalingRow r;
+      if (!scaling_point_in_child(s, n, reps, r)) {
+        std::printf("%7d  the child process failed (out of memory?)\n", n);
+        continue;
+      }
+      const int disks = n * static_cast<int>(s.robot.segments.size());
+      // Per disk: the CPU time, and the RSS the solve added to the process's.
+      const double us_per_disk = 1e3 * r.cpu_ms / disks, kb_per_disk = 1024.0 * (r.rss_mb - r.base_mb) / disks;
+      std::printf("%7d %9d %9d %6d %11.2f %11.2f %11.2f %11.2f %9.1f %10.2f%s\n", n, r.unknowns, r.nnz, r.iterations,
+                  r.median_ms, r.min_ms, r.cpu_ms, us_per_disk, r.rss_mb, kb_per_disk, r.converged ? "" : "  FAILED");
+      char line[512];
+      std::snprintf(line, sizeof line, "b,%s,%d,cc_arcs,rk4,%d,%.4f,%.4f,%.4f,%d,%d,%d,%.1f,%.3f,%.3f,,", c.name, n,
+                    s.solver.rk4_steps, r.median_ms, r.min_ms, r.cpu_ms, r.iterations, r.unknowns, r.nnz, r.rss_mb,
+                    us_per_disk, kb_per_disk);
+      rows.push_back(line);
+      if (n >= 30) {
+        logn.push_back(std::log(n));
+        logt.push_back(std::log(r.cpu_ms));
+      }
     }
-  }
-  if (logn.size() >= 2) {
-    double mx = 0, my = 0;
-    for (std::size_t i = 0; i < logn.size(); ++i) mx += logn[i], my += logt[i];
-    mx /= logn.size();
-    my /= logn.size();
-    double sxy = 0, sxx = 0;
-    for (std::size_t i = 0; i < logn.size(); ++i) sxy += (logn[i] - mx) * (logt[i] - my), sxx += (logn[i] - mx) * (logn[i] - mx);
-    std::printf("log-log slope of time against n (n >= 30): %.3f (linear = 1)\n", sxy / sxx);
+    if (logn.size() >= 2) {
+      double mx = 0, my = 0;
+      for (std::size_t i = 0; i < logn.size(); ++i) mx += logn[i], my += logt[i];
+      mx /= logn.size();
+      my /= logn.size();
+      double sxy = 0, sxx = 0;
+      for (std::size_t i = 0; i < logn.size(); ++i)
+        sxy += (logn[i] - mx) * (logt[i] - my), sxx += (logn[i] - mx) * (logn[i] - mx);
+      std::printf("  log-log slope of CPU time against n (n >= 30): %.3f (linear = 1)\n", sxy / sxx);
+    }
   }
   if (!csv.empty()) {
     std::ofstream out(csv);

@@ -125,23 +125,39 @@ for r in vcref:
         rows.append(f"| {r['initial_guess']} | {r['rk4_steps']} | {f(r['median_ms'])} ms | {f(r['tip_error_m'])} m | "
                     f"{f(r['speedup_vs_paper'])}x |")
 tables["vcref_a"] = "\n".join(rows)
-rows = ["| disks per segment | unknowns | Jacobian nonzeros | Newton iterations | median | peak RSS |",
-        "| --- | --- | --- | --- | --- | --- |"]
-pts = []
+# Scaling (part b): per scene, wall and CPU time and peak RSS against the disk count, CPU time
+# and added RSS per disk; the log-log slope of CPU time against n from n = 30 on, per scene.
+def duration(ms):
+    return f"{f(ms / 1000)} s" if ms >= 1000 else f"{f(ms)} ms"
+
+
+rows = ["| scene | disks per segment | unknowns | Jacobian nonzeros | Newton iterations | median (wall) | "
+        "median (CPU) | CPU per disk | peak RSS | added RSS per disk |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+pts = {}
 for r in vcref:
     if r["part"] == "b":
-        rows.append(f"| {r['n']} | {r['unknowns']} | {r['nnz']} | {r['iterations']} | {f(r['median_ms'])} ms | "
-                    f"{f(r['peak_rss_mb'])} MB |")
+        cpu = float(r["cpu_ms"])
+        rows.append(f"| {r['scene']} | {r['n']} | {r['unknowns']} | {r['nnz']} | {r['iterations']} | "
+                    f"{duration(float(r['median_ms']))} | {duration(cpu)} | {f(r['us_per_disk'])} us | "
+                    f"{f(r['peak_rss_mb'])} MB | {f(r['kb_per_disk'])} KB |")
         if int(r["n"]) >= 30:
-            pts.append((math.log(float(r["n"])), math.log(float(r["median_ms"]))))
+            pts.setdefault(r["scene"], []).append((math.log(float(r["n"])), math.log(cpu)))
 tables["vcref_b"] = "\n".join(rows)
-if len(pts) >= 2:
-    mx = sum(x for x, _ in pts) / len(pts)
-    my = sum(y for _, y in pts) / len(pts)
-    slope = sum((x - mx) * (y - my) for x, y in pts) / sum((x - mx) ** 2 for x, _ in pts)
-    tables["vcref_slope"] = f"{slope:.2f}"
-else:
-    tables["vcref_slope"] = "-"
+slopes = []
+for scene, p in pts.items():
+    if len(p) >= 2:
+        mx = sum(x for x, _ in p) / len(p)
+        my = sum(y for _, y in p) / len(p)
+        slope = sum((x - mx) * (y - my) for x, y in p) / sum((x - mx) ** 2 for x, _ in p)
+        slopes.append(f"{slope:.2f} ({scene})")
+tables["vcref_slope"] = ", ".join(slopes) if slopes else "-"
+# The stamp of bench_vcref's own run (vcref_machine.txt beside vcref.csv), else run_all's.
+stamp = os.path.join(res, "vcref_machine.txt")
+if not os.path.exists(stamp):
+    stamp = os.path.join(res, "machine.txt")
+with open(stamp) as fh:
+    tables["vcref_run"] = "; ".join(line.lstrip("# ").rstrip() for line in fh if line.strip())
 
 # Effects.
 names = []

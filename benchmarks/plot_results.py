@@ -202,28 +202,29 @@ def warmstart(res, out):
 
 
 def vcref_scaling(res, out):
-    """Part (b) of bench_vcref --csv RESULTS_DIR/vcref.csv: cost against disks per segment."""
+    """Part (b) of bench_vcref --csv RESULTS_DIR/vcref.csv: cost and memory per disk against disks per segment."""
     rows = read(os.path.join(res, "vcref.csv"))
     if not rows:
         return
     rows = [r for r in rows if r["part"] == "b"]
-    n = [num(r["n"]) for r in rows]
-    t = [num(r["median_ms"]) for r in rows]
-    fig, ax = plt.subplots(figsize=(6, 4.5))
-    ax.loglog(n, t, "o-", color=COLORS["vcref"], label="VCref, multiple shooting + KLU")
-    sel = [(math.log(a), math.log(b)) for a, b in zip(n, t) if a >= 30 and b > 0]
-    if len(sel) >= 2:
-        mx = sum(x for x, _ in sel) / len(sel)
-        my = sum(y for _, y in sel) / len(sel)
-        slope = sum((x - mx) * (y - my) for x, y in sel) / sum((x - mx) ** 2 for x, _ in sel)
-        ax.set_title(f"VCref cost against disk count: log-log slope {slope:.2f} (n >= 30)")
-        x0 = min(a for a in n if a >= 30)
-        y0 = [b for a, b in zip(n, t) if a == x0][0]
-        ax.loglog([x0, max(n)], [y0, y0 * max(n) / x0], "k:", lw=1, label="linear")
-    ax.set_xlabel("disks per segment n")
-    ax.set_ylabel("median solve time (ms)")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend()
+    scenes = []
+    for r in rows:
+        if r["scene"] not in scenes:
+            scenes.append(r["scene"])
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(10, 4.2))
+    for scene, style in zip(scenes, ["o-", "s--", "^:"]):
+        sel = [r for r in rows if r["scene"] == scene]
+        n = [num(r["n"]) for r in sel]
+        ax.semilogx(n, [num(r["us_per_disk"]) for r in sel], style, color=COLORS["vcref"], label=scene)
+        bx.semilogx(n, [num(r["kb_per_disk"]) for r in sel], style, color=COLORS["vcref"], label=scene)
+    for a in (ax, bx):
+        a.set_xlabel("disks per segment n")
+        a.set_ylim(bottom=0)
+        a.grid(True, which="both", alpha=0.3)
+        a.legend()
+    ax.set_ylabel("CPU time of a cold solve per disk (us)")
+    bx.set_ylabel("RSS added by the solve, per disk (KB)")
+    fig.suptitle("VCref (multiple shooting + KLU), default options: cost per disk against the disk count")
     save(fig, out, "vcref_scaling")
 
 

@@ -17,6 +17,7 @@ py=/usr/bin/python3; [ -x "$py" ] || py=python3
   echo "# machine: $(uname -m), $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //')"
   echo "# date: $(date -u +%Y-%m-%dT%H:%MZ)   commit: $(git rev-parse --short HEAD 2>/dev/null || echo unknown)"
 } > "$out/machine.txt"
+cp "$out/machine.txt" "$out/vcref_machine.txt"  # the stamp of bench_vcref's run (also run on its own)
 "$build/bin/bench_case_study" $quick --out "$out"
 "$build/bin/bench_vcref" $quick --csv "$out/vcref.csv" | tee "$out/bench_vcref.txt"
 "$build/bin/bench_vc" $quick | tee "$out/bench_vc.txt"

@@ -290,6 +290,40 @@ TEST(Vcref, SparseJacobianMatchesFiniteDifferences) {
   }
 }
 
+// The disk loads' exact derivatives (vcref_tangent.cpp) for tendons whose hole offsets change
+// from disk to disk (helical routing, half a turn per segment), Eq. 58 on and off, against central
+// differences as above, at the cold guess moved off the answer and at the answer.
+TEST(Vcref, SparseJacobianMatchesFiniteDifferencesForHelicalTendons) {
+  for (DiskNormalForce dn : {DiskNormalForce::Removed, DiskNormalForce::Kept}) {
+    Scene s = paper::scene(6, 6);  // T2 and T3: a tendon ending at each segment
+    s.effects.disk_normal_force = dn;
+    for (Segment& seg : s.robot.segments)
+      for (TendonSpec& t : seg.tendons) {
+        t.routing.type = TendonRoutingSpec::Type::Helical;
+        t.routing.turns = 0.5;
+      }
+    s.loads.tip_force = Vec3(0.1, -0.2, 0.0);
+    VcrefModel model(s.robot, s.effects);
+    auto ws = model.make_workspace();
+    double Fs = 1e-3 + s.loads.tip_force.norm();
+    for (double t : s.actuation.values) Fs += t;
+    const int n = model.unknowns();
+    Eigen::VectorXd cs(n);
+    cs.head<3>().setConstant(Fs);
+    cs.segment<3>(3).setConstant(Fs * 0.1);
+    for (int i = 6; i < n; ++i) {
+      const int k = (i - 6) % 12;
+      cs[i] = k < 3 ? 0.1 : k < 6 ? 1.0 : k < 9 ? Fs : Fs * 0.1;
+    }
+    const bvp::JacobianCheck c = model.check_jacobian(*ws, s.input(), s.solver, nullptr, 0.05);
+    ASSERT_TRUE(c.evaluated);
+    EXPECT_LT(row_relative_error(c, cs), 1e-5);
+    const Solution sol = tdcr::solve(model, *ws, s.input(), s.solver);
+    ASSERT_TRUE(sol.converged()) << sol.summary.message;
+    EXPECT_LT(row_relative_error(model.check_jacobian(*ws, s.input(), s.solver, &sol, 0.0), cs), 1e-5);
+  }
+}
+
 // 7. Eq. 58 (frictionless disks, paper Section 9.1): the normal component of a pass-through
 // tendon's two chord forces vanishes when the neighbouring subsegments bend equally, i.e. at
 // constant curvature, which holds without external load inside a segment whose tendon
@@ -571,6 +605,96 @@ TEST(Vcref, CvodeAndRk4Agree) {
   EXPECT_EQ(b.summary.integrator, "cvode");
   EXPECT_LT((a.tip().p - b.tip().p).norm(), 1e-8);
   EXPECT_LT(lie::rotation_angle(a.tip().R, b.tip().R), 1e-7);
+}
+
+// Cost linear in the disk count (docs/benchmarks.md, "VCref cost against the number of disks").
+// A rigid motion of disks 1..N (the base stays clamped) turns no tendon chord against its disks
+// and moves every rod with its ends, so the Jacobian maps it to zero outside block 1 (the rows of
+// disk 1, next to the base): a translation anywhere, a rotation about the base at an equilibrium
+// without external load (the residual turns with it: omega x 0). Units: unknowns in their scales
+// (L, 1, F_s, F_s L), residuals scaled. Forward differences with steps of 1e-7 of those scales
+// leave a rounding of about eps / 1e-7 = 2.2e-9 in every entry (the residual's terms are of order
+// 1, the change 1e-7), whatever the disk count; a row sums at most nine entries: below 2e-8
+// (measured: at most 3.4e-9). With the tendon wrenches differentiated in full the steps had to be
+// 1e-7 of the shortest interval l_min (the chords turn on that scale) and their truncation and
+// rounding grew with L / l_min: 2.0e-6 on the paper robot at n = 10, 2.6e-5 on the robot with
+// short disk spacing below, and from 5000 disks per segment on Newton stalled on them.
+struct RigidMotionRows {
+  // The largest scaled |J d| outside block 1: pose continuity rows, disk equilibrium rows.
+  double translation[2] = {0.0, 0.0}, rotation[2] = {0.0, 0.0};
+};
+
+RigidMotionRows rigid_motion_rows(const Scene& s) {
+  VcrefModel model(s.robot, s.effects);
+  auto ws = model.make_workspace();
+  const Solution sol = tdcr::solve(model, *ws, s.input(), s.solver);
+  EXPECT_TRUE(sol.converged()) << sol.summary.message;
+  const bvp::JacobianCheck c = model.check_jacobian(*ws, s.input(), s.solver, &sol, 0.0);
+  EXPECT_TRUE(c.evaluated);
+  const int n = model.unknowns(), N = s.robot.total_disks();
+  const double L = s.robot.total_length();
+  double Fs = 1e-3;  // physics::LoadCase::force_scale without external loads
+  for (double t : s.actuation.values) Fs += t;
+  Eigen::VectorXd fs(n);
+  std::vector<int> group(n);
+  for (int i = 0; i < n; ++i) {
+    group[i] = i < 6 ? 2 + i / 3 : ((i - 6) % 12) / 3;  // rows of p, w continuity, force, moment balance
+    fs[i] = group[i] == 0 ? 1.0 / L : group[i] == 1 ? 1.0 : group[i] == 2 ? 1.0 / Fs : 1.0 / (Fs * L);
+  }
+  const auto outside_block_1 = [&](const Eigen::VectorXd& d, double* worst) {
+    const Eigen::VectorXd r = (c.analytic * d).cwiseProduct(fs).cwiseAbs();
+    for (int i = 0; i < n; ++i)
+      if (i < 6 || i >= 18) worst[group[i] / 2] = std::max(worst[group[i] / 2], r[i]);
+  };
+  const Vec3 e = Vec3(1.0, 2.0, 3.0).normalized();
+  const Eigen::VectorXd& x = sol.unknowns;  // the check's point, up to the rotation charts (w = 0)
+  Eigen::VectorXd shift = Eigen::VectorXd::Zero(n), turn = Eigen::VectorXd::Zero(n);
+  turn.head<3>() = e.cross(Vec3(x.head<3>()));
+  turn.segment<3>(3) = e.cross(Vec3(x.segment<3>(3)));
+  for (int k = 1; k < N; ++k) {
+    const int o = 6 + 12 * (k - 1);
+    shift.segment<3>(o) = L * e;
+    turn.segment<3>(o) = e.cross(Vec3(x.segment<3>(o)));
+    turn.segment<3>(o + 3) = sol.disk_frames[k].R.transpose() * e;
+    turn.segment<3>(o + 6) = e.cross(Vec3(x.segment<3>(o + 6)));
+    turn.segment<3>(o + 9) = e.cross(Vec3(x.segment<3>(o + 9)));
+  }
+  RigidMotionRows rows;
+  outside_block_1(shift, rows.translation);
+  outside_block_1(turn, rows.rotation);
+  return rows;
+}
+
+TEST(Vcref, JacobianMapsRigidMotionsOfTheDisksToZero) {
+  // The paper robot (configuration 2), and one whose second segment is 0.5 mm long with 50
+  // disks: L / l_min = 1e4, as with 5000 disks per segment, at 714 unknowns.
+  Scene fine = paper::scene(10, 2);
+  fine.robot.segments[1].length = 5e-4;
+  fine.robot.segments[1].disks = 50;
+  for (const Scene& s : {paper::scene(10, 2), fine}) {
+    const RigidMotionRows r = rigid_motion_rows(s);
+    const std::string robot = std::to_string(s.robot.segments[1].disks) + " disks in segment 2";
+    for (int g = 0; g < 2; ++g) {
+      EXPECT_LT(r.translation[g], 2e-8) << robot << (g ? ", equilibrium rows" : ", continuity rows");
+      EXPECT_LT(r.rotation[g], 2e-8) << robot << (g ? ", equilibrium rows" : ", continuity rows");
+    }
+  }
+}
+
+// The user's scene: the paper robot with 5000 disks per segment (configuration 2). The cold guess
+// misses only the axial compression (strain T / EA ~ 5e-5), and one Newton step takes it out;
+// before the disk loads were linearised the first steps of the direct solve were rejected, it
+// stalled for 30 iterations, the loading path then ran for minutes in 9 GB. Continuation off and
+// few iterations allowed: a stall fails here within seconds.
+TEST(Vcref, FiveThousandDisksPerSegmentConvergeInOneNewtonStep) {
+  Scene s = paper::scene(5000, 2);
+  s.solver.continuation = false;
+  s.solver.max_iterations = 4;
+  const Solution sol = run(s);
+  ASSERT_TRUE(sol.converged()) << sol.summary.message;
+  EXPECT_EQ(sol.summary.linear_solver, "klu");
+  EXPECT_LE(sol.summary.iterations, 2);
+  EXPECT_LT(sol.summary.residual_norm, 1e-10);
 }
 
 }  // namespace

@@ -203,6 +203,13 @@ bool ShootingSystem::sparse_jacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
   const SparsityPattern& pattern = structure_->pattern;
   const int* row_block = structure_->row_block.data();
   const double noise = integrator_->relative_noise();
+  // The problem may linearise terms about the trajectory of x (starts_, ends_, unchanged below)
+  // until the loop ends, however it ends.
+  struct Linearization {
+    const ShootingProblem& problem;
+    ~Linearization() { problem.end_linearization(); }
+  } linearization{problem_};
+  problem_.begin_linearization(nodes());
   for (int k = 0; k < n_; ++k) {
     const size_t off = static_cast<size_t>(k) * m_;
     const double* y0 = starts_.data() + off;
@@ -217,8 +224,11 @@ bool ShootingSystem::sparse_jacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
       int idx = pattern.col_ptr[col];
       const int end = pattern.col_ptr[col + 1];
       if (idx == end) continue;
-      const double h = problem_.increment(k, j, xnode_[j], scale_[col], noise);
-      xnode_[j] = x[col] + h;
+      // The step actually taken, x + h - x: for a position near L perturbed by h ~ L / N * 1e-7
+      // the rounding of x + h is a relative error of ~ N * 1e-9 in the column, and a different
+      // one in every binade of x.
+      xnode_[j] = x[col] + problem_.increment(k, j, xnode_[j], scale_[col], noise);
+      const double h = xnode_[j] - x[col];
       problem_.start_state(k, xnode_.data(), py);
       bool ok = true;
       if (problem_.shifts_end(k, j)) {

@@ -52,11 +52,13 @@ void VcrefShooting::bind(const ModelInput& input, const SolverOptions& options) 
   const double L = d_.length, Fs = load_.force_scale();
   const double comp[4] = {1.0 / L, 1.0, 1.0 / Fs, 1.0 / (Fs * L)};
   std::copy(comp, comp + 4, comp_scale_);
-  // Finite-difference steps: the tendon chord directions vary on the scale of the shortest
-  // interval l_min (positions) and l_min / r_max (rotations), not on the robot's scale; steps
-  // relative to those keep the forward differences accurate with 1000 disks per segment.
+  // Finite-difference steps on the scales of the unknowns: the Jacobian takes the tendon wrenches,
+  // whose chords turn on the much shorter scales of the shortest interval l_min (positions) and
+  // l_min / r_max (rotations), through their exact linearisation (begin_linearization). With
+  // tendon friction it differentiates them in full, with steps on those short scales (their
+  // rounding then grows with the disk count).
   const double l = d_.l_min;
-  const double fd[4] = {l, r_max > 0.0 ? std::min(1.0, l / r_max) : 1.0, Fs, Fs * L};
+  const double fd[4] = {d_.friction ? l : L, d_.friction && r_max > 0.0 ? std::min(1.0, l / r_max) : 1.0, Fs, Fs * L};
   std::copy(fd, fd + 4, fd_comp_);
   fd_rel_ = kFdStep;
   if (options.integrator == IntegratorKind::Cvode)  // adaptive steps: noise ~ rtol
@@ -135,6 +137,8 @@ void VcrefShooting::subtract_disk_load(int j, Vec3& F, Vec3& M) const {
     tendon::DiskWrench w;
     if (d_.friction) {
       w = tendon::disk_wrench_friction(j, frames_.data(), active_, chord_.data(), d_.remove_normal);
+    } else if (linearized_) {
+      w = linearized_wrench(j);
     } else {
       // Bit-identical frames give the bit-identical wrench: reuse it.
       WrenchMemo& m = wrench_memo_[j];
@@ -152,6 +156,53 @@ void VcrefShooting::subtract_disk_load(int j, Vec3& F, Vec3& M) const {
     M -= w.moment;
   }
   if (load_.has_disk_weight()) F -= load_.disk_weight(j);
+}
+
+void VcrefShooting::begin_linearization(const bvp::ShootingNodes& nominal) const {
+  if (d_.friction) return;
+  linearized_ = true;
+  nominal_ = nominal;
+  for (LinearWrench& l : linear_) l.disk = -1;
+}
+
+Frame VcrefShooting::nominal_frame(int k) const {
+  return cosserat::frame_of(k < d_.N ? nominal_.start(k) : nominal_.end(d_.N - 1));
+}
+
+// The wrench at the nominal frames is tendon::disk_wrench's there (bit for bit the residual's);
+// moved frames add D (dp, log(R_nominal^T R)).
+tendon::DiskWrench VcrefShooting::linearized_wrench(int j) const {
+  const int read = j < d_.N && passes_[j] ? 3 : 2;
+  LinearWrench* l = nullptr;
+  for (LinearWrench& c : linear_)
+    if (c.disk == j) l = &c;
+  if (!l) {
+    l = &linear_[linear_next_];
+    linear_next_ = (linear_next_ + 1) % 4;
+    l->disk = j;
+    Frame saved[3];
+    for (int i = 0; i < read; ++i) {
+      saved[i] = frames_[j - 1 + i];
+      l->frames[i] = frames_[j - 1 + i] = nominal_frame(j - 1 + i);
+    }
+    tendon::DiskWrench same_up_to_rounding;
+    disk_wrench_derivative(j, frames_.data(), same_up_to_rounding, l->D);
+    l->wrench = tendon::disk_wrench(j, frames_.data(), active_, tension_.data(), d_.remove_normal);
+    for (int i = 0; i < read; ++i) frames_[j - 1 + i] = saved[i];
+  }
+  tendon::DiskWrench w = l->wrench;
+  for (int i = 0; i < read; ++i) {
+    const Frame& now = frames_[j - 1 + i];
+    const Frame& was = l->frames[i];
+    if (same_bits(now, was)) continue;
+    Eigen::Matrix<double, 6, 1> d;
+    d.head<3>() = now.p - was.p;
+    d.tail<3>() = lie::log_so3(was.R.transpose() * now.R);
+    const Eigen::Matrix<double, 6, 1> dw = l->D.middleCols<6>(6 * i) * d;
+    w.force += dw.head<3>();
+    w.moment += dw.tail<3>();
+  }
+  return w;
 }
 
 void VcrefShooting::friction_frames(int j, const bvp::ShootingNodes& nodes) const {

@@ -89,9 +89,27 @@ class VcrefShooting final : public bvp::ShootingProblem {
   // the rotation symmetry) and for RK4 only (CVODE's error control is not rotation invariant).
   bool linearize_shot(int k, bvp::Integrator& integrator, const double* y0, const double* end) const override;
   void shot_tangent(int k, const double* dy, double* dend) const override;
+  // The tendon wrenches on the disks through their exact linearisation in the poses of the disks
+  // they read (vcref_tangent.cpp), while a Jacobian is taken: a tendon chord is L / N long, its
+  // direction moves on that scale, and forward differences of the full wrench lost digits in
+  // proportion to the disk count (from about 5000 disks per segment on, Newton stalled on the
+  // paper robot). Not with tendon friction (the tensions read every proximal pose).
+  void begin_linearization(const bvp::ShootingNodes& nominal) const override;
+  void end_linearization() const override { linearized_ = false; }
+
+  // The tendon wrench on disk j and its derivative in the poses (dp, body rotation dtheta) of the
+  // disks j-1, j, j+1 (columns 0-5, 6-11, 12-17; the last six zero unless a tendon passes disk j)
+  // at `frames` (disk frames, 0..N), for the tensions of the last set_load_factor(). Without
+  // tendon friction.
+  void disk_wrench_derivative(int j, const Frame* frames, tendon::DiskWrench& w,
+                              Eigen::Matrix<double, 6, 18>& D) const;
 
  private:
   void subtract_disk_load(int j, Vec3& F, Vec3& M) const;
+  // The tendon wrench on disk j at frames_ j-1..j+1 through its linearisation about the nominal
+  // frames (begin_linearization).
+  tendon::DiskWrench linearized_wrench(int j) const;
+  Frame nominal_frame(int k) const;
   // With friction: frames_ 0..j+1 (at most N) from the nodes and chord_ from them.
   void friction_frames(int j, const bvp::ShootingNodes& nodes) const;
 
@@ -125,6 +143,18 @@ class VcrefShooting final : public bvp::ShootingProblem {
   double comp_scale_[4] = {1, 1, 1, 1};  // 1/L, 1, 1/F_s, 1/(F_s L)
   double fd_comp_[4] = {1, 1, 1, 1};     // finite-difference scale per component group
   double fd_rel_ = 1e-7;
+  // Linearised tendon wrenches (begin_linearization): the nominal trajectory and, for the last
+  // few disks asked for (a Jacobian visits the nodes in order), the wrench and its derivative.
+  mutable bool linearized_ = false;
+  mutable bvp::ShootingNodes nominal_{nullptr, nullptr, 0, 0};
+  struct LinearWrench {
+    int disk = -1;
+    Frame frames[3];  // nominal frames of disks j-1, j, j+1
+    tendon::DiskWrench wrench;
+    Eigen::Matrix<double, 6, 18> D;
+  };
+  mutable LinearWrench linear_[4];
+  mutable int linear_next_ = 0;
   // The last linearize_shot(): its start and end states and d(end) / d(n, m of the start).
   mutable cosserat::State shot_start_, shot_end_;
   mutable Eigen::Matrix<double, cosserat::kStateSize, 6> shot_d_;

@@ -123,6 +123,20 @@ class ShootingProblem {
   /// @brief The end-state change (m values) of interval k for the start-state change dy (m
   /// values), linear in dy, at the last linearize_shot(k) that returned true.
   virtual void shot_tangent(int k, const double* dy, double* dend) const { (void)k, (void)dy, (void)dend; }
+
+  // Linearised residual terms (optional).
+
+  /// @brief The Jacobian's finite differences are about to be taken around `nominal` (the
+  /// trajectory of the unknowns it is evaluated at; valid until end_linearization()). Until then
+  /// boundary() and junction() may evaluate a term through its exact linearisation about
+  /// `nominal` instead of in full: the finite differences of a linear term are its exact
+  /// derivative, for any increment. For terms that vary on a much shorter scale than the rest of
+  /// a block (e.g. a point load whose direction is set by two nodes a small fraction of the
+  /// problem's length apart, where forward differences lose digits in proportion to the number
+  /// of intervals), so that the increments can follow the scale of the rest. Default: nothing.
+  virtual void begin_linearization(const ShootingNodes& nominal) const { (void)nominal; }
+  /// @brief The Jacobian's finite differences are done: evaluate every term in full again.
+  virtual void end_linearization() const {}
 };
 
 /// @brief The layout and Jacobian structure of a ShootingProblem: they depend only on its

@@ -19,7 +19,10 @@
 /// tendon wrench reads the poses of disks j-1, j, j+1. The Jacobian is block tridiagonal
 /// (forward differences; without gravity the free rod's flow commutes with translations and
 /// rotations of the whole start, so only the start wrench's 6 unknowns need an integration each;
-/// with gravity the rotations take 3 more); KLU above 18
+/// with gravity the rotations take 3 more; the tendon wrenches, whose chords turn on the scale of
+/// the disk spacing L / N, enter through their exact derivatives in the disk poses, so that the
+/// differences' steps follow the unknowns' scales and the Jacobian's accuracy does not fall with
+/// N; with tendon friction they are differenced in full); KLU above 18
 /// unknowns (whatever NewtonOptions::dense_size_limit says), so the cost grows linearly with N. Its pattern
 /// follows the input: disk j's equilibrium reads disk j+1's pose only where a tensioned tendon
 /// passes disk j; a workspace keeps the patterns of its last two such sets and rebuilds one only
