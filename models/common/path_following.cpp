@@ -93,17 +93,26 @@ bvp::ArclengthResult run_path(ModelProblem& P, const TendonRouting& routing, bvp
 // back along the branch from the answer by natural Newton steps (1/8 of the way to that point,
 // halved when Newton fails), each tested, until a point that is not unstable, then by regula
 // falsi (Illinois) on the stability margin between the two, to kHiddenBifurcationTolerance or
-// a point the test does not decide. Returns the load fraction, or a negative value if there is
-// none to report (or the walk failed); `margin` gets the answer's. The Newton solves have a
-// solver of their own (the workspace's keeps the path's last Jacobian for the solves after
-// it), their work is counted in `sum`; the system's parameter is left at the answer's.
+// a point the test does not decide. The branch must be continuous there: the states on either
+// side of the located load (scaled by the system's unknown scales) closer than a tenth of the
+// way from there to the answer. Otherwise the natural steps left the branch (it ends in a fold
+// on the way back: the loading path jumped onto it; a near-perfect column, docs/hard-cases.md),
+// and no bifurcation is reported. The Newton solves have a solver of their own (the workspace's
+// keeps the path's last Jacobian for the solves after it), their work is counted in `sum`; the
+// system's parameter is left at the answer's.
+struct HiddenBifurcation {
+  double lambda = -1.0;  ///< Where the branch lost stability (< 0: none located).
+  double margin = 0.0;   ///< The answer's stability margin.
+  bool unstable = false; ///< The answer is unstable through a real eigenvalue, unexplained.
+};
 constexpr int kHiddenBifurcationSolves = 24;          // Newton solves (each tested) in all
 constexpr int kHiddenBifurcationIterations = 30;      // per Newton solve (a corrector's limit)
 constexpr double kHiddenBifurcationTolerance = 1e-5;  // load fraction
 
-double hidden_bifurcation(ModelProblem& P, bvp::ParameterizedSystem& system, const Eigen::VectorXd& x,
-                          const bvp::NewtonOptions& newton_options, const bvp::ArclengthResult& r, double& margin,
-                          SolverSummary& sum) {
+HiddenBifurcation hidden_bifurcation(ModelProblem& P, bvp::ParameterizedSystem& system, const Eigen::VectorXd& x,
+                                     const bvp::NewtonOptions& newton_options, const bvp::ArclengthResult& r,
+                                     SolverSummary& sum) {
+  HiddenBifurcation out;
   const double end = r.parameter;
   double floor = 0.0;     // the path's last stable point: the start, or its last snap landing
   bool recorded = false;  // a bifurcation recorded since then
@@ -114,11 +123,12 @@ double hidden_bifurcation(ModelProblem& P, bvp::ParameterizedSystem& system, con
     }
     if (e.type == bvp::ArclengthEventType::Bifurcation) recorded = true;
   }
-  if (recorded || !(end > floor)) return -1.0;
+  if (recorded || !(end > floor)) return out;
   const Stability at_end = P.stability(x, end);
   system.set_parameter(end);
-  if (at_end.status != StabilityStatus::Unstable || oscillatory_mode(at_end.method)) return -1.0;
-  margin = at_end.margin;
+  if (at_end.status != StabilityStatus::Unstable || oscillatory_mode(at_end.method)) return out;
+  out.unstable = true;
+  out.margin = at_end.margin;
   bvp::NewtonSolver newton;
   bvp::NewtonOptions options = newton_options;
   options.max_iterations = std::min(options.max_iterations, kHiddenBifurcationIterations);
@@ -145,6 +155,7 @@ double hidden_bifurcation(ModelProblem& P, bvp::ParameterizedSystem& system, con
     }
     const Stability st = P.stability(trial, l);
     if (st.status == StabilityStatus::Undetermined && std::isfinite(st.margin)) {  // at the crossing
+      lo = hi = trial;
       l_lo = l_hi = l;
     } else if (st.status != StabilityStatus::Stable) {
       if (l <= floor) break;  // unstable down to the last stable point: nothing to locate
@@ -166,6 +177,7 @@ double hidden_bifurcation(ModelProblem& P, bvp::ParameterizedSystem& system, con
     if (!solve_at(l, trial)) break;
     const Stability st = P.stability(trial, l);
     if (st.status == StabilityStatus::Undetermined) {  // at the crossing (or not decided there)
+      lo = hi = trial;
       l_lo = l_hi = l;
     } else if (st.status == StabilityStatus::Unstable) {
       hi = trial;
@@ -182,7 +194,11 @@ double hidden_bifurcation(ModelProblem& P, bvp::ParameterizedSystem& system, con
     }
   }
   system.set_parameter(end);
-  return l_lo < 0.0 ? -1.0 : 0.5 * (l_lo + l_hi);
+  if (l_lo < 0.0 || l_hi - l_lo > kHiddenBifurcationTolerance) return out;
+  Eigen::VectorXd w(x.size());
+  system.unknown_scale(w);
+  if ((hi - lo).cwiseProduct(w).norm() <= 0.1 * (x - lo).cwiseProduct(w).norm()) out.lambda = 0.5 * (l_lo + l_hi);
+  return out;
 }
 
 void add_counts(const bvp::ArclengthResult& r, SolverSummary& sum) {
@@ -241,8 +257,8 @@ bvp::ArclengthResult follow_loading_path(ModelProblem& P, const TendonRouting& r
     }
     if (D->system() != &system) system.set_parameter(r.parameter);
   }
-  double unstable_margin = 0.0;
-  const double hidden = r.converged() ? hidden_bifurcation(P, system, x, newton_options, r, unstable_margin, sum) : -1.0;
+  const HiddenBifurcation hidden =
+      r.converged() ? hidden_bifurcation(P, system, x, newton_options, r, sum) : HiddenBifurcation{};
   sum.solver_flag = r.last.flag;
   sum.residual_norm = r.last.residual_norm;
   sum.physical_residual = r.last.physical_residual;
@@ -272,29 +288,38 @@ bvp::ArclengthResult follow_loading_path(ModelProblem& P, const TendonRouting& r
     events.push_back(pe);
   }
 
-  if (hidden >= 0.0) {
+  std::string unstable;  // why the answer is unstable, for the summary
+  if (hidden.lambda >= 0.0) {
     PathEvent pe;
     pe.type = PathEvent::Type::Bifurcation;
-    pe.load_fraction = hidden;
+    pe.load_fraction = hidden.lambda;
     char buf[400];
     std::snprintf(buf, sizeof buf,
                   "bifurcation at %.4g %% of the load, found by the stability test (%s): the path stays on its "
                   "branch, unstable beyond it (stability margin %.3g at the answer)",
-                  100.0 * hidden,
+                  100.0 * hidden.lambda,
                   P.determinant_marks_bifurcations()
                       ? "the path's determinant keeps its sign there: an even number of directions lose stability "
                         "at once, as a round column's two bending planes"
                       : "this model's determinant does not mark bifurcations",
-                  unstable_margin);
+                  hidden.margin);
     pe.note = buf;
     events.push_back(pe);
+    unstable = pe.note;
+  } else if (hidden.unstable) {
+    char buf[240];
+    std::snprintf(buf, sizeof buf,
+                  "stability margin %.3g, and walking back along its branch found no point where it loses "
+                  "stability continuously (the loading path may have jumped onto it)",
+                  hidden.margin);
+    unstable = buf;
   }
 
   const std::string why = purpose + "; " + again + r.message;
   if (r.converged()) {
     sum.termination = TerminationType::Converged;
     sum.message = r.last.message + " (by following the loading path from rest: " + why + ")";
-    if (hidden >= 0.0) sum.message = "the answer is unstable: " + events.back().note + "; " + sum.message;
+    if (!unstable.empty()) sum.message = "the answer is unstable: " + unstable + "; " + sum.message;
     if (!snaps.empty()) sum.message = "the robot snaps: " + snaps + "; " + sum.message;
   } else {
     sum.termination = r.last.converged() || r.steps == 0 ? TerminationType::NoConvergence : r.last.termination;
