@@ -91,9 +91,10 @@ bvp::ArclengthResult run_path(ModelProblem& P, const TendonRouting& routing, bvp
 // bifurcation was recorded since the path's last stable point (the start, or its last snap
 // landing), the branch lost stability on the way. The load where it did is found by walking
 // back along the branch from the answer by natural Newton steps (1/8 of the way to that point,
-// halved when Newton fails), each tested, until a point that is not unstable, then by regula
-// falsi (Illinois) on the stability margin between the two, to kHiddenBifurcationTolerance or
-// a point the test does not decide. The branch must be continuous there: the states on either
+// halved when Newton fails), each tested, until a point that is not unstable, then by the
+// secant of the margin through the last two unstable points and regula falsi (Illinois) on the
+// margin between the two sides, to kHiddenBifurcationTolerance or a point the test does not
+// decide. The branch must be continuous there: the states on either
 // side of the located load (scaled by the system's unknown scales) closer than a tenth of the
 // way from there to the answer. Otherwise the natural steps left the branch (it ends in a fold
 // on the way back: the loading path jumped onto it; a near-perfect column, docs/hard-cases.md),
@@ -145,6 +146,7 @@ HiddenBifurcation hidden_bifurcation(ModelProblem& P, bvp::ParameterizedSystem& 
   // The walk back from the answer (hi: unstable) to a point that is not (lo).
   Eigen::VectorXd hi = x, lo, trial;
   double l_hi = end, m_hi = at_end.margin, l_lo = -1.0, m_lo = 0.0;
+  double l_hi2 = NAN, m_hi2 = NAN;  // the unstable point before (l_hi, m_hi)
   double step = 0.125 * (end - floor);
   while (l_lo < 0.0 && solves < kHiddenBifurcationSolves && step > 1e-4 * (end - floor)) {
     const double l = std::max(floor, l_hi - step);
@@ -160,6 +162,8 @@ HiddenBifurcation hidden_bifurcation(ModelProblem& P, bvp::ParameterizedSystem& 
     } else if (st.status != StabilityStatus::Stable) {
       if (l <= floor) break;  // unstable down to the last stable point: nothing to locate
       hi = trial;
+      l_hi2 = l_hi;
+      m_hi2 = m_hi;
       l_hi = l;
       m_hi = st.margin;
     } else {
@@ -168,10 +172,14 @@ HiddenBifurcation hidden_bifurcation(ModelProblem& P, bvp::ParameterizedSystem& 
       m_lo = st.margin;
     }
   }
-  // Regula falsi on the margin between them.
+  // Then the secant through the last two unstable points (the margin on the unstable side is
+  // the mode that crosses zero; on the stable side another mode can be the least stable one,
+  // PRB's column), and once a point falls on the stable side, regula falsi on the margin
+  // between the two sides.
   int side = 0;
+  bool secant = std::isfinite(l_hi2);
   while (l_lo >= 0.0 && l_hi - l_lo > kHiddenBifurcationTolerance && solves < kHiddenBifurcationSolves) {
-    double l = l_lo + (l_hi - l_lo) * m_lo / (m_lo - m_hi);
+    double l = secant ? l_hi - m_hi * (l_hi - l_hi2) / (m_hi - m_hi2) : l_lo + (l_hi - l_lo) * m_lo / (m_lo - m_hi);
     if (!(l > l_lo && l < l_hi)) l = 0.5 * (l_lo + l_hi);
     trial = l - l_lo < l_hi - l ? lo : hi;
     if (!solve_at(l, trial)) break;
@@ -181,6 +189,8 @@ HiddenBifurcation hidden_bifurcation(ModelProblem& P, bvp::ParameterizedSystem& 
       l_lo = l_hi = l;
     } else if (st.status == StabilityStatus::Unstable) {
       hi = trial;
+      l_hi2 = l_hi;
+      m_hi2 = m_hi;
       l_hi = l;
       m_hi = st.margin;
       if (side == -1) m_lo *= 0.5;
@@ -191,6 +201,7 @@ HiddenBifurcation hidden_bifurcation(ModelProblem& P, bvp::ParameterizedSystem& 
       m_lo = st.margin;
       if (side == +1) m_hi *= 0.5;
       side = +1;
+      secant = false;
     }
   }
   system.set_parameter(end);
