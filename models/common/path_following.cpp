@@ -1,5 +1,6 @@
 // The loading path from rest (load_continuation.hpp: follow_loading_path): arclength
-// continuation with snaps, its events mapped to PathEvents with the tip jump in metres.
+// continuation with snaps, its events mapped to PathEvents with the tip jump in metres, and the
+// bifurcations its determinant does not see (hidden_bifurcation).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -94,11 +95,11 @@ bvp::ArclengthResult run_path(ModelProblem& P, const TendonRouting& routing, bvp
 // halved when Newton fails), each tested, until a point that is not unstable, then by the
 // secant of the margin through the last two unstable points and regula falsi (Illinois) on the
 // margin between the two sides, to kHiddenBifurcationTolerance or a point the test does not
-// decide. The branch must be continuous there: the states on either
-// side of the located load (scaled by the system's unknown scales) closer than a tenth of the
-// way from there to the answer. Otherwise the natural steps left the branch (it ends in a fold
-// on the way back: the loading path jumped onto it; a near-perfect column, docs/hard-cases.md),
-// and no bifurcation is reported. The Newton solves have a solver of their own (the workspace's
+// decide. The branch must be continuous there: the states on either side of the located load
+// (scaled by the system's unknown scales) closer than a tenth of the way from there to the
+// answer. Otherwise the natural steps left the branch (it ends in a fold on the way back: the
+// loading path jumped onto it; a near-perfect column, docs/hard-cases.md), and no bifurcation is
+// reported. The Newton solves have a solver of their own (the workspace's
 // keeps the path's last Jacobian for the solves after it), their work is counted in `sum`; the
 // system's parameter is left at the answer's.
 struct HiddenBifurcation {
@@ -184,7 +185,8 @@ HiddenBifurcation hidden_bifurcation(ModelProblem& P, bvp::ParameterizedSystem& 
     trial = l - l_lo < l_hi - l ? lo : hi;
     if (!solve_at(l, trial)) break;
     const Stability st = P.stability(trial, l);
-    if (st.status == StabilityStatus::Undetermined) {  // at the crossing (or not decided there)
+    if (st.status == StabilityStatus::Undetermined) {  // at the crossing, unless the test failed
+      if (!std::isfinite(st.margin)) break;
       lo = hi = trial;
       l_lo = l_hi = l;
     } else if (st.status == StabilityStatus::Unstable) {

@@ -34,15 +34,16 @@
 // pose (N the wrench part of the free end's fields). K_j+1 is the derivative of the net wrench
 // on disk j+1, which is zero at an equilibrium, so it is symmetric in the pairing of pose and
 // wrench (dp . dn + dtheta . dm; in every chart of the rotations); the residual asymmetry is
-// the integration error (up to 1.3e-3 of |K| on the coarse loading-path meshes of the loaded-scene
-// suite, 3e-6 on the requested ones; a temporary print). By the Schur complement (Haynsworth),
-// the Morse index of [s_j, L] is that of [s_j+1, L], plus that of the interval clamped at both
-// ends (zero: each interval is far below its own buckling loads ~ 4 pi^2 EI / h^2, as VCref's
-// test assumes), plus the number of negative eigenvalues of K_j+1. So the conjugate points in
-// [s_j, s_j+1) with their multiplicity are the negative eigenvalues of K_j+1, and their sum
-// from the tip is the Morse index. det K_j+1 has the sign of det M(s_j) / det M(s_j+1) (times
-// det B's, positive for a short interval), so the count changes parity exactly where det M
-// changes sign: on the 278 rows of the loaded-scene suite every verdict and row is unchanged.
+// the integration error (up to 1.3e-3 of |K| over the loaded-scene suite on its coarse
+// loading-path meshes, 3e-6 on s1001's requested mesh; a temporary print). By the Schur
+// complement (Haynsworth), the Morse index of [s_j, L] is that of [s_j+1, L], plus that of the
+// interval clamped at both ends (zero: each interval is far below its own buckling loads
+// ~ 4 pi^2 EI / h^2, as VCref's test assumes), plus the number of negative eigenvalues of
+// K_j+1. So the conjugate points in [s_j, s_j+1) with their multiplicity are the negative
+// eigenvalues of K_j+1, and their sum from the tip is the Morse index. det K_j+1 has the sign
+// of det M(s_j) / det M(s_j+1) (times det B's, positive for a short interval), so the count
+// changes parity exactly where det M changes sign: on the 278 rows of the loaded-scene suite
+// every verdict and row is unchanged.
 //
 // The earlier family, [0, s] with the wrench transmitted at s held as a dead load, is not
 // conservative (a dead couple of finite 3-D rotations), and its det changed sign twice within a
