@@ -1,6 +1,7 @@
 // Stability of converged answers (Solution::stability) against known answers: Euler buckling of a
-// cantilever column (critical tip load pi^2 EI / (4 L^2)), the paper robot's Table 3
-// configurations, and a column pushed past its critical load by a large tip moment.
+// cantilever column (critical tip load pi^2 EI / (4 L^2)), straight and on the loading path from
+// rest (where the column's double bifurcation is a path event), and the paper robot's Table 3
+// configurations.
 #include <cmath>
 #include <string>
 
@@ -55,8 +56,9 @@ constexpr ModelKind kStaticKinds[] = {ModelKind::VC, ModelKind::CCsub, ModelKind
 }  // namespace
 
 // Below the critical load the straight column is stable, above it the straight column is
-// unstable (Newton started on the straight shape, no continuation: it stays there). VC's test
-// misses this double conjugate point of the round column (vc_stability.cpp): not asserted.
+// unstable (Newton started on the straight shape, no continuation: it stays there). For VC this
+// is a double conjugate point (the round column buckles in both planes at once), which the sign
+// of det M(s) missed; vc_stability.cpp counts conjugate points with their multiplicity.
 TEST(Stability, EulerColumnStraightBranch) {
   for (ModelKind kind : kStaticKinds) {
     const std::string name = to_string(kind);
@@ -68,14 +70,13 @@ TEST(Stability, EulerColumnStraightBranch) {
     const Solution above = solve_with(kind, column(1.2, 0.0, false));
     ASSERT_TRUE(above.converged()) << name << ": " << above.summary.message;
     EXPECT_LT(lateral(above), 1e-9) << name << ": the straight branch";
-    if (kind == ModelKind::VC) continue;
     EXPECT_EQ(above.stability.status, StabilityStatus::Unstable) << name << ": " << above.stability.method;
     EXPECT_LT(above.stability.margin, 0.0) << name;
   }
 }
 
 // VC: just below the critical load the margin is small and positive (the first conjugate point
-// approaches the tip).
+// approaches the base).
 TEST(Stability, VcMarginSmallBelowTheCriticalLoad) {
   const Solution a = solve_with(ModelKind::VC, column(0.99, 0.0, false));
   const Solution b = solve_with(ModelKind::VC, column(0.5, 0.0, false));
@@ -133,4 +134,113 @@ TEST(Stability, VcrefMarginChangesSignAtTheCriticalLoad) {
   EXPECT_EQ(c.stability.status, StabilityStatus::Unstable) << c.stability.margin;
   EXPECT_NEAR(b.stability.margin, -c.stability.margin, 0.05 * b.stability.margin);
   EXPECT_NEAR(a.stability.margin, 2.0 * b.stability.margin, 0.05 * b.stability.margin);
+}
+
+// VC: the margin (the smallest singular value of M(s), negative from the first conjugate point
+// on) changes sign at Euler's load: the rod is continuous, so its critical load is Euler's
+// whatever the disks (n = 5 and 20 alike), up to the RK4 error of the Jacobi fields. Measured:
+// +-0.00331 at 0.995 and 1.005, zero at 1.000 to 1e-9.
+TEST(Stability, VcMarginChangesSignAtTheCriticalLoad) {
+  for (int n : {5, 20}) {
+    Scene below = column(0.995, 0.0, false), above = column(1.005, 0.0, false);
+    below.robot = above.robot = paper::scene(n, 1, "vc").robot;
+    const Solution b = solve_with(ModelKind::VC, below), c = solve_with(ModelKind::VC, above);
+    ASSERT_TRUE(b.converged() && c.converged());
+    EXPECT_EQ(b.stability.status, StabilityStatus::Stable) << n << ": " << b.stability.margin;
+    EXPECT_EQ(c.stability.status, StabilityStatus::Unstable) << n << ": " << c.stability.margin;
+    EXPECT_NEAR(b.stability.margin, -c.stability.margin, 0.01 * b.stability.margin) << n;
+  }
+}
+
+namespace {
+
+// The paper robot as a column (column()) with n disks per segment, loaded from rest to `factor`
+// times Euler's load.
+Solution column_on_loading_path(ModelKind kind, int n, double factor) {
+  Scene s = column(factor);
+  s.robot = paper::scene(n, 1, "vc").robot;
+  const double EI = s.robot.backbone.effective_stiffness().EI, L = s.robot.total_length();
+  s.loads.tip_force = Vec3(0.0, 0.0, -factor * M_PI * M_PI * EI / (4.0 * L * L));
+  return solve_with(kind, s);
+}
+
+// The model's critical load over Euler's, from the bifurcation event on the loading path to 1.2
+// times Euler's load (NaN if the path did not report exactly one).
+double critical_load(ModelKind kind, int n) {
+  const Solution sol = column_on_loading_path(kind, n, 1.2);
+  EXPECT_TRUE(sol.converged()) << to_string(kind) << " n = " << n << ": " << sol.summary.message;
+  EXPECT_LT(lateral(sol), 1e-9) << to_string(kind) << " n = " << n << ": the straight branch";
+  EXPECT_EQ(sol.stability.status, StabilityStatus::Unstable) << to_string(kind) << " n = " << n;
+  if (sol.path_events.size() != 1 || sol.path_events[0].type != PathEvent::Type::Bifurcation) {
+    ADD_FAILURE() << to_string(kind) << " n = " << n << ": " << sol.path_events.size() << " path events; "
+                  << sol.summary.message;
+    return NAN;
+  }
+  return 1.2 * sol.path_events[0].load_fraction;
+}
+
+}  // namespace
+
+// Loaded from rest past Euler's load, the straight column loses stability at a bifurcation of
+// even multiplicity (both bending planes at once, so the path's determinant keeps its sign). The
+// path reports it as an event where the model's own critical load lies, and stays on the
+// straight branch, whose answer is unstable (docs/models.md, "Stability"). Below that load the
+// path has no event and the answer is stable. Each model's critical load, over Euler's:
+// - VC and VCref: Euler's (a continuous rod; rods between the disks), to the event's location
+//   tolerance 1e-5 and the coarse path mesh's RK4 error: measured 1.000000 at n = 10.
+// - CCsub: each subsegment's curvature from the moment at its proximal end, a first-order rule
+//   in the subsegment length: 0.97679 at n = 10, 0.98796 at n = 20 (errors 0.232 / n, 0.241 / n),
+//   whose Richardson extrapolation 2 P(20) - P(10) = 0.99913 is second order (0.99977 from
+//   n = 20 and 40).
+// - PRB: the chain's bending compliance per length is sum(1 / k_theta) / EI (0.99879 with Table 1's
+//   k_theta), so its limit is Euler's load over that sum, 1.00121; 1.00109 at n = 10 (1.00084 at
+//   n = 5, 1.00117 at n = 20: second order).
+TEST(Stability, EulerCriticalLoadIsABifurcationOfTheLoadingPath) {
+  for (ModelKind kind : kStaticKinds) {
+    const Solution below = column_on_loading_path(kind, 10, 0.9);
+    ASSERT_TRUE(below.converged()) << to_string(kind) << ": " << below.summary.message;
+    EXPECT_EQ(below.stability.status, StabilityStatus::Stable) << to_string(kind) << ": " << below.stability.method;
+    EXPECT_TRUE(below.path_events.empty()) << to_string(kind) << ": " << below.summary.message;
+  }
+  EXPECT_NEAR(critical_load(ModelKind::VC, 10), 1.0, 1e-4);
+  EXPECT_NEAR(critical_load(ModelKind::VCref, 10), 1.0, 1e-4);
+  const double ccsub10 = critical_load(ModelKind::CCsub, 10), ccsub20 = critical_load(ModelKind::CCsub, 20);
+  EXPECT_LT(ccsub10, ccsub20);
+  EXPECT_LT(ccsub20, 1.0);
+  EXPECT_NEAR(1.0 - ccsub10, 0.25 / 10, 0.03 / 10);  // first order: c / n, c -> 0.245
+  EXPECT_NEAR(2.0 * ccsub20 - ccsub10, 1.0, 2e-3);   // its Richardson extrapolation: second order
+  const PrbParameters prb;
+  const double compliance = 1.0 / prb.k_theta[0] + 1.0 / prb.k_theta[1] + 1.0 / prb.k_theta[2];
+  EXPECT_NEAR(critical_load(ModelKind::PRB, 10), 1.0 / compliance, 3e-4);
+}
+
+// The reported scene: a soft straight robot (the paper robot with E x 0.25, 20 disks per
+// segment, shear and extension on), no tension, a tip force (0, 0, -0.3 N) above its Euler load
+// pi^2 EI / (4 L^2) = 0.2617 N. Every static model, with the disk normal forces of Eq. 58 kept
+// or removed (no tension: the same loads), converges on the straight branch, unstable, with the
+// bifurcation on its loading path where its own critical load lies: within 1.3 % of Euler's
+// (CCsub's first-order error at n = 20, 0.0120; the others within 1.2e-3, PRB's Table 1 bias).
+TEST(Stability, SoftColumnPastItsBucklingLoadIsReported) {
+  Scene s = paper::scene(20, 1, "vc");
+  s.robot.backbone.youngs_modulus *= 0.25;
+  s.actuation.values.assign(s.actuation.values.size(), 0.0);
+  const double EI = s.robot.backbone.effective_stiffness().EI, L = s.robot.total_length();
+  const double euler = M_PI * M_PI * EI / (4.0 * L * L);
+  ASSERT_NEAR(euler, 0.2617, 1e-4);
+  s.loads.tip_force = Vec3(0.0, 0.0, -0.3);
+  for (ModelKind kind : kStaticKinds) {
+    for (DiskNormalForce d : {DiskNormalForce::Kept, DiskNormalForce::Removed}) {
+      if (kind == ModelKind::VC && d == DiskNormalForce::Kept) continue;  // VC has no Eq. 58
+      s.effects.disk_normal_force = d;
+      const std::string name = to_string(kind) + (d == DiskNormalForce::Kept ? " kept" : " removed");
+      const Solution sol = solve_with(kind, s);
+      ASSERT_TRUE(sol.converged()) << name << ": " << sol.summary.message;
+      EXPECT_LT(lateral(sol), 1e-9) << name << ": the straight branch";
+      EXPECT_EQ(sol.stability.status, StabilityStatus::Unstable) << name << ": " << sol.stability.method;
+      ASSERT_EQ(sol.path_events.size(), 1u) << name << ": " << sol.summary.message;
+      EXPECT_EQ(sol.path_events[0].type, PathEvent::Type::Bifurcation) << name;
+      const double critical = 0.3 * sol.path_events[0].load_fraction / euler;
+      EXPECT_NEAR(critical, 1.0, kind == ModelKind::CCsub ? 0.013 : 1.3e-3) << name;
+    }
+  }
 }

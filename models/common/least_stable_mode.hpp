@@ -12,6 +12,16 @@
 
 namespace tdcr::detail {
 
+/// The words of least_stable_mode()'s note for a complex pair.
+inline constexpr const char* kOscillatoryMode = "a complex pair";
+
+/// Whether a Stability::method names an oscillatory least stable mode (least_stable_mode()): a
+/// loss of stability the loading path does not meet as a fold or a bifurcation
+/// (path_following.cpp).
+inline bool oscillatory_mode(const std::string& method) {
+  return method.find(std::string("least stable mode: ") + kOscillatoryMode) != std::string::npos;
+}
+
 /// The eigenvalue of smallest real part of `eigenvalues` (of a real matrix, so complex ones come
 /// in conjugate pairs), and in `note` what kind of mode it is: a real eigenvalue (divergence-type:
 /// the equilibrium turns into a fold or a bifurcation where it crosses 0) or a complex pair
@@ -27,9 +37,9 @@ inline double least_stable_mode(const Eigen::VectorXcd& eigenvalues, std::string
   char buf[200];
   if (std::abs(z.imag()) > 1e-9 * std::max(1.0, std::abs(z)))
     std::snprintf(buf, sizeof buf,
-                  "; least stable mode: a complex pair %.3g +- %.3gi (oscillatory, flutter-type, as only "
+                  "; least stable mode: %s %.3g +- %.3gi (oscillatory, flutter-type, as only "
                   "non-conservative loads have)",
-                  z.real(), std::abs(z.imag()));
+                  kOscillatoryMode, z.real(), std::abs(z.imag()));
   else
     std::snprintf(buf, sizeof buf, "; least stable mode: a real eigenvalue %.3g (divergence-type)", z.real());
   note = buf;
