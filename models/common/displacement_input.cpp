@@ -522,14 +522,15 @@ bool DisplacementProblem::flip(const Eigen::VectorXd& y) {
   return changed;
 }
 
-bool DisplacementProblem::complete(Eigen::VectorXd& y, const bvp::NewtonOptions& options, SolverSummary& summary) {
+ModelProblem::Completion DisplacementProblem::complete(Eigen::VectorXd& y, const bvp::NewtonOptions& options,
+                                                      SolverSummary& summary) {
   const std::string path = summary.message;
   std::string what;
   bvp::NewtonOptions fresh = options;  // exact Newton: the last Jacobian is of other equations
   fresh.reuse_jacobian = false;
   fresh.max_setup_calls = 1;
   if (compliance_ > 0.0) {
-    if (!stiffen(y, options, summary)) return false;
+    if (!stiffen(y, options, summary)) return Completion::Done;
     what = "homotopy compliance " + format_value(kStartCompliance) + " taken to zero";
   }
   int updates = 0;
@@ -538,7 +539,7 @@ bool DisplacementProblem::complete(Eigen::VectorXd& y, const bvp::NewtonOptions&
       summary.termination = TerminationType::NoConvergence;
       summary.message = path + "; slack and taut tendons changed more than " + std::to_string(kMaxConstraintUpdates) +
                         " times (cycling)";
-      return false;
+      return Completion::Done;
     }
     // A direct solve from the last answer; where it fails, from the same answer with the taut
     // tendons compliant and the compliance taken to zero (a tendon moved to taut at zero
@@ -555,9 +556,11 @@ bool DisplacementProblem::complete(Eigen::VectorXd& y, const bvp::NewtonOptions&
       res = newton_.solve(*this, y, fresh);
       copy_newton_result(res, summary);
       if (!res.converged() || !stiffen(y, fresh, summary)) {
-        compliance_ = 0.0;
-        summary.message = path + "; after tendons changed between slack and taut: " + summary.message;
-        return false;
+        // Solved cold instead, with the new branches and the compliance back.
+        compliance_ = kStartCompliance;
+        applied_valid_ = false;
+        summary.message = path + "; after tendons changed between slack and taut, from the answer: " + summary.message;
+        return Completion::FollowAgain;
       }
     }
   }
@@ -565,7 +568,7 @@ bool DisplacementProblem::complete(Eigen::VectorXd& y, const bvp::NewtonOptions&
                            std::to_string(updates) + (updates == 1 ? " time" : " times");
   refine(y, options);
   if (!what.empty()) summary.message = path + "; then " + what + ": " + summary.message;
-  return summary.converged();
+  return Completion::Done;
 }
 
 void DisplacementProblem::refine(Eigen::VectorXd& y, const bvp::NewtonOptions& options) {

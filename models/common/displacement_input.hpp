@@ -104,9 +104,10 @@ class DisplacementProblem final : public ModelProblem, public bvp::Parameterized
   bool impossible_input(std::string& why) const override;
   /// From the driver's answer: the homotopy compliance taken to zero, then complementarity
   /// (a taut tendon that would push goes slack, a slack one whose path is too long goes taut,
-  /// each change solved again from the last answer, at most kMaxConstraintUpdates), then
-  /// refined (see refine()).
-  bool complete(Eigen::VectorXd& y, const bvp::NewtonOptions& options, SolverSummary& summary) override;
+  /// each change solved again from the last answer, at most kMaxConstraintUpdates; where that
+  /// fails, FollowAgain: the driver solves the new equations cold, from rest or the cold guess,
+  /// with the compliance back), then refined (see refine()).
+  Completion complete(Eigen::VectorXd& y, const bvp::NewtonOptions& options, SolverSummary& summary) override;
 
   /// Which driven tendons are taut (by driven index) and their global indices.
   const std::vector<char>& taut() const { return taut_; }

@@ -138,16 +138,23 @@ class ModelProblem {
                                           static_cast<Eigen::Index>(scratch.tendon_displacements.size()));
     return d.size() > 0 && d.allFinite();
   }
+  /// What complete() did.
+  enum class Completion {
+    Done,          ///< x is the answer (converged or not: the summary says).
+    FollowAgain    ///< The problem changed its equations and asks for the whole solve again (cold).
+  };
   /// After the driver's solve converged at unknowns x (system parameter 1): the problem may go
   /// on from x with problems of its own, e.g. displacement input takes the tendons' homotopy
   /// compliance to zero and moves tendons between slack and taut by complementarity, each a
   /// Newton solve from the last answer (its Newton solver, `options`). x and `summary` (its work
-  /// added, its status and message) are the result; false if it failed. Default: nothing, true.
-  virtual bool complete(Eigen::VectorXd& x, const bvp::NewtonOptions& options, SolverSummary& summary) {
+  /// added, its status and message) are the result. FollowAgain: the new equations could not be
+  /// solved from x; the driver then solves them cold, by its own rule (at most a few times).
+  /// Default: nothing, Done.
+  virtual Completion complete(Eigen::VectorXd& x, const bvp::NewtonOptions& options, SolverSummary& summary) {
     (void)x;
     (void)options;
     (void)summary;
-    return true;
+    return Completion::Done;
   }
   /// True and the reason if the bound input asks for what no shape of the robot gives (a pull of
   /// an inextensible tendon not shorter than its free length): the driver then returns the rest

@@ -472,7 +472,22 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
       };
       reached = solve_on_loading_path(model, input, P, *sys, nopt, options, warm ? warm_start : nullptr, rebind, x,
                                       predicted ? &unpredicted : nullptr, sol);
-      if (sum.converged()) P.complete(x, nopt, sum);
+      // The problem's own completion (displacement input: compliance to zero, slack and taut
+      // tendons); where it changed its equations and cannot solve them from the answer, the
+      // solve again, cold.
+      constexpr int kMaxFollowAgain = 3;
+      for (int again = 0; sum.converged(); ++again) {
+        if (P.complete(x, nopt, sum) == detail::ModelProblem::Completion::Done) break;
+        if (again == kMaxFollowAgain) {
+          sum.termination = TerminationType::NoConvergence;
+          sum.message += "; the problem's equations changed " + std::to_string(kMaxFollowAgain + 1) +
+                         " times after a converged solve";
+          break;
+        }
+        sys->set_parameter(1.0);
+        sol.path_events.clear();
+        reached = solve_on_loading_path(model, input, P, *sys, nopt, options, nullptr, rebind, x, nullptr, sol);
+      }
     }
     if (sum.converged()) reached = 1.0;
     const bool evaluated = final_check(P, *sys, x, reached, options.function_tolerance, sum);
