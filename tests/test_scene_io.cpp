@@ -102,6 +102,33 @@ TEST(SceneIo, LongValuesAreShortenedInMessages) {
   }
 }
 
+// A number that overflows a double is an InputError at its path wherever it stands (nested
+// arrays, the solver object), with the number's text; a 400-digit integer (Python writes big
+// ints so) is shortened in the message.
+TEST(SceneIo, NumberOverflowNamesItsPathAndText) {
+  struct Case {
+    std::string text, field, value;
+  };
+  const std::string digits(400, '9');
+  const std::vector<Case> cases = {
+      {with_raw("/solver", R"({"rk4_max_step": 1e999})"), "solver.rk4_max_step", "1e999"},
+      {with_raw("/robot/segments/0/tendons/0/routing", R"({"type": "points", "positions": [[0, 0.008], [0, -1E+999]]})"),
+       "robot.segments[0].tendons[0].routing.positions[1][1]", "-1E+999"},
+      {with_raw("/loads", R"({"gravity": [0, 0, )" + digits + "]}"), "loads.gravity[2]", digits.substr(0, 20)},
+  };
+  for (const Case& c : cases) {
+    try {
+      tdcr::parse_scene(c.text, "scene.json");
+      ADD_FAILURE() << "accepted " << c.text;
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.field(), c.field) << e.what();
+      EXPECT_EQ(e.value().rfind(c.value, 0), 0u) << e.what();
+      EXPECT_LT(e.value().size(), 64u) << e.what();
+      EXPECT_NE(std::string(e.what()).find("must be a finite number"), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST(SceneIo, MinimalSceneTakesDefaults) {
   const tdcr::Scene s = tdcr::parse_scene(base_scene().dump());
   const tdcr::Scene d;
