@@ -1,5 +1,6 @@
 """Bad input at the edges of the Python front door: NaN and infinity in a scene dict, numpy values in
-it, what tdcr.solve accepts, solver options out of their bounds, an interpreter without numpy."""
+it, what tdcr.solve accepts, solver options out of their bounds, an interpreter without numpy, and
+`tdcr plot`'s options (checked before any solve)."""
 import copy
 import json
 import os
@@ -11,6 +12,7 @@ import numpy as np
 import pytest
 
 import tdcr
+import tdcr.plot
 from conftest import EXAMPLES
 from test_errors import BASE, edited
 
@@ -106,3 +108,29 @@ def test_without_numpy_the_import_error_says_so():
     assert sys.executable in last  # the interpreter that lacks numpy
     assert "This tdcr module was built for " in last and "(Python 3." in last
     assert "initialization failed" not in run.stderr
+
+
+@pytest.mark.parametrize("args,option,value", [
+    (["-o", "/nonexistent/dir/x.png"], "-o", "/nonexistent/dir/x.png"),
+    (["-o", "x.png", "--dpi", "0"], "--dpi", "0"),
+    (["-o", "x.png", "--dpi", "100000"], "--dpi", "100000"),
+    (["-o", "x.bmp"], "-o", "x.bmp"),
+])
+def test_plot_options_are_checked_before_the_scene(tmp_path, capsys, monkeypatch, args, option, value):
+    monkeypatch.chdir(tmp_path)
+    # A scene that does not exist: the option is reported first, before any scene is read or solved.
+    assert tdcr.plot.main([str(tmp_path / "no_such_scene.json")] + args) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: %s: " % option) and err.endswith(" (got %s)\n" % value), err
+    assert err.count("\n") == 1, err  # one line, no traceback
+    assert not list(tmp_path.iterdir())
+
+
+def test_plot_output_that_is_a_folder_or_under_a_file(tmp_path, capsys):
+    scene = str(EXAMPLES / "paper_robot_vc.json")
+    (tmp_path / "folder.png").mkdir()
+    assert tdcr.plot.main([scene, "-o", str(tmp_path / "folder.png")]) == 2
+    assert "-o: is a folder" in capsys.readouterr().err
+    (tmp_path / "file").write_text("")
+    assert tdcr.plot.main([scene, "-o", str(tmp_path / "file" / "x.png")]) == 2
+    assert "is not a folder" in capsys.readouterr().err
