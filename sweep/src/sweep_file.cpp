@@ -64,7 +64,7 @@ void classify(SweepAxis& axis, const Scene& base, const std::string& where) {
   std::smatch m;
   if (std::regex_match(axis.field, m, input_re)) {
     const std::string group = m[1], name = m[2];
-    const std::size_t k = std::stoul(m[3]);
+    const std::size_t k = sweep_detail::index_value(m[3]);
     axis.index = static_cast<int>(std::min<std::size_t>(k, 1 << 30));
     if (group == "actuation" && (name == "tensions" || name == "displacements")) {
       const bool tensions = name == "tensions";
