@@ -26,6 +26,14 @@ if(TARGET tdcr_cli)
   add_test(NAME sweep_cli_missing_sweep_file COMMAND tdcr_cli sweep ${PROJECT_BINARY_DIR}/no_such_sweep.json -o ${PROJECT_BINARY_DIR}/no_such_sweep.csv)
   set_tests_properties(sweep_cli_missing_sweep_file PROPERTIES
     PASS_REGULAR_EXPRESSION "error: sweep file: cannot read the file \\(does it exist\\?\\) \\(got [^)]*no_such_sweep.json\\)")
+  # A number that overflows a double: exit 2 naming its path and text (was an internal error, exit 3).
+  file(WRITE ${PROJECT_BINARY_DIR}/sweep_number_overflow.json
+       "{\"scene\": \"${PROJECT_SOURCE_DIR}/examples/paper_robot_tip_force.json\", \"models\": [\"vc\"],\n"
+       " \"axes\": [{\"field\": \"actuation.tensions[0]\", \"from\": 0, \"to\": 1e999, \"count\": 3}]}\n")
+  add_test(NAME sweep_cli_number_overflow
+           COMMAND tdcr_cli sweep ${PROJECT_BINARY_DIR}/sweep_number_overflow.json -o ${PROJECT_BINARY_DIR}/sweep_number_overflow.csv)
+  set_tests_properties(sweep_cli_number_overflow PROPERTIES
+    PASS_REGULAR_EXPRESSION "error: axes\\[0\\]\\.to: must be a finite number [^\n]*\\(got 1e999\\)")
   add_test(NAME sweep_cli_bad_shard COMMAND tdcr_cli sweep ${PROJECT_SOURCE_DIR}/examples/sweeps/tension_force_grid.json -o x.csv --shard 2/2)
   set_tests_properties(sweep_cli_bad_shard PROPERTIES PASS_REGULAR_EXPRESSION "--shard: must be a whole number from 0 to 1 \\(got 2\\)")
 endif()

@@ -102,6 +102,129 @@ TEST(SceneIo, LongValuesAreShortenedInMessages) {
   }
 }
 
+// A number that overflows a double is an InputError at its path wherever it stands (nested
+// arrays, the solver object), with the number's text; a 400-digit integer (Python writes big
+// ints so) is shortened in the message.
+TEST(SceneIo, NumberOverflowNamesItsPathAndText) {
+  struct Case {
+    std::string text, field, value;
+  };
+  const std::string digits(400, '9');
+  const std::vector<Case> cases = {
+      {with_raw("/solver", R"({"rk4_max_step": 1e999})"), "solver.rk4_max_step", "1e999"},
+      {with_raw("/robot/segments/0/tendons/0/routing", R"({"type": "points", "positions": [[0, 0.008], [0, -1E+999]]})"),
+       "robot.segments[0].tendons[0].routing.positions[1][1]", "-1E+999"},
+      {with_raw("/loads", R"({"gravity": [0, 0, )" + digits + "]}"), "loads.gravity[2]", digits.substr(0, 20)},
+  };
+  for (const Case& c : cases) {
+    try {
+      tdcr::parse_scene(c.text, "scene.json");
+      ADD_FAILURE() << "accepted " << c.text;
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.field(), c.field) << e.what();
+      EXPECT_EQ(e.value().rfind(c.value, 0), 0u) << e.what();
+      EXPECT_LT(e.value().size(), 64u) << e.what();
+      EXPECT_NE(std::string(e.what()).find("must be a finite number"), std::string::npos) << e.what();
+    }
+  }
+}
+
+// Every numeric solver option has bounds (tdcr::SolverOptions::validate): a value outside is an
+// InputError naming solver.<name> and the value, e.g. rk4_steps 1e8, which ran for minutes.
+TEST(SceneIo, SolverOptionsOutsideTheirBoundsNameFieldAndValue) {
+  struct Case {
+    json solver;
+    std::string field, value;
+  };
+  const std::vector<Case> cases = {
+      {{{"rk4_steps", 100000000}}, "solver.rk4_steps", "100000000"},
+      {{{"rk4_steps", 4097}}, "solver.rk4_steps", "4097"},
+      {{{"rk4_steps", 0}}, "solver.rk4_steps", "0"},
+      {{{"rk4_steps", 65}, {"rk4_tip_tolerance", 1e-8}}, "solver.rk4_steps", "65"},  // 64 x 65 > 4096
+      {{{"rk4_max_step", 1e-7}}, "solver.rk4_max_step", "1e-07"},
+      {{{"rk4_max_step", 0}}, "solver.rk4_max_step", "0"},
+      {{{"rk4_max_step", 6e-5}, {"rk4_tip_tolerance", 1e-8}}, "solver.rk4_max_step", "6e-05"},  // / 64 < 1e-6
+      {{{"rk4_tip_tolerance", 1e-19}}, "solver.rk4_tip_tolerance", "1e-19"},
+      {{{"rk4_tip_tolerance", 0.1}}, "solver.rk4_tip_tolerance", "0.1"},
+      {{{"rk4_tip_tolerance", -1e-8}}, "solver.rk4_tip_tolerance", "-1e-08"},
+      {{{"function_tolerance", 1e-16}}, "solver.function_tolerance", "1e-16"},
+      {{{"function_tolerance", 0.1}}, "solver.function_tolerance", "0.1"},
+      {{{"step_tolerance", 1e-21}}, "solver.step_tolerance", "1e-21"},
+      {{{"step_tolerance", 1}}, "solver.step_tolerance", "1"},
+      {{{"cvode_rtol", 1e-15}}, "solver.cvode_rtol", "1e-15"},
+      {{{"cvode_rtol", 0.5}}, "solver.cvode_rtol", "0.5"},
+      {{{"cvode_atol", 1e-21}}, "solver.cvode_atol", "1e-21"},
+      {{{"cvode_atol", 0.1}}, "solver.cvode_atol", "0.1"},
+      {{{"max_iterations", 0}}, "solver.max_iterations", "0"},
+      {{{"max_iterations", 1001}}, "solver.max_iterations", "1001"},
+      {{{"max_continuation_steps", 0}}, "solver.max_continuation_steps", "0"},
+      {{{"max_continuation_steps", 1001}}, "solver.max_continuation_steps", "1001"},
+  };
+  for (const Case& c : cases) {
+    try {
+      tdcr::parse_scene(with("/solver", c.solver), "scene.json");
+      ADD_FAILURE() << "accepted " << c.solver.dump();
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.field(), c.field) << c.solver.dump() << ": " << e.what();
+      EXPECT_EQ(e.value(), c.value) << c.solver.dump() << ": " << e.what();
+      EXPECT_NE(std::string(e.what()).find("must be"), std::string::npos) << e.what();
+    }
+  }
+}
+
+// The bounds themselves are accepted (the ranges are closed), and so is every mesh an
+// accuracy-driven solve refines to from its extreme first mesh: the solve validates each
+// refined mesh's options again (2^kMaxRk4Halvings times the first's steps at most).
+TEST(SceneIo, SolverOptionsAtTheirBoundsAreValid) {
+  using S = tdcr::SolverOptions;
+  const std::vector<json> valid = {
+      {{"rk4_steps", S::kMaxRk4Steps}, {"rk4_max_step", S::kMinRk4MaxStep}},
+      {{"rk4_steps", 1}, {"rk4_tip_tolerance", S::kMaxRk4TipTolerance}},
+      {{"rk4_tip_tolerance", S::kMinRk4TipTolerance}},
+      {{"function_tolerance", S::kMinFunctionTolerance}, {"step_tolerance", S::kMinStepTolerance},
+       {"cvode_rtol", S::kMinCvodeRtol}, {"cvode_atol", S::kMinCvodeAtol}, {"max_iterations", 1},
+       {"max_continuation_steps", 1}},
+      {{"function_tolerance", S::kMaxFunctionTolerance}, {"step_tolerance", S::kMaxStepTolerance},
+       {"cvode_rtol", S::kMaxCvodeRtol}, {"cvode_atol", S::kMaxCvodeAtol}, {"max_iterations", S::kMaxIterations},
+       {"max_continuation_steps", S::kMaxContinuationSteps}},
+  };
+  for (const json& solver : valid) EXPECT_NO_THROW(tdcr::parse_scene(with("/solver", solver))) << solver.dump();
+
+  S first;
+  first.rk4_tip_tolerance = 1e-9;
+  first.rk4_steps = S::kMaxRk4Steps >> S::kMaxRk4Halvings;
+  first.rk4_max_step = S::kMinRk4MaxStep * (1 << S::kMaxRk4Halvings);
+  ASSERT_NO_THROW(first.validate());
+  S finest = first;  // as the refinement makes it (solve_driver.cpp, solve_refined)
+  finest.rk4_tip_tolerance = 0.0;
+  finest.rk4_steps <<= S::kMaxRk4Halvings;
+  finest.rk4_max_step /= 1 << S::kMaxRk4Halvings;
+  EXPECT_NO_THROW(finest.validate());
+  // C++ only (JSON has no infinity): exactly rk4_steps steps per interval.
+  S exact;
+  exact.rk4_max_step = std::numeric_limits<double>::infinity();
+  EXPECT_NO_THROW(exact.validate());
+}
+
+// A scene file's robot has at most 4000 disks in all segments together (scene_schema.cpp,
+// kMaxDisks): the segment that crosses the bound is named, with its disks.
+TEST(SceneIo, DiskCountOfTheRobotIsBounded) {
+  EXPECT_NO_THROW(tdcr::parse_scene(edited([](json& j) {
+    j["robot"]["segments"][0]["disks"] = 2000;
+    j["robot"]["segments"][1]["disks"] = 2000;
+  })));
+  for (const int disks : {3991, 100000000}) {
+    try {
+      tdcr::parse_scene(with("/robot/segments/1/disks", disks));  // segment 0 has 10
+      ADD_FAILURE() << "accepted " << disks;
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.field(), "robot.segments[1].disks") << e.what();
+      EXPECT_EQ(e.value(), std::to_string(disks)) << e.what();
+      EXPECT_NE(std::string(e.what()).find("at most 4000 disks"), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST(SceneIo, MinimalSceneTakesDefaults) {
   const tdcr::Scene s = tdcr::parse_scene(base_scene().dump());
   const tdcr::Scene d;

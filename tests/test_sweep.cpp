@@ -243,6 +243,28 @@ TEST(SweepFile, BadInputNamesTheFieldAndTheValue) {
        "actuation.displacements[0]", ""},
       {"not a sweepable field", "{" + scene + R"("models": ["vc"], "axes": [{"field": "model", "values": [1]}]})", "axes[0].field",
        "model"},
+      // Numbers that overflow a double, named by their path in the sweep file (not an internal error).
+      {"range end that overflows a double",
+       "{" + scene + R"("models": ["vc"], "axes": [{"field": "actuation.tensions[0]", "from": 0, "to": 1e999, "count": 3}]})",
+       "axes[0].to", "1e999"},
+      {"value that overflows a double",
+       "{" + scene + R"("models": ["vc"], "axes": [{"field": "actuation.tensions[0]", "values": [1, -1e999]}]})",
+       "axes[0].values[1]", "-1e999"},
+      {"inline scene number that overflows a double",
+       R"({"scene": {"robot": {"segments": [{"length": 0.05, "disks": 2, "tendons": [{"x": 0, "y": 0.008}]}]},
+                     "actuation": {"tensions": [1e999]}},
+           "models": ["vc"], "axes": [)" + ok_axis + "]}",
+       "scene.actuation.tensions[0]", "1e999"},
+      {"range wider than a double", "{" + scene + R"("models": ["vc"], "axes": [{"field": "loads.tip_force[0]", "from": -1e308, "to": 1e308, "count": 3}]})",
+       "axes[0].to", "1e+308"},
+      // Indices too large for any integer type: fields that do not exist (was std::stoul's out_of_range).
+      {"tendon index of 23 digits",
+       "{" + scene + R"("models": ["vc"], "axes": [{"field": "actuation.tensions[99999999999999999999999]", "values": [1]}]})",
+       "actuation.tensions[99999999999999999999999]", ""},
+      {"segment index of 23 digits",
+       "{" + scene + R"("models": ["vc"], "axes": [{"field": "robot.segments[99999999999999999999999].length", "values": [0.05]}]})",
+       "robot.segments[99999999999999999999999].length", "0.05"},
+      {"duplicate key", "{" + scene + R"("models": ["vc"], "models": ["cc"], "axes": [)" + ok_axis + "]}", "models", "models"},
   };
   for (const BadSweep& c : cases) {
     try {

@@ -144,14 +144,17 @@ json parse_json_text(const std::string& text, const std::string& source) {
     throw InputError(source, "",
                      "malformed JSON at byte " + std::to_string(e.byte) + ": " + plain_message(e));
   } catch (const json::out_of_range& e) {
-    // A number too large for a double (e.g. 1e999).
+    // A number too large for a double (e.g. 1e999, or an integer of 400 digits), named by its
+    // path and its text (shortened: the text can be as long as the file).
+    constexpr std::size_t kMaxValueLength = 40;
     std::string value;
     const std::string m = e.what();
     const auto a = m.find('\''), b = m.rfind('\'');
     if (a != std::string::npos && b > a) value = m.substr(a + 1, b - a - 1);
+    if (value.size() > kMaxValueLength) value = value.substr(0, kMaxValueLength - 3) + "...";
     const std::string path = tracker.pending_path();
     throw InputError(path.empty() ? source : path, value,
-                     "must be a finite number (" + plain_message(e) + ")");
+                     "must be a finite number (number overflow: it does not fit a double)");
   }
 }
 

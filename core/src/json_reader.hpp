@@ -1,5 +1,6 @@
-// Strict reading of JSON documents (private to tdcr_core): every error is a tdcr::InputError that
-// names the JSON path of the offending value (`robot.segments[0].disks`) and the value itself.
+// Strict reading of JSON documents (private to tdcr's libraries, not installed: tdcr_core reads
+// scene files with it, tdcr_sweep sweep files): every error is a tdcr::InputError that names the
+// JSON path of the offending value (`robot.segments[0].disks`) and the value itself.
 //
 // parse_json_text rejects malformed text, duplicate keys, number overflow and absurd nesting;
 // the typed readers check one value each; JsonObject checks an object's keys against its known

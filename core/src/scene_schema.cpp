@@ -1,12 +1,15 @@
 // The scene-file field table: every key of a scene file, once, with how it is read and written
 // and its row of the reference (docs/scene-file.md, checked by test_scene_io). Value checks
 // (ranges, list lengths) are the structs' validate() functions; the constraint texts here
-// describe them. Model names are the models layer's (tdcr::validate_scene); core only checks
-// that `model` is a string.
+// describe them. One bound is the scene file's own: the disks of a robot (kMaxDisks), so that a
+// file cannot ask for a robot no model solves in memory. Model names are the models layer's
+// (tdcr::validate_scene); core only checks that `model` is a string.
 #include "scene_schema.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
 
 namespace tdcr::detail {
 
@@ -160,11 +163,22 @@ const Schema<TendonSpec>& tendon_schema() {
   return s;
 }
 
+// Most disks of a scene file's robot, all segments together: twice the largest robot of the
+// benchmarks (bench_vcref: the paper robot at 1000 disks per segment). More is not a robot but
+// a memory or time sink: the paper robot at 5000 disks per segment made VCref run for over
+// 2 minutes in 4.3 GB, at 1e8 disks in one segment every model ends in std::bad_alloc
+// (`tdcr solve` on examples/paper_robot_vc.json with "disks" changed, 2026-11-26); 2 x 2000
+// disks solve in under 1 s with every model, unloaded and under examples/paper_robot_tip_force.json's
+// tip force. (A loading path through many disks is costly well below this bound: 4 segments of
+// 100 disks under that tip force take 3-18 s with CCsub, PRB and VCref.)
+constexpr int kMaxDisks = 4000;
+
 const Schema<Segment>& segment_schema() {
   using S = Segment;
+  static const std::string disks = ">= 1; at most " + std::to_string(kMaxDisks) + " in all segments together";
   static const Schema<S> s({
       number_field("length", &S::length, {"m", nullptr, "> 0", kAll}).required(),
-      integer_field("disks", &S::disks, {"", nullptr, ">= 1", kAll}).required(),
+      integer_field("disks", &S::disks, {"", nullptr, disks.c_str(), kAll}).required(),
       objects_field("tendons", &S::tendons, tendon_schema(), "k", nullptr,
                     {"", nullptr, "may be empty (a passive segment)", kAll})
           .required(),
@@ -174,15 +188,30 @@ const Schema<Segment>& segment_schema() {
 }
 
 const Schema<Robot>& robot_schema() {
-  static const Schema<Robot> s({
-      object_field("backbone", &Robot::backbone, backbone_schema(),
-                   {"", "the paper's rod", "see [robot.backbone](#scene_backbone)", kAll})
-          .own_table(),
-      objects_field("segments", &Robot::segments, segment_schema(), "i", "segment",
-                    {"", nullptr, "at least one; see [robot.segments](#scene_segments)", kAll})
-          .required()
-          .own_table(),
-  });
+  static const Schema<Robot> s(
+      {
+          object_field("backbone", &Robot::backbone, backbone_schema(),
+                       {"", "the paper's rod", "see [robot.backbone](#scene_backbone)", kAll})
+              .own_table(),
+          objects_field("segments", &Robot::segments, segment_schema(), "i", "segment",
+                        {"", nullptr, "at least one; see [robot.segments](#scene_segments)", kAll})
+              .required()
+              .own_table(),
+      },
+      {},
+      // The disk bound (kMaxDisks), reported at the segment that crosses it.
+      [](const JsonObject& o, const Robot& r) {
+        long long total = 0;
+        for (std::size_t i = 0; i < r.segments.size(); ++i) {
+          const int n = r.segments[i].disks;
+          total += std::max(n, 0);  // below 1: Robot::validate's to report
+          if (total > kMaxDisks)
+            throw InputError(index_path(o.path("segments"), i) + ".disks", std::to_string(n),
+                             "a robot has at most " + std::to_string(kMaxDisks) +
+                                 " disks in all segments together (this segment brings it to " +
+                                 std::to_string(total) + ")");
+        }
+      });
   return s;
 }
 
@@ -361,42 +390,62 @@ const Schema<Effects>& effects_schema() {
   return s;
 }
 
+// "from 1e-15 to 0.01" as the reference writes numbers.
+std::string range_text(double lo, double hi) {
+  return "from " + reference_text(ojson(lo)) + " to " + reference_text(ojson(hi));
+}
+
 const Schema<SolverOptions>& solver_schema() {
   using S = SolverOptions;
   constexpr const char* kOde = "VC, VCref";
   constexpr const char* kRk4 = "VC, VCref (with `\"rk4\"`)";
   constexpr const char* kCvode = "VC, VCref (with `\"cvode\"`)";
+  // The bounds of SolverOptions::validate(), written from its constants (the Doxygen of
+  // SolverOptions justifies them).
+  constexpr int kFinest = 1 << S::kMaxRk4Halvings;
+  static const std::string rk4_steps = "1 to " + std::to_string(S::kMaxRk4Steps) + " (1 to " +
+                                       std::to_string(S::kMaxRk4Steps / kFinest) +
+                                       " with `rk4_tip_tolerance`); minimum RK4 steps per disk interval";
+  static const std::string rk4_max_step =
+      ">= " + reference_text(ojson(S::kMinRk4MaxStep)) + " (>= " + reference_text(ojson(S::kMinRk4MaxStep * kFinest)) +
+      " with `rk4_tip_tolerance`); longest RK4 step: a disk interval longer than `rk4_steps` times this takes more "
+      "steps";
+  static const std::string rk4_tip_tolerance =
+      "0 or " + range_text(S::kMinRk4TipTolerance, S::kMaxRk4TipTolerance) +
+      "; accuracy-driven RK4: refine the mesh from `rk4_steps` / `rk4_max_step` until the estimated tip error is at "
+      "most this (0: off; the finest mesh allowed has " + std::to_string(kFinest) + " times the first's steps)";
+  static const std::string cvode_rtol = range_text(S::kMinCvodeRtol, S::kMaxCvodeRtol);
+  static const std::string cvode_atol = range_text(S::kMinCvodeAtol, S::kMaxCvodeAtol);
+  static const std::string function_tolerance =
+      range_text(S::kMinFunctionTolerance, S::kMaxFunctionTolerance) +
+      "; Newton stops when the scaled residual max-norm is below it";
+  static const std::string step_tolerance =
+      range_text(S::kMinStepTolerance, S::kMaxStepTolerance) +
+      "; KINSOL's scaled step tolerance (a step-size stop counts as converged only if the residual tolerance holds)";
+  static const std::string max_iterations =
+      "1 to " + std::to_string(S::kMaxIterations) + "; Newton iterations per solve";
+  static const std::string max_continuation_steps =
+      "1 to " + std::to_string(S::kMaxContinuationSteps) +
+      "; at most this many Newton solves (converged or failed steps)";
   static const Schema<S> s({
       choice_field("integrator", &S::integrator, kIntegrators,
                    {"", nullptr,
                     "`\"rk4\"` (fixed-step RK4, fast) or `\"cvode\"` (SUNDIALS CVODE, Adams, error controlled)", kOde}),
-      integer_field("rk4_steps", &S::rk4_steps, {"", nullptr, ">= 1; minimum RK4 steps per disk interval", kRk4}),
-      number_field("rk4_max_step", &S::rk4_max_step,
-                   {"m", nullptr,
-                    "> 0; longest RK4 step: a disk interval longer than `rk4_steps` times this takes more steps",
-                    kRk4}),
-      number_field("rk4_tip_tolerance", &S::rk4_tip_tolerance,
-                   {"m", nullptr,
-                    ">= 0; accuracy-driven RK4: refine the mesh from `rk4_steps` / `rk4_max_step` until the "
-                    "estimated tip error is at most this (0: off)",
-                    kRk4}),
-      number_field("cvode_rtol", &S::cvode_rtol, {"", nullptr, "> 0", kCvode}),
-      number_field("cvode_atol", &S::cvode_atol, {"state units", nullptr, "> 0", kCvode}),
-      number_field("function_tolerance", &S::function_tolerance,
-                   {"", nullptr, "> 0; Newton stops when the scaled residual max-norm is below it", kNewton}),
-      number_field("step_tolerance", &S::step_tolerance,
-                   {"", nullptr,
-                    "> 0; KINSOL's scaled step tolerance (a step-size stop counts as converged only if the "
-                    "residual tolerance holds)",
-                    kNewton}),
-      integer_field("max_iterations", &S::max_iterations, {"", nullptr, ">= 1; Newton iterations per solve", kNewton}),
+      integer_field("rk4_steps", &S::rk4_steps, {"", nullptr, rk4_steps.c_str(), kRk4}),
+      number_field("rk4_max_step", &S::rk4_max_step, {"m", nullptr, rk4_max_step.c_str(), kRk4}),
+      number_field("rk4_tip_tolerance", &S::rk4_tip_tolerance, {"m", nullptr, rk4_tip_tolerance.c_str(), kRk4}),
+      number_field("cvode_rtol", &S::cvode_rtol, {"", nullptr, cvode_rtol.c_str(), kCvode}),
+      number_field("cvode_atol", &S::cvode_atol, {"state units", nullptr, cvode_atol.c_str(), kCvode}),
+      number_field("function_tolerance", &S::function_tolerance, {"", nullptr, function_tolerance.c_str(), kNewton}),
+      number_field("step_tolerance", &S::step_tolerance, {"", nullptr, step_tolerance.c_str(), kNewton}),
+      integer_field("max_iterations", &S::max_iterations, {"", nullptr, max_iterations.c_str(), kNewton}),
       choice_field("linear_solver", &S::linear_solver, kLinearSolvers,
                    {"", nullptr, "`\"auto\"`, `\"dense\"` or `\"klu\"`",
                     "VC, VCref (CCsub and PRB always use dense LU)"}),
       boolean_field("continuation", &S::continuation,
                     {"", nullptr, "follow the loading path from rest when the loads are large or a direct solve fails", kNewton}),
       integer_field("max_continuation_steps", &S::max_continuation_steps,
-                    {"", nullptr, ">= 1; at most this many Newton solves (converged or failed steps)", kNewton}),
+                    {"", nullptr, max_continuation_steps.c_str(), kNewton}),
       boolean_field("coarse_loading_path", &S::coarse_loading_path,
                     {"", nullptr,
                      "a cold solve that follows the loading path from rest follows it on a coarse RK4 mesh "

@@ -3,6 +3,7 @@
 // field by field reads like its JSON file.
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <optional>
 #include <string>
 #include <utility>
@@ -129,7 +130,64 @@ void set_kinds(tdcr::Actuation& a, const std::vector<std::string>& names) {
   if (one_kind) a.kinds.clear();
 }
 
-std::string json_dumps(const py::object& obj) { return py::str(py::module_::import("json").attr("dumps")(obj)); }
+/// `parent.key` (just `key` at the root), `parent[i]`: the scene file's field paths.
+std::string key_path(const std::string& parent, const std::string& key) { return parent.empty() ? key : parent + "." + key; }
+std::string index_path(const std::string& parent, std::size_t i) { return parent + "[" + std::to_string(i) + "]"; }
+
+/// repr() of a value for a message, shortened if long.
+std::string short_repr(const py::handle& v) {
+  std::string r = py::repr(v);
+  return r.size() > 80 ? r.substr(0, 77) + "..." : r;
+}
+
+/// `v` (a value of a scene dict at `path`) as plain JSON values for json.dumps: numpy scalars
+/// become Python numbers and numpy arrays lists (np.float64(2.0), np.array([1.0, 0, 0])); a NaN or
+/// an infinity, a key that is not a string, or a value JSON cannot hold is an InputError naming
+/// its path, as a scene file's would be (json.dumps would write NaN, which is no JSON number, or
+/// refuse numpy values as "not JSON serializable").
+py::object plain_json(const py::handle& v, const std::string& path) {
+  if (v.is_none() || py::isinstance<py::bool_>(v) || py::isinstance<py::str>(v) || py::isinstance<py::int_>(v))
+    return py::reinterpret_borrow<py::object>(v);
+  if (py::isinstance<py::float_>(v)) {  // np.float64 too (a float subclass)
+    const double x = v.cast<double>();
+    if (!std::isfinite(x)) throw tdcr::InputError(path, tdcr::format_value(x), "must be a finite number");
+    return py::float_(x);
+  }
+  if (py::isinstance<py::dict>(v)) {
+    py::dict out;
+    for (const auto& [key, value] : py::reinterpret_borrow<py::dict>(v)) {
+      if (!py::isinstance<py::str>(key))
+        throw tdcr::InputError(key_path(path, short_repr(key)), short_repr(key),
+                               "a key must be a string (as in a scene file)");
+      const std::string k = key.cast<std::string>();
+      out[key] = plain_json(value, key_path(path, k));
+    }
+    return std::move(out);
+  }
+  if (py::isinstance<py::list>(v) || py::isinstance<py::tuple>(v)) {
+    py::list out;
+    std::size_t i = 0;
+    for (const py::handle& item : v) out.append(plain_json(item, index_path(path, i++)));
+    return std::move(out);
+  }
+  // numpy (imported with the module): an array as nested lists, a scalar (np.float32, np.int64,
+  // np.bool_) as its Python value.
+  const py::module_ np = py::module_::import("numpy");
+  if (py::isinstance(v, np.attr("ndarray"))) return plain_json(v.attr("tolist")(), path);
+  if (py::isinstance(v, np.attr("generic"))) return plain_json(v.attr("item")(), path);
+  throw tdcr::InputError(path, short_repr(v),
+                         "must be a number, a string, a boolean, None, a list or a dict (a JSON value), not " +
+                             std::string(py::str(v.get_type().attr("__name__"))));
+}
+
+/// A scene dict as scene file text (the values checked and converted by plain_json).
+std::string scene_dict_text(const py::object& d) {
+  if (!py::isinstance<py::dict>(d))
+    throw tdcr::InputError("scene", short_repr(d),
+                           "Scene.from_dict needs a dict with the scene file's keys, not " +
+                               std::string(py::str(d.get_type().attr("__name__"))));
+  return py::str(py::module_::import("json").attr("dumps")(plain_json(d, ""), "allow_nan"_a = false));
+}
 
 void bind_robot(py::module_& m) {
   py::class_<tdcr::BackboneStiffness>(m, "BackboneStiffness", "Direct cross-section stiffnesses")
@@ -357,8 +415,9 @@ void bind_scene_class(py::module_& m) {
       .def_static("from_file", &tdcr::load_scene, "path"_a, "read a scene file (InputError on bad input)")
       .def_static("from_json", &tdcr::parse_scene, "text"_a, "source"_a = "<string>")
       .def_static(
-          "from_dict", [](const py::object& d) { return tdcr::parse_scene(json_dumps(d), "<dict>"); }, "data"_a,
-          "parse a dict with the scene file's keys (the same checks and messages as a file)");
+          "from_dict", [](const py::object& d) { return tdcr::parse_scene(scene_dict_text(d), "<dict>"); }, "data"_a,
+          "parse a dict with the scene file's keys (the same checks and messages as a file); numpy numbers and "
+          "arrays are taken as numbers and lists, NaN and infinity are refused naming their field");
 
   m.def("load_scene", &tdcr::load_scene, "path"_a);
   m.def("parse_scene", &tdcr::parse_scene, "text"_a, "source"_a = "<string>");

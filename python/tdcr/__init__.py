@@ -54,16 +54,31 @@ from ._tdcr import (  # noqa: F401
 )
 from ._tdcr import solve_scene as _solve_scene
 
+import os as _os
+
 __all__ = [name for name in dir() if not name.startswith("_")] + ["solve", "scene_from"]
 
 
+def _input_error(field, value, reason):
+    """An InputError as the C++ library raises it: "<field>: <reason> (got <value>)"."""
+    error = InputError("%s: %s (got %s)" % (field, reason, value))
+    error.field, error.value = field, value
+    return error
+
+
 def scene_from(source):
-    """A Scene from a Scene (copied), a dict with the scene file's keys, or a path to a scene file."""
+    """A Scene from a Scene (copied), a dict with the scene file's keys, or a path to a scene file
+    (str, bytes or os.PathLike). Anything else raises InputError (field "scene") saying what is accepted."""
     if isinstance(source, Scene):
         return source.copy()
     if isinstance(source, dict):
         return Scene.from_dict(source)
-    return Scene.from_file(str(source))
+    if isinstance(source, (str, bytes, _os.PathLike)):
+        return Scene.from_file(_os.fsdecode(source))
+    text = repr(source)
+    raise _input_error("scene", text if len(text) <= 80 else text[:77] + "...",
+                       "must be a Scene, a dict with the scene file's keys, or the path of a scene file "
+                       "(str or os.PathLike), not %s" % type(source).__name__)
 
 
 def solve(scene, model=None, warm_start=None, accuracy=0.01):

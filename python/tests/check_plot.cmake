@@ -26,4 +26,32 @@ execute_process(COMMAND ${CLI} plot ${SCENE} --model cosserat -o ${WORK}/bad.png
 if(NOT rc EQUAL 2 OR NOT err MATCHES "model")
   message(FATAL_ERROR "tdcr plot --model cosserat: expected exit 2 naming the model (got ${rc}: ${err})")
 endif()
-message("tdcr plot: robot.png and robot.svg written and checked")
+# Bad options: exit status 2 and one line naming the option and its value (no traceback), checked
+# before the scene is read or solved (a scene that does not exist is not what is reported).
+foreach(case "-o;/nonexistent/dir/x.png;-o: the folder /nonexistent/dir does not exist (got /nonexistent/dir/x.png)"
+             "--dpi;0;--dpi: must be a whole number from 1 to 600 (got 0)")
+  list(GET case 0 option)
+  list(GET case 1 value)
+  list(GET case 2 expected)
+  set(output ${WORK}/ok.png)
+  if(option STREQUAL "-o")
+    set(output ${value})
+  endif()
+  foreach(scene ${SCENE} ${WORK}/no_such_scene.json)
+    if(option STREQUAL "-o")
+      set(extra "")
+    else()
+      set(extra ${option} ${value})
+    endif()
+    execute_process(COMMAND ${CLI} plot ${scene} -o ${output} ${extra}
+                    RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+    if(NOT rc EQUAL 2 OR NOT err STREQUAL "error: ${expected}\n")
+      message(FATAL_ERROR "tdcr plot ${scene} -o ${output} ${extra}: expected exit 2 and the one line "
+                          "'error: ${expected}' (got ${rc}:\n${err})")
+    endif()
+  endforeach()
+endforeach()
+if(EXISTS ${WORK}/ok.png)
+  message(FATAL_ERROR "tdcr plot wrote ${WORK}/ok.png although --dpi was bad")
+endif()
+message("tdcr plot: robot.png and robot.svg written and checked; bad -o and --dpi exit 2 naming them")

@@ -19,6 +19,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "json_reader.hpp"  // core's strict JSON reading (sweep/CMakeLists.txt)
 #include "tdcr/core/error.hpp"
 #include "tdcr/core/scene_io.hpp"
 #include "tdcr/models/model_registry.hpp"
@@ -63,7 +64,7 @@ void classify(SweepAxis& axis, const Scene& base, const std::string& where) {
   std::smatch m;
   if (std::regex_match(axis.field, m, input_re)) {
     const std::string group = m[1], name = m[2];
-    const std::size_t k = std::stoul(m[3]);
+    const std::size_t k = sweep_detail::index_value(m[3]);
     axis.index = static_cast<int>(std::min<std::size_t>(k, 1 << 30));
     if (group == "actuation" && (name == "tensions" || name == "displacements")) {
       const bool tensions = name == "tensions";
@@ -118,6 +119,9 @@ SweepAxis parse_axis(const json& a, const std::string& path, bool random, const 
     throw InputError(path, axis.field, "a range needs both \"from\" and \"to\"");
   axis.from = number(a["from"], path + ".from");
   axis.to = number(a["to"], path + ".to");
+  if (!std::isfinite(axis.to - axis.from))  // e.g. -1e308 to 1e308: the samples would be inf or nan
+    throw InputError(path + ".to", text_of(a["to"]),
+                     "the range from " + text_of(a["from"]) + " is wider than a double holds");
   if (random) {
     if (a.contains("count"))
       throw InputError(path + ".count", text_of(a["count"]), "random sampling draws \"samples\" points; no count per axis");
@@ -184,12 +188,9 @@ std::string read_file(const std::string& path, const std::string& field) {
 }  // namespace
 
 SweepSpec parse_sweep(const std::string& json_text, const std::string& source, const std::string& base_dir) {
-  json doc;
-  try {
-    doc = json::parse(json_text);
-  } catch (const json::parse_error& e) {
-    throw InputError(source, "", std::string("malformed JSON: ") + e.what());
-  }
+  // As strict as a scene file: a syntax error names the byte, a duplicate key or a number that
+  // overflows a double (1e999) names its path in the sweep file (axes[0].to, scene.robot...).
+  json doc = detail::parse_json_text(json_text, source);
   if (!doc.is_object()) throw InputError(source, "", "a sweep file is a JSON object");
   check_keys(doc, "", {"description", "scene", "models", "axes", "sampling", "samples", "seed", "order"});
   SweepSpec spec;

@@ -22,9 +22,10 @@ void set_path(json& doc, const std::string& path, double value) {
     if (path[pos] == '.') ++pos;
     if (path[pos] == '[') {
       const std::size_t close = path.find(']', pos);
-      const std::size_t k = std::stoul(path.substr(pos + 1, close - pos - 1));
+      const std::string digits = path.substr(pos + 1, close - pos - 1);  // the field regex allows only digits
+      const std::size_t k = sweep_detail::index_value(digits);
       if (!node->is_array() || k >= node->size())
-        throw InputError(path, "", "does not exist in the base scene (index " + std::to_string(k) + ")");
+        throw InputError(path, "", "does not exist in the base scene (index " + digits + ")");
       node = &(*node)[k];
       pos = close + 1;
       continue;

@@ -108,9 +108,72 @@ struct SolverOptions {
   /// then depends on the workspace's history within function_tolerance, as with reuse_jacobian.
   bool extrapolate_warm_starts = true;
 
-  /// @brief Throws InputError (field `solver.<name>`) on a tolerance that is not a positive
-  /// finite number, or an iteration, RK4 step or continuation step count below 1, or an RK4 tip
-  /// tolerance that is negative or not finite.
+  /// @name Bounds of the numeric options
+  /// validate() accepts each numeric option within these bounds (docs/scene-file.md lists them).
+  /// Each is far outside what a solve needs; it rejects values that make a solve meaningless,
+  /// fail always, or run for minutes (`rk4_steps` 1e8 did). Times below: `tdcr solve` of
+  /// examples/paper_robot_vc.json ("vc") and examples/paper_robot_tip_force.json ("tip force")
+  /// with the option at its bound, Release build, 2-core AMD EPYC, 2026-11-26.
+  ///@{
+
+  /// Most RK4 steps per disk interval (rk4_steps): RK4's error falls as h^4, so 4096 steps, 512
+  /// times the default 8, would be 7e10 times more accurate than the default mesh, whose VCref
+  /// tip on the paper robot is already within 7e-10 m of CVODE at n = 10 (rk4_max_step). At
+  /// 4096: VC 0.11 s ("vc") and 0.84 s ("tip force"), VCref 0.43 s and 0.57 s.
+  static constexpr int kMaxRk4Steps = 4096;
+  /// Smallest longest RK4 step (m; rk4_max_step): 1 um, so that a 5 mm disk interval (the
+  /// paper robot at n = 10) takes at most 5000 steps, as many as kMaxRk4Steps. At 1 um: VC
+  /// 0.14 s ("vc") and 1.2 s ("tip force"), VCref 0.43 s and 0.43 s.
+  static constexpr double kMinRk4MaxStep = 1e-6;
+  /// Bounds of the Newton residual tolerance (function_tolerance, dimensionless: residuals are
+  /// scaled to order 1). Near 1e-15 the residual is rounding noise: at 1e-15 VCref on "vc" ends
+  /// as line_search_failed (VC converges), at 1e-16 both fail on "tip force" (KIN_STEP_LT_STPTOL
+  /// with |F| = 5.6e-16 and 1.2e-15). Above 1e-2 an "equilibrium" leaves a percent of the
+  /// scaled forces unbalanced.
+  static constexpr double kMinFunctionTolerance = 1e-15;
+  static constexpr double kMaxFunctionTolerance = 1e-2;  ///< @copydoc kMinFunctionTolerance
+  /// Bounds of the scaled step tolerance (step_tolerance): a step stop counts as converged only
+  /// if function_tolerance holds too, so a small value cannot make a wrong answer or a hang
+  /// (max_iterations ends it); a relative step below 1e-16 changes no digit of a double, and
+  /// 1e-20 leaves room for unknowns scaled far from 1. Above 1e-2 Newton would stop on a
+  /// percent-sized step.
+  static constexpr double kMinStepTolerance = 1e-20;
+  static constexpr double kMaxStepTolerance = 1e-2;  ///< @copydoc kMinStepTolerance
+  /// Bounds of CVODE's relative tolerance (cvode_rtol): CVODE gives up near the unit roundoff
+  /// (2.2e-16): at 1e-16 every solve of "tip force" fails at 0 % of the load (the residual
+  /// cannot be evaluated); 1e-15 still converges, 1e-14 keeps a decade from it. At 1e-14 with
+  /// cvode_atol 1e-20: VC 0.03 s, VCref 0.12 s ("tip force"). Above 1e-2 it is no integration.
+  static constexpr double kMinCvodeRtol = 1e-14;
+  static constexpr double kMaxCvodeRtol = 1e-2;  ///< @copydoc kMinCvodeRtol
+  /// Bounds of CVODE's absolute tolerance (cvode_atol, in state units: m, N, N m and rotation
+  /// entries, of order 1e-3 to 1 on a laboratory robot): below 1e-20 no component is resolved
+  /// better (rtol governs), above 1e-2 a centimetre or a hundredth of a newton is ignored.
+  static constexpr double kMinCvodeAtol = 1e-20;
+  static constexpr double kMaxCvodeAtol = 1e-2;  ///< @copydoc kMinCvodeAtol
+  /// Bounds of the accuracy-driven RK4 tip tolerance (m; rk4_tip_tolerance when not 0): the
+  /// smallest estimate reached on "tip force" from rk4_steps 1, rk4_max_step 8e-3 is 7.0e-15 m
+  /// (VC) and 7.2e-15 m (VCref), after two refinements, in under 2 ms. A tolerance below what is
+  /// reachable is harmless: the solve ends after kMaxRk4Halvings halvings as not converged and
+  /// says so (test_rk4_tolerance asks for 1e-18 m to see this). Below 1e-18 m, under a tenth of
+  /// the spacing of doubles at 0.1 m (1.4e-17 m), no value means anything else. Above 1 cm every
+  /// mesh passes.
+  static constexpr double kMinRk4TipTolerance = 1e-18;
+  static constexpr double kMaxRk4TipTolerance = 1e-2;  ///< @copydoc kMinRk4TipTolerance
+  /// Most Newton iterations per solve (max_iterations): 5 times the default 200; a Newton solve
+  /// that has not converged in 1000 iterations will not.
+  static constexpr int kMaxIterations = 1000;
+  /// Most continuation steps (max_continuation_steps): about 16 times the default 64. With both
+  /// bounds, the longest failing solves found ("vc" with a helical tendon of 1e6 turns, or disks
+  /// of 1e9 kg under gravity) end within 3 s: VC 1000 continuation steps, 5264 iterations, 3.0 s;
+  /// PRB 1000 steps, 1.6 s.
+  static constexpr int kMaxContinuationSteps = 1000;
+  ///@}
+
+  /// @brief Throws InputError (field `solver.<name>`, the value, and the allowed range) on a
+  /// numeric option outside its bounds above, or not finite (rk4_max_step may be +infinity:
+  /// exactly rk4_steps steps per interval). With rk4_tip_tolerance > 0 the finest mesh of the
+  /// refinement (2^kMaxRk4Halvings times the first) must stay within them too: rk4_steps at most
+  /// kMaxRk4Steps / 64 and rk4_max_step at least 64 kMinRk4MaxStep.
   void validate() const;
 };
 
