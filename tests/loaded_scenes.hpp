@@ -4,6 +4,7 @@
 // same scene everywhere.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <random>
@@ -13,6 +14,7 @@
 #include "tdcr/core/paper_robot.hpp"
 #include "tdcr/core/scene.hpp"
 #include "tdcr/core/scene_io.hpp"
+#include "tdcr/core/solution.hpp"
 
 namespace tdcr::loaded {
 
@@ -38,6 +40,24 @@ inline double tendon_bend(const Scene& s) {
   const auto& T = s.actuation.values;
   const double k = kPitch * kPitch / bending_stiffness(s.robot);
   return std::max(std::abs(T[0] - T[1] + T[2] - T[3]), std::abs(T[2] - T[3])) * k;
+}
+
+// Largest curvature x offset c = 1 - dh . dp / |dp|^2 over disk intervals and the tendons that
+// pass them, of a converged shape (1: a tendon at the centre of curvature, its geometric limit).
+inline double max_bend(const Robot& robot, const Solution& sol) {
+  const TendonRouting routing = TendonRouting::from(robot);
+  double c = 0.0;
+  for (int j = 1; j < routing.disk_count(); ++j) {
+    const Frame& a = sol.disk_frames[static_cast<std::size_t>(j - 1)];
+    const Frame& b = sol.disk_frames[static_cast<std::size_t>(j)];
+    const Vec3 dp = b.p - a.p;
+    for (const RoutedTendon& t : routing.tendons) {
+      if (!routing.passes(t.index, j)) continue;
+      const Vec3 dh = dp + b.R * t.r - a.R * t.r;
+      c = std::max(c, 1.0 - dh.dot(dp) / dp.squaredNorm());
+    }
+  }
+  return c;
 }
 
 inline double load_parameter(const Scene& s) {

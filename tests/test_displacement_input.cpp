@@ -264,6 +264,75 @@ INSTANTIATE_TEST_SUITE_P(StaticModels, DisplacementInput,
                          ::testing::Values(ModelKind::CCsub, ModelKind::PRB, ModelKind::VC, ModelKind::VCref),
                          [](const auto& info) { return to_string(info.param); });
 
+// Loaded scenes a user drove by displacement (default options, cold solves): the displacements
+// of a tension solve give its tensions back to 1e-8 T_M and its tip to 1e-9 m in every static
+// model. T_M is the paper robot's tension of Eq. 55 at E = 2.11e11 Pa (5.5533 N).
+class DisplacementInputLoaded : public ::testing::TestWithParam<ModelKind> {
+ protected:
+  void expect_round_trip(const Robot& r, const std::vector<double>& t, const Vec3& tip_force,
+                         const std::vector<K>& kinds = kAllDisplaced) const {
+    const double tm = paper::max_tension(paper::robot(10));
+    const auto m = make_model(GetParam(), r, Effects{});
+    const auto ws = m->make_workspace();
+    Loads loads;
+    loads.tip_force = tip_force;
+    const Solution ref = solve(*m, *ws, tension_input(t, loads));
+    ASSERT_TRUE(ref.converged()) << ref.summary.brief_report();
+    const Solution back = solve(*m, *ws, from_solution(ref, kinds, loads));
+    ASSERT_TRUE(back.converged()) << back.summary.message;
+    EXPECT_LT((back.tip().p - ref.tip().p).norm(), 1e-9);
+    for (std::size_t k = 0; k < t.size(); ++k) {
+      EXPECT_NEAR(back.tensions[k], ref.tensions[k], 1e-8 * tm) << "tendon " << k << "; " << back.summary.message;
+      if (back.tendon_slack[k]) {
+        EXPECT_EQ(back.tensions[k], 0.0) << "a slack tendon carries no tension";
+      }
+    }
+  }
+};
+
+// The soft robot (E x 0.25, 20 disks per segment) bent by T1 = T_M under a compressive tip force
+// of 0.3 N, above the straight column's buckling load (about 0.26 N).
+TEST_P(DisplacementInputLoaded, SoftRobotUnderCompression) {
+  const double tm = paper::max_tension(paper::robot(10));
+  expect_round_trip(paper::robot(20, 0.25), {tm, 0.0, 0.0, 0.0}, Vec3(0.0, 0.0, -0.3));
+}
+
+// The paper robot at 20 disks, T = (2, 1, 0, 0) N (co-contraction on segment 1, which the
+// displacements decide only through the tip force), tip force (0.1, 0.1, 0.1) N.
+TEST_P(DisplacementInputLoaded, CoContractionUnderATipForce) {
+  expect_round_trip(paper::robot(20), {2.0, 1.0, 0.0, 0.0}, Vec3(0.1, 0.1, 0.1));
+}
+
+// The soft robot with T1 = 1 N and the 0.3 N compressive tip force.
+TEST_P(DisplacementInputLoaded, SoftRobotPastItsBucklingLoad) {
+  expect_round_trip(paper::robot(20, 0.25), {1.0, 0.0, 0.0, 0.0}, Vec3(0.0, 0.0, -0.3));
+}
+
+// Mixed input on a soft robot (E x 0.1, 15 disks per segment, tip force (0.3, -0.3, 0.1) N): T1,
+// T2 and T4 by tension, T3 by displacement.
+TEST_P(DisplacementInputLoaded, MixedInputOnASoftRobot) {
+  expect_round_trip(paper::robot(15, 0.1), {1.0, 0.3, 0.5, 0.0}, Vec3(0.3, -0.3, 0.1),
+                    {K::Tensions, K::Tensions, K::Displacements, K::Tensions});
+}
+
+// Pulls past the geometric limit: 0.1 m on T1 and T3 (the robot is 0.1 m long), the others let
+// out. Named infeasible, the tendon given.
+TEST_P(DisplacementInputLoaded, PullsLongerThanThePathAreInfeasible) {
+  const auto m = make_model(GetParam(), paper::robot(10), Effects{});
+  const auto ws = m->make_workspace();
+  ModelInput in;
+  in.actuation.kind = K::Displacements;
+  in.actuation.values = {0.1, -0.1, 0.1, -0.1};
+  const Solution s = solve(*m, *ws, in);
+  EXPECT_EQ(s.summary.termination, TerminationType::Infeasible) << s.summary.message;
+  EXPECT_NE(s.summary.message.find("tendon T1"), std::string::npos) << s.summary.message;
+  ASSERT_FALSE(s.disk_frames.empty());  // the robot at rest, a shape to show
+}
+
+INSTANTIATE_TEST_SUITE_P(StaticModels, DisplacementInputLoaded,
+                         ::testing::Values(ModelKind::CCsub, ModelKind::PRB, ModelKind::VC, ModelKind::VCref),
+                         [](const auto& info) { return to_string(info.param); });
+
 std::string field_of(const std::function<void()>& f) {
   try {
     f();

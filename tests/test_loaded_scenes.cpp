@@ -73,22 +73,6 @@ const KnownFailure* known_failure(const std::string& scene, ModelKind model) {
   return nullptr;
 }
 
-// Largest curvature x offset over disk intervals and tendons of a converged shape.
-double max_bend(const Robot& robot, const Solution& sol) {
-  const TendonRouting routing = TendonRouting::from(robot);
-  double c = 0.0;
-  for (int j = 1; j < routing.disk_count(); ++j) {
-    const Frame& a = sol.disk_frames[j - 1];
-    const Frame& b = sol.disk_frames[j];
-    const Vec3 dp = b.p - a.p;
-    for (const RoutedTendon& t : routing.tendons) {
-      if (!routing.passes(t.index, j)) continue;
-      const Vec3 dh = dp + b.R * t.r - a.R * t.r;
-      c = std::max(c, 1.0 - dh.dot(dp) / dp.squaredNorm());
-    }
-  }
-  return c;
-}
 
 Solution solve_cold(ModelKind kind, const Scene& scene) {
   const auto model = make_model(kind, scene.robot, scene.effects);

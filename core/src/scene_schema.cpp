@@ -163,15 +163,14 @@ const Schema<TendonSpec>& tendon_schema() {
   return s;
 }
 
-// Most disks of a scene file's robot, all segments together: twice the largest robot of the
-// benchmarks (bench_vcref: the paper robot at 1000 disks per segment). More is not a robot but
-// a memory or time sink: the paper robot at 5000 disks per segment made VCref run for over
-// 2 minutes in 4.3 GB, at 1e8 disks in one segment every model ends in std::bad_alloc
-// (`tdcr solve` on examples/paper_robot_vc.json with "disks" changed, 2026-11-26); 2 x 2000
-// disks solve in under 1 s with every model, unloaded and under examples/paper_robot_tip_force.json's
-// tip force. (A loading path through many disks is costly well below this bound: 4 segments of
-// 100 disks under that tip force take 3-18 s with CCsub, PRB and VCref.)
-constexpr int kMaxDisks = 4000;
+// Most disks of a scene file's robot, all segments together: the VCref scaling benchmark's
+// largest robot (bench_vcref: the paper robot at 100000 disks per segment, 22.8 s and 4.2 GB with
+// the default options, docs/benchmarks.md) with room to spare. More is not a robot but a memory
+// sink: VCref takes about 24 KB per disk, and at 1e8 disks in one segment every model ended in
+// std::bad_alloc (`tdcr solve` on examples/paper_robot_vc.json with "disks" changed, 2026-11-26).
+// (A loading path through many disks is costly well below this bound: 4 segments of 100 disks
+// under examples/paper_robot_tip_force.json's tip force take 3-18 s with CCsub, PRB and VCref.)
+constexpr int kMaxDisks = 250000;
 
 const Schema<Segment>& segment_schema() {
   using S = Segment;
