@@ -5,11 +5,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <string>
 #include <vector>
 
-#include <Eigen/LU>
+#include <Eigen/SVD>
 
 #include "common/newton_summary.hpp"
 #include "physics/tendon_path.hpp"
@@ -337,7 +336,14 @@ void DisplacementProblem::linear_guess(Eigen::VectorXd& tau) const {
         for (std::size_t c = 0; c < A.size(); ++c)
           M(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(c)) = linear_(A[a], A[c]);
       }
-      const Eigen::VectorXd t = M.completeOrthogonalDecomposition().solve(b);
+      // Minimum norm by a singular value decomposition: antagonistic tendons taut together make M
+      // singular, and Eigen's CompleteOrthogonalDecomposition read uninitialised memory in its
+      // solve of a rank-deficient matrix (valgrind, Eigen 3.4).
+      const Eigen::JacobiSVD<Eigen::MatrixXd> svd(M, Eigen::ComputeThinU | Eigen::ComputeThinV);
+      Eigen::VectorXd c = svd.matrixU().transpose() * b;
+      const Eigen::VectorXd& sv = svd.singularValues();
+      for (Eigen::Index q = 0; q < sv.size(); ++q) c[q] = sv[q] > 1e-12 * sv[0] ? c[q] / sv[q] : 0.0;
+      const Eigen::VectorXd t = svd.matrixV() * c;
       for (std::size_t a = 0; a < A.size(); ++a) tau[A[a]] = t[static_cast<Eigen::Index>(a)];
     }
     const Eigen::VectorXd w = linear_ * tau - q;
@@ -476,7 +482,7 @@ bool DisplacementProblem::impossible_input(std::string& why) const {
 }
 
 bool DisplacementProblem::stiffen(Eigen::VectorXd& y, const bvp::NewtonOptions& options, SolverSummary& summary) {
-  double factor = 1e-2;
+  double factor = 0.0;  // straight to zero first; where that fails, in decades, then shorter steps
   Eigen::VectorXd last = y;
   bvp::NewtonOptions o = options;
   while (compliance_ > 0.0) {
@@ -491,7 +497,7 @@ bool DisplacementProblem::stiffen(Eigen::VectorXd& y, const bvp::NewtonOptions& 
     }
     y = last;
     compliance_ = from;
-    factor = std::sqrt(factor);
+    factor = factor == 0.0 ? 1e-2 : std::sqrt(factor);
     o.reuse_jacobian = false;
     if (factor > 0.9) {
       summary.message += "; the taut tendons' homotopy compliance could not be taken below " + format_value(from);

@@ -121,7 +121,7 @@ class DisplacementProblem final : public ModelProblem, public bvp::Parameterized
   // The border of the Jacobian at y (f = F(y)): col_, row_, tt_.
   bool border(const Eigen::Ref<const Eigen::VectorXd>& y, const Eigen::Ref<const Eigen::VectorXd>& f);
   // complete()'s parts. stiffen(): the compliance from its value down to zero in Newton solves
-  // from the last answer (decades, shorter steps where one fails). flip(): move the tendons whose
+  // from the last answer (straight to zero, else decades, else shorter steps). flip(): move the tendons whose
   // complementarity y violates (true if any moved). refine(): Newton iterations (fresh Jacobians,
   // at most 3) towards 1e-3 of the tolerance, kept if they lower the residual: the driven
   // tensions then carry the precision of the pulls (co-contraction of an antagonistic pair moves
