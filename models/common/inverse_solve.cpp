@@ -38,12 +38,12 @@ namespace {
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
 
-// Function tolerance of the inner forward solves (at most): their tips then agree to about
-// 1e-13 m whatever the warm start and the Newton Jacobian reused (the paper robot, every model,
-// n = 5..20, E and E / 10), four orders below the default position tolerance.
+// Function tolerance of the inner forward solves (at most): the tips of warm and cold solves then
+// agree to 1e-12 m or better (the paper robot, every model, n = 5..20, E and E / 10; at 1e-10 they
+// differ by up to 1e-10 m), three orders below the default position tolerance.
 constexpr double kInnerFunctionTolerance = 1e-12;
-// Function tolerance of the forward solves that difference the Jacobian (where they converge,
-// else kInnerFunctionTolerance): their tips agree to about 1e-15 m.
+// Function tolerance of the forward solves that difference the Jacobian and of phase 2's (where
+// they converge, else kInnerFunctionTolerance): their tips agree to about 1e-15 m.
 constexpr double kDifferenceFunctionTolerance = 1e-14;
 // Tip scatter (m) below which two differences are not told apart (consistency of a column).
 constexpr double kTipNoise = 1e-12;
@@ -55,9 +55,9 @@ constexpr double kRankThreshold = 1e-8;
 // truncation error, not the tips' noise, limits the reduced gradient where a target coordinate
 // is barely controllable (a tip force across the bending plane of the paper robot: singular
 // values 1.6e-2, 4.8e-5, 3.6e-6 m/N): there 1e-3 errs by 1e-5 N, 1e-4 by 1e-7 N. (The models'
-// differential kinematics is no alternative: 6 to 15 times a warm solve, as it also computes the
-// tip compliance, and VCref's is accurate to only 3e-6 .. 2e-4 relative, its shooting Jacobian
-// being a forward difference.)
+// differential kinematics is no alternative: it costs 5 to 17 warm solves, as it also forms the
+// tip compliance, and VCref's is accurate to only 5e-7 .. 2e-4 relative on the paper robot, its
+// shooting Jacobian being a forward difference.)
 constexpr double kDifferenceStep = 1e-4;
 // Increment of the reduced Hessian's second differences along a tangent direction, relative to
 // max(|T|, tension scale): truncation (delta / T_c)^2 ~ 1e-5 and the tips' noise times the
