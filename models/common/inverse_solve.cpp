@@ -75,9 +75,10 @@ constexpr int kUnseenSteps = 3;
 // Restarts of phase 1 from the cold answer when the warm-started iteration met the target on an
 // equilibrium that the loading path does not reach.
 constexpr int kBranchRestarts = 2;
-// Other starts of phase 1 where it ends at a local minimum of the distance, and the bases of
-// their Halton sequence (one per tendon, cycled).
+// Other starts of phase 1 where it ends at a local minimum of the distance, the Halton points
+// they are chosen from, and the bases of that sequence (one per tendon, cycled).
 constexpr int kRestarts = 8;
+constexpr int kCandidates = 32;
 // Kept steps of phase 1 over which the error must at least halve (else another start is tried):
 // Gauss-Newton halves it at every step even at a singular root.
 constexpr std::size_t kStallSteps = 10;
@@ -313,11 +314,13 @@ class Solver {
   enum class Reach { Reached, Stationary, Stalled, Limit, Failed };
 
   // Phase 1 from cur and, where it ends at a local minimum of the distance that misses the
-  // target, from up to kRestarts other starts: points of a Halton sequence in [0, box]^m, box =
-  // max(10 tension scale, 2 max T_start) (a target on a branch that the start's valley does not
-  // lead to: a tip force across the bending plane). True when reached (cur there); else the
-  // result is finished with the closest pose of all.
+  // target (or stalls), from up to kRestarts other starts: of the first kCandidates points of a
+  // Halton sequence in [0, box]^m, box = max(10 tension scale, 2 max T_start), each time the one
+  // farthest from the starts tried and where they ended (a target on a branch that the start's
+  // valley does not lead to: a tip force across the bending plane). True when reached (cur
+  // there); else the result is finished with the closest pose of all.
   bool reach(Point& cur) {
+    const VectorXd T_first = cur.T;
     std::string why;
     Reach how = reach_target(cur, why);
     if (how == Reach::Reached) return true;
@@ -327,14 +330,34 @@ class Solver {
     int tried = 0;
     auto local = [](Reach h) { return h == Reach::Stationary || h == Reach::Stalled; };
     Reach best_how = how;
+    // Candidates: the first kCandidates Halton points; each start the one farthest from the
+    // points tried so far and where they ended (maximin).
+    std::vector<VectorXd> candidates, seen = {T_first, best.T};
+    for (int k = 1; k <= kCandidates; ++k) {
+      VectorXd c(m);
+      for (Eigen::Index i = 0; i < m; ++i) c[i] = box * halton(k, kPrimes[static_cast<std::size_t>(i) % kPrimes.size()]);
+      candidates.push_back(c);
+    }
     for (int k = 1; local(how) && k <= kRestarts; ++k) {
-      VectorXd T(m);
-      for (Eigen::Index i = 0; i < m; ++i) T[i] = box * halton(k, kPrimes[static_cast<std::size_t>(i) % kPrimes.size()]);
+      std::size_t pick = 0;
+      double far = -1.0;
+      for (std::size_t c = 0; c < candidates.size(); ++c) {
+        double d = std::numeric_limits<double>::infinity();
+        for (const VectorXd& v : seen) d = std::min(d, (candidates[c] - v).norm());
+        if (d > far) {
+          far = d;
+          pick = c;
+        }
+      }
+      const VectorXd T = candidates[pick];
+      candidates.erase(candidates.begin() + static_cast<std::ptrdiff_t>(pick));
+      seen.push_back(T);
       Point p;
       ++tried;
       if (!evaluate(T, nullptr, p) || !jacobian(p)) continue;
       std::string w;
       how = reach_target(p, w);
+      seen.push_back(p.T);
       if (how == Reach::Reached) {
         cur = std::move(p);
         return true;
