@@ -3,12 +3,12 @@
 /// orientation), the tensions of least norm among those that do.
 ///
 /// Phase 1 reaches the target by a bounded Levenberg-Marquardt iteration over the tensions (every
-/// step a non-negative least-squares problem on the model's tip Jacobian, Solution::tip_jacobian
-/// from SolverOptions::differential_kinematics). Phase 2 minimises |T| on the target set by
-/// Newton steps in its tangent space (the reduced Hessian of the Lagrangian by differences of the
-/// tip Jacobian), brought back onto the target after every step, with the non-negative tensions
-/// as an active set. `minimum_norm` is claimed only where the first- and second-order conditions
-/// of a local minimum are verified on a Jacobian by central differences of forward solves
+/// step a non-negative least-squares problem on the tip Jacobian, by central differences of
+/// tight, warm-started forward solves), started again from other tensions where it ends at a
+/// local minimum of the distance. Phase 2 minimises |T| on the target set by Newton steps in its
+/// tangent space (the reduced Hessian of the Lagrangian by second differences), brought back onto
+/// the target after every step, with the non-negative tensions as an active set. `minimum_norm`
+/// is claimed only where the first- and second-order conditions of a local minimum hold
 /// (docs/user-guide.md, "Inverse solve"):
 ///
 /// @code
@@ -89,8 +89,9 @@ std::string to_string(InverseStatus s);
 struct InverseResult {
   InverseStatus status = InverseStatus::ForwardFailed;  ///< Why it ended.
   std::string message;          ///< One sentence of detail.
-  /// The forward solve at `tensions` (with its tip Jacobian); empty disk_frames only if even
-  /// the start failed.
+  /// The forward solve at `tensions` (converged: from the straight robot along the loading path,
+  /// `solver` with its function tolerance capped at 1e-12, differential kinematics and stability
+  /// as `solver` asks); empty disk_frames only if even the start failed.
   Solution solution;
   std::vector<double> tensions;  ///< The answer (N), global tendon order, all >= 0.
   double position_error = 0.0;   ///< |tip position - target position| (m).
@@ -126,20 +127,21 @@ struct InverseResult {
 /// @brief Non-negative tensions that put the tip of `model` at `target`.
 ///
 /// Starts from the tensions of `start` (its loads stay as they are). The forward solves use
-/// `solver` with a function tolerance of at most 1e-12 (their tips then agree to about 1e-13 m,
-/// well inside position_tolerance), exact Newton without Jacobian reuse or secant prediction
-/// (their answers depend on the tensions only), differential kinematics on and no stability
-/// analysis; the steps are warm-started. Phase 1 reaches the target (bounded Levenberg-Marquardt
-/// with a gain-ratio test); phase 2 lowers |T| on the target (Newton steps in its tangent space,
+/// `solver` with a function tolerance of at most 1e-12 (1e-14 for the Jacobian's differences and
+/// phase 2), warm-started and reusing the workspace's Newton Jacobian, without secant prediction,
+/// differential kinematics or stability analysis; a step that loads a part of the robot that no
+/// tendon loads at its warm start is solved cold. Phase 1 reaches the target (bounded
+/// Levenberg-Marquardt with a gain-ratio test; other starts where it ends at a local minimum of
+/// the distance or stalls); phase 2 lowers |T| on the target (Newton steps in its tangent space,
 /// active set on T >= 0) to a local minimum, verified as described at
 /// InverseResult::minimum_norm (antagonistic pulls that only compress the backbone are released).
 /// Without target.rotation only the position is sought. The answer is then solved again cold,
-/// from the straight robot (the loading path tdcr::solve takes): `solution` is that solve, with
-/// `solver`'s stability setting, and a result is Converged only if its tip meets the tolerances
-/// (a target met only on another equilibrium branch restarts phase 1 from the cold answer, at
-/// most twice). An unreachable target ends with the closest pose found, status Unreachable (no
-/// step with T >= 0 gets closer: a local minimum of the distance) or MaxIterations, and its
-/// distance in position_error.
+/// from the straight robot (the loading path tdcr::solve takes): `solution` is that solve, and a
+/// result is Converged only if its tip meets the tolerances (a target met only on another
+/// equilibrium branch restarts phase 1 from the cold answer, at most twice). An unreachable
+/// target ends with the closest pose found, status Unreachable (no step with T >= 0 gets closer
+/// from any start: a local minimum of the distance) or MaxIterations, and its distance in
+/// position_error.
 ///
 /// Throws InputError on an invalid target or options, displacement input in `start` (the
 /// iteration varies tensions), or whatever tdcr::solve throws for `start`.
