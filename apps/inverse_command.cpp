@@ -108,7 +108,10 @@ void print_json(const InverseResult& r, const InverseTarget& target) {
                   {"position_error", r.position_error},
                   {"rotation_error", r.rotation_error},
                   {"iterations", r.iterations},
-                  {"minimum_norm", r.minimum_norm}};
+                  {"forward_solves", r.forward_solves},
+                  {"minimum_norm", r.minimum_norm},
+                  {"optimality", r.optimality},
+                  {"tension_resolution", r.tension_resolution}};
   std::printf("%s\n", j.dump(2).c_str());
 }
 

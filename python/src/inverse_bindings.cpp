@@ -3,7 +3,6 @@
 #include <optional>
 #include <string>
 
-#include <Eigen/Geometry>
 #include <pybind11/eigen.h>
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>
@@ -24,7 +23,8 @@ using Point = std::array<double, 3>;
 tdcr::Vec3 vec(const Point& p) { return tdcr::Vec3(p[0], p[1], p[2]); }
 
 /// A target orientation given as a rotation vector (3,) or a rotation matrix (3, 3), as the
-/// rotation vector InverseTarget holds.
+/// rotation vector InverseTarget holds. A matrix must be a rotation (InverseTarget::
+/// rotation_from_matrix: orthonormal to 1e-9, det +1), else InputError naming target.rotation.
 std::optional<tdcr::Vec3> rotation_vector(const py::object& rotation) {
   if (rotation.is_none()) return std::nullopt;
   const auto a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(rotation);
@@ -33,8 +33,7 @@ std::optional<tdcr::Vec3> rotation_vector(const py::object& rotation) {
     tdcr::Mat3 R;
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j) R(i, j) = a.at(i, j);
-    const Eigen::AngleAxisd aa(R);
-    return tdcr::Vec3(aa.angle() * aa.axis());
+    return tdcr::InverseTarget::rotation_from_matrix(R);
   }
   throw tdcr::InputError("target.rotation", py::str(rotation),
                          "must be a rotation vector (3,) or a rotation matrix (3, 3)");
@@ -63,7 +62,8 @@ void bind_inverse(py::module_& m) {
       .def_property(
           "rotation", [](const tdcr::InverseTarget& t) { return t.rotation; },
           [](tdcr::InverseTarget& t, const py::object& r) { t.rotation = rotation_vector(r); },
-          "tip orientation as a rotation vector (rad), or None (orientation free); a (3, 3) matrix is accepted")
+          "tip orientation as a rotation vector (rad), or None (orientation free); a (3, 3) rotation matrix is "
+          "accepted (orthonormal to 1e-9, det +1, else InputError naming target.rotation)")
       .def_readwrite("rotation_weight", &tdcr::InverseTarget::rotation_weight,
                      "m per rad in the least-squares steps; 0: the robot's length")
       .def("validate", &tdcr::InverseTarget::validate);
@@ -89,7 +89,12 @@ void bind_inverse(py::module_& m) {
       .def_readonly("rotation_error", &R::rotation_error, "rad; 0 without a rotation target")
       .def_readonly("iterations", &R::iterations)
       .def_readonly("accepted_steps", &R::accepted_steps)
-      .def_readonly("minimum_norm", &R::minimum_norm, "converged and |T| could not be lowered further")
+      .def_readonly("forward_solves", &R::forward_solves, "all forward solves, the Jacobian's differences included")
+      .def_readonly("minimum_norm", &R::minimum_norm,
+                    "converged and verified to be a local minimum of |T| on the target (first and second order)")
+      .def_readonly("optimality", &R::optimality, "N: the last Newton step of the minimum-norm problem")
+      .def_readonly("tension_resolution", &R::tension_resolution,
+                    "N: tensions this far apart in the least controllable direction both meet the target")
       .def_property_readonly("converged", &R::converged)
       .def("brief_report", &R::brief_report)
       .def("__repr__", [](const R& r) { return "<InverseResult " + r.brief_report() + ">"; });
