@@ -304,23 +304,6 @@ const std::vector<Listed> kKnownFailures = {
     // (s1048). Reported as failed, never as converged.
     {"s1037", ModelKind::CCsub, false, "no convergence (co-tension decided to 1e-7, 0.06 N tip force)"},
     {"s1048", ModelKind::CCsub, false, "slack and taut tendons cycling (0.03 N tip force)"},
-    // Mixed input (T2, T4 by tension) near a tendon's limit: brought on from rest together with
-    // the commanded displacements and the tip force, the given tensions run a tendon into its
-    // geometric limit on the way (named infeasible), while the tension solve's own path reaches
-    // its answer. A path that reaches it under displacement control is not known here.
-    {"s1027", ModelKind::CCsub, true, "T4 at its limit on the way"},
-    {"s1029", ModelKind::CCsub, true, "T4 at its limit on the way"},
-    {"s1029", ModelKind::VCref, true, "T4 at its limit on the way"},
-    {"s1029", ModelKind::PRB, true, "T4 at its limit on the way"},
-    {"s1029", ModelKind::VC, true, "T2 at its limit on the way"},
-    {"s1030", ModelKind::PRB, true, "T4 at its limit on the way"},
-    {"s1030", ModelKind::VC, true, "T2 at its limit on the way"},
-    {"s1030", ModelKind::VCref, true, "T4 at its limit on the way"},
-    {"d13(s2052, elastic)", ModelKind::CCsub, true, "T4 at its limit on the way"},
-    {"d13(s2052, elastic)", ModelKind::PRB, true, "T4 at its limit on the way"},
-    {"d13(s2052, elastic)", ModelKind::VC, true, "T2 at its limit on the way"},
-    {"d13(s2052, elastic)", ModelKind::VCref, true, "T4 at its limit on the way"},
-    {"d20(s2080, friction)", ModelKind::VC, true, "T2 at its limit on the way"},
 };
 
 const Listed* listed(const std::vector<Listed>& list, const std::string& scene, ModelKind model, bool mixed) {

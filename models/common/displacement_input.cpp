@@ -99,14 +99,20 @@ void DisplacementProblem::bind(const StaticModel& model, ModelProblem& inner, co
   // Linear beam theory on the straight robot: tendon j's tension bends every segment it spans
   // with curvature T_j r_j / EI towards it, which pulls tendon i by (r_i . r_j) / EI per length
   // they share (the base offsets: a guess, exact for straight routing).
+  // The tendons given by tension pull the driven ones by linear_given_ (in units of r).
+  const auto pull = [&](int i, int j) {  // d pull_i / d T_j (m/N), global indices
+    const RoutedTendon& a = routing.tendons[static_cast<std::size_t>(i)];
+    const RoutedTendon& b = routing.tendons[static_cast<std::size_t>(j)];
+    return a.r.dot(b.r) * routing.disk_s[static_cast<std::size_t>(std::min(a.end_disk, b.end_disk))] / EI;
+  };
   linear_.resize(k_, k_);
-  for (int i = 0; i < k_; ++i)
-    for (int j = 0; j < k_; ++j) {
-      const RoutedTendon& a = routing.tendons[static_cast<std::size_t>(index_[i])];
-      const RoutedTendon& b = routing.tendons[static_cast<std::size_t>(index_[j])];
-      const double shared = routing.disk_s[static_cast<std::size_t>(std::min(a.end_disk, b.end_disk))];
-      linear_(i, j) = a.r.dot(b.r) * shared / EI * ts_[j] / r_[i];
-    }
+  linear_given_.setZero(k_);
+  for (int i = 0; i < k_; ++i) {
+    for (int j = 0; j < k_; ++j) linear_(i, j) = pull(index_[i], index_[j]) * ts_[j] / r_[i];
+    for (std::size_t j = 0; j < input.actuation.values.size(); ++j)
+      if (input.actuation.kind_of(j) == Actuation::Kind::Tensions)
+        linear_given_[i] += pull(index_[i], static_cast<int>(j)) * input.actuation.values[j] / r_[i];
+  }
   // Which tendons start taut: a warm start's tensioned ones, else those the linear guess
   // tensions (a tendon it leaves slack is moved to taut after the solve if its path is too long:
   // update_constraints; starting it taut at zero tension can make the loading path's first
@@ -117,6 +123,8 @@ void DisplacementProblem::bind(const StaticModel& model, ModelProblem& inner, co
   if (!from_warm) linear_guess(tau);
   for (int i = 0; i < k_; ++i) taut_[static_cast<std::size_t>(i)] = tau[i] > 0.0;
   lambda_ = 1.0;
+  start_.resize(0);
+  base_.setZero(k_);
   T_.setZero(k_);
   applied_valid_ = false;
   // A cold solve starts with every taut tendon compliant (complete() takes it to zero): co-
@@ -175,7 +183,7 @@ void DisplacementProblem::driven_rows(const Eigen::Ref<const Eigen::VectorXd>& t
                                       Eigen::Ref<Eigen::VectorXd> r) const {
   for (int i = 0; i < k_; ++i)
     r[i] = taut_[static_cast<std::size_t>(i)]
-               ? (pulls_[index_[i]] + stretch_[i] * ts_[i] * tau[i] - lambda_ * delta_[i]) / r_[i] + compliance_ * tau[i]
+               ? (pulls_[index_[i]] + stretch_[i] * ts_[i] * tau[i] - target(i)) / r_[i] + compliance_ * tau[i]
                : tau[i];
 }
 
@@ -291,7 +299,25 @@ double DisplacementProblem::relative_noise() const { return sys_->relative_noise
 
 void DisplacementProblem::set_parameter(double lambda) {
   lambda_ = lambda;
-  sys_->set_parameter(lambda);
+  sys_->set_parameter(start_.size() > 0 ? 1.0 : lambda);
+}
+
+ColdStart DisplacementProblem::cold_start() const {
+  constexpr int kStartPathSteps = 128;
+  if (start_.size() == 0) return inner_->cold_start();
+  ColdStart c;
+  c.max_path_steps = kStartPathSteps;
+  return c;
+}
+
+void DisplacementProblem::start_from(const Solution& start) {
+  Eigen::VectorXd y;
+  if (!warm_guess(start, y)) return;  // stays from rest
+  base_.resize(k_);
+  for (int i = 0; i < k_; ++i) base_[i] = start.tendon_displacements[static_cast<std::size_t>(index_[i])];
+  start_ = y;
+  compliance_ = 0.0;
+  sys_->set_parameter(1.0);
 }
 
 void DisplacementProblem::accept_step(Eigen::VectorXd& y) {
@@ -315,12 +341,13 @@ void DisplacementProblem::adjust_warm(bvp::NewtonOptions& options, bool same_inp
 }
 
 void DisplacementProblem::linear_guess(Eigen::VectorXd& tau) const {
-  // The linear complementarity problem w = L tau - delta / r >= 0, tau >= 0, tau . w = 0, by
+  // The linear complementarity problem w = L tau + p - delta / r >= 0, tau >= 0, tau . w = 0 (p:
+  // the pulls of the tendons given by tension), by
   // moving tendons between the taut set (w = 0, minimum-norm) and the slack set (tau = 0).
   tau.setZero(k_);
   if (k_ == 0) return;
   Eigen::VectorXd q(k_);
-  for (int i = 0; i < k_; ++i) q[i] = delta_[i] / r_[i];
+  for (int i = 0; i < k_; ++i) q[i] = delta_[i] / r_[i] - linear_given_[i];
   std::vector<char> taut(static_cast<std::size_t>(k_));
   for (int i = 0; i < k_; ++i) taut[static_cast<std::size_t>(i)] = q[i] > 0.0;
   for (int pass = 0; pass < 2 * k_ + 2; ++pass) {
@@ -360,7 +387,18 @@ void DisplacementProblem::linear_guess(Eigen::VectorXd& tau) const {
   tau = tau.cwiseMax(0.0);
 }
 
+std::vector<double> DisplacementProblem::linear_tensions(std::vector<double> values) const {
+  Eigen::VectorXd tau;
+  linear_guess(tau);
+  for (int i = 0; i < k_; ++i) values[static_cast<std::size_t>(index_[i])] = ts_[i] * tau[i];
+  return values;
+}
+
 void DisplacementProblem::cold_guess(Eigen::VectorXd& y) {
+  if (start_.size() > 0) {
+    y = start_;
+    return;
+  }
   Eigen::VectorXd tau;
   linear_guess(tau);
   apply(tau);
@@ -371,6 +409,7 @@ void DisplacementProblem::cold_guess(Eigen::VectorXd& y) {
 }
 
 bool DisplacementProblem::alternative_guess(Eigen::VectorXd& y) {
+  if (start_.size() > 0) return false;
   Eigen::VectorXd tau;
   linear_guess(tau);
   apply(tau);
@@ -382,6 +421,10 @@ bool DisplacementProblem::alternative_guess(Eigen::VectorXd& y) {
 }
 
 void DisplacementProblem::rest_state(Eigen::VectorXd& y) {
+  if (start_.size() > 0) {  // the tension solve's equilibrium solves the pulls' homotopy at 0
+    y = start_;
+    return;
+  }
   // The straight robot with every driven tension 0.
   const Eigen::VectorXd zero = Eigen::VectorXd::Zero(k_);
   apply(zero);
@@ -515,7 +558,7 @@ bool DisplacementProblem::flip(const Eigen::VectorXd& y) {
   bool changed = false;
   for (int i = 0; i < k_; ++i) {
     char& t = taut_[static_cast<std::size_t>(i)];
-    const double gap = (pulls_[index_[i]] + stretch_[i] * ts_[i] * std::max(0.0, y[n_ + i]) - lambda_ * delta_[i]) / r_[i];
+    const double gap = (pulls_[index_[i]] + stretch_[i] * ts_[i] * std::max(0.0, y[n_ + i]) - target(i)) / r_[i];
     if (t && y[n_ + i] < -tolerance_) {
       t = 0;  // it would push: slack
       changed = true;
@@ -610,12 +653,29 @@ detail::DisplacementProblem& ModelWorkspace::displacement_problem() {
 
 namespace tdcr::detail {
 
+bool tension_start(const StaticModel& model, ModelWorkspace& workspace, const ModelInput& input,
+                   const SolverOptions& options, Solution& start) {
+  const auto& D =
+      static_cast<const DisplacementProblem&>(bind_displacement_problem(model, workspace, input, options, nullptr, nullptr));
+  ModelInput tensions = input;
+  tensions.actuation.kind = Actuation::Kind::Tensions;
+  tensions.actuation.kinds.clear();
+  tensions.actuation.values = D.linear_tensions(input.actuation.values);
+  SolverOptions o = options;
+  o.stability = false;
+  o.differential_kinematics = false;
+  start = tdcr::solve(model, workspace, tensions, o);
+  return start.converged();
+}
+
 ModelProblem& bind_displacement_problem(const StaticModel& model, ModelWorkspace& workspace, const ModelInput& input,
-                                        const SolverOptions& options, const Solution* warm_start) {
+                                        const SolverOptions& options, const Solution* warm_start,
+                                        const Solution* tension_start) {
   const ModelInput tensions = tension_form(input, DisplacementProblem::placeholders(model, input));
   ModelProblem& inner = model.bind(workspace, tensions, options);
   DisplacementProblem& D = workspace.displacement_problem();
-  D.bind(model, inner, input, options, warm_start);
+  D.bind(model, inner, input, options, warm_start ? warm_start : tension_start);
+  if (tension_start && !warm_start) D.start_from(*tension_start);
   return D;
 }
 

@@ -85,7 +85,10 @@ class DisplacementProblem final : public ModelProblem, public bvp::Parameterized
   bvp::NewtonSolver& newton() override { return newton_; }
   void adjust(bvp::NewtonOptions& options) const override;
   void adjust_warm(bvp::NewtonOptions& options, bool same_input) const override;
-  ColdStart cold_start() const override { return inner_->cold_start(); }
+  /// The model's rule; from a tension solve's start (start_from) the pulls' homotopy, a first
+  /// attempt, keeps its path to kStartPathSteps corrector solves (the driver solves from rest
+  /// after it).
+  ColdStart cold_start() const override;
   bool determinant_marks_bifurcations() const override { return inner_->determinant_marks_bifurcations(); }
   void cold_guess(Eigen::VectorXd& y) override;
   bool alternative_guess(Eigen::VectorXd& y) override;
@@ -109,6 +112,15 @@ class DisplacementProblem final : public ModelProblem, public bvp::Parameterized
   /// with the compliance back), then refined (see refine()).
   Completion complete(Eigen::VectorXd& y, const bvp::NewtonOptions& options, SolverSummary& summary) override;
 
+  /// From now until the next bind the parameter lambda brings the commanded pulls on from those
+  /// of `start` (a converged tension solve of this model at the same loads, e.g. tension_start):
+  /// target_k(lambda) = d_k(start) + lambda (delta_k - d_k(start)), the loads and given tensions at
+  /// full value; its equilibrium is the rest state (lambda = 0) and the cold guess, its tensioned
+  /// tendons taut, no compliance.
+  void start_from(const Solution& start);
+  /// `values` (the input's, global order) with each driven tendon's entry the tension of the
+  /// linear guess (see linear_guess()).
+  std::vector<double> linear_tensions(std::vector<double> values) const;
   /// Which driven tendons are taut (by driven index) and their global indices.
   const std::vector<char>& taut() const { return taut_; }
   const std::vector<int>& driven() const { return index_; }
@@ -144,8 +156,13 @@ class DisplacementProblem final : public ModelProblem, public bvp::Parameterized
   Eigen::VectorXd delta_, r_, ts_, stretch_;  // commanded pull, lever arm, T_s, L / EA (0: inextensible)
   Eigen::VectorXd longest_;          // the longest pull any shape gives an inextensible tendon
   Eigen::MatrixXd linear_;           // linear beam theory's d pull_i / d tau_j on the straight robot
+  Eigen::VectorXd linear_given_;     // and the pulls the tendons given by tension add (over r_i)
   std::vector<char> taut_;
   double lambda_ = 1.0;
+  Eigen::VectorXd start_, base_;     // start_from(): the start's unknowns and pulls (empty: from rest)
+  // The commanded pull of driven tendon i at the parameter: lambda delta (from rest), or from
+  // the start's pull to delta.
+  double target(int i) const { return base_[i] + lambda_ * (delta_[i] - base_[i]); }
   double tolerance_ = 1e-10;         // SolverOptions::function_tolerance: the complementarity's slack
   double compliance_ = 0.0;          // the homotopy compliance c of the taut rows (driven_rows)
   Eigen::VectorXd T_, applied_;      // tensions to apply, last applied
@@ -161,6 +178,12 @@ class DisplacementProblem final : public ModelProblem, public bvp::Parameterized
   bvp::NewtonSolver newton_;
   int last_iterations_ = 0;
 };
+
+/// The start of a cold displacement solve: the tension solve (by the driver's rule, stability and
+/// differential kinematics off) of `input` with its displacement-driven tendons at the tensions
+/// of DisplacementProblem's linear guess. False if it did not converge (`start` says why).
+bool tension_start(const StaticModel& model, ModelWorkspace& workspace, const ModelInput& input,
+                   const SolverOptions& options, Solution& start);
 
 /// bind_displacement_problem (declared in tdcr/models/static_model.hpp, a friend of the model
 /// and the workspace): the workspace's DisplacementProblem, bound for `input` on the model's

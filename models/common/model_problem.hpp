@@ -26,6 +26,9 @@ struct ColdStart {
   /// direct solve (0: the continuation default).
   double first_step = 0.0;
   std::string reason;       ///< Why, for the summary message.
+  /// Bound on the corrector solves of a loading path of this problem (0: the path's own, at least
+  /// 400): a path that is only a first attempt, with a fallback after it, is kept short.
+  int max_path_steps = 0;
 };
 
 /// One bound solve of a model: the residual system at the bound input and what surrounds it.

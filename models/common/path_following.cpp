@@ -42,8 +42,10 @@ bvp::ArclengthResult run_path(ModelProblem& P, const TendonRouting& routing, bvp
   a.target = 1.0;
   a.at_fold = bvp::FoldAction::Snap;
   a.detect_bifurcations = a.detect_bifurcations && P.determinant_marks_bifurcations();
-  // The path is long in scaled arclength where the robot bends far: at least 400 corrector solves.
-  a.max_steps = std::max(a.max_steps, 400);
+  // The path is long in scaled arclength where the robot bends far: at least 400 corrector solves
+  // (unless the problem bounds its path: a first attempt with a fallback).
+  const int bound = P.cold_start().max_path_steps;
+  a.max_steps = bound > 0 ? bound : std::max(a.max_steps, 400);
   a.max_step *= std::clamp(std::sqrt(system.size() / kStepBoundUnknowns), 1.0, kStepBoundFactor);
   if (first_step > 0.0) a.initial_step = std::clamp(first_step, a.min_step, a.initial_step);
   a.event_output = [&P, &system](const Eigen::VectorXd& xe, double lambda) {

@@ -396,13 +396,29 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
     throw InputError("workspace", "a workspace of another model",
                      "use the workspace made by this model's make_workspace() (" + model.name() + ")");
   if (warm_start) check_warm_start(model, *warm_start);
-  // Displacement input: the driven tendons' tensions join the model's unknowns.
+  // Displacement input: the driven tendons' tensions join the model's unknowns. A cold solve
+  // starts from the tension solve at the tensions linear beam theory gives its pulls (that solve
+  // by its own rule: direct, or along its loading path from rest): the commanded pulls are then
+  // brought on from that equilibrium's pulls (DisplacementProblem::start_from, a direct solve
+  // first); where that fails, the solve is done again from rest (the first attempt's work
+  // counted).
   const bool displacement = detail::needs_displacement_solve(model, input);
+  Solution start;
+  const Solution* tension_start = nullptr;
+  std::string start_failure;
+  SolverSummary start_work;
+  if (displacement && !warm_start && options.continuation) {
+    if (detail::tension_start(model, workspace, input, options, start)) tension_start = &start;
+    else start_failure = "the tension solve at the linear guess's tensions failed: " + start.summary.message;
+    start_work = start.summary;
+  }
   const auto bind_problem = [&]() -> detail::ModelProblem& {
-    return displacement ? detail::bind_displacement_problem(model, workspace, input, options, warm_start)
-                        : model.bind(workspace, input, options);
+    return displacement
+               ? detail::bind_displacement_problem(model, workspace, input, options, warm_start, tension_start)
+               : model.bind(workspace, input, options);
   };
 
+  for (;;) {
   detail::ModelProblem* bound = &bind_problem();
   std::string coarse_failure;  // why a coarse loading path was not the answer ("" if none was tried)
   SolverSummary coarse_work;   // the work it took (counted in this solve's summary)
@@ -519,8 +535,24 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
     sum.message += " (followed on the requested mesh because " + coarse_failure + ")";
     add_work(coarse_work, sum);
   }
+
+  if (tension_start && !sol.converged()) {  // from rest instead
+    start_failure = "from the tension solve at the linear guess's tensions: " + sum.message;
+    add_work(sum, start_work);
+    tension_start = nullptr;
+    continue;
+  }
+  if (!start_failure.empty()) {
+    sum.message += " (from rest because " + start_failure + ")";
+    add_work(start_work, sum);
+  } else if (displacement && start_work.termination != TerminationType::NotSolved) {
+    add_work(start_work, sum);
+    sum.message = "from the tension solve at the linear guess's tensions (" + start_work.brief_report() +
+                  "): " + sum.message;
+  }
   sum.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return sol;
+  }
 }
 
 }  // namespace tdcr

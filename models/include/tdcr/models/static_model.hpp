@@ -67,9 +67,11 @@ struct SolveHistory {
 class ModelWorkspace;
 namespace detail {
 /// Displacement input (models/common/displacement_input.hpp): the workspace's problem with the
-/// driven tendons' tensions as unknowns, bound for `input`.
+/// driven tendons' tensions as unknowns, bound for `input` (started from `tension_start`, a
+/// tension solve of the same model, if given).
 ModelProblem& bind_displacement_problem(const StaticModel& model, ModelWorkspace& workspace, const ModelInput& input,
-                                        const SolverOptions& options, const Solution* warm_start);
+                                        const SolverOptions& options, const Solution* warm_start,
+                                        const Solution* tension_start);
 }  // namespace detail
 
 /// @brief Mutable memory of one model's solves. Made by StaticModel::make_workspace(), it
@@ -92,7 +94,7 @@ class ModelWorkspace {
                         const Solution*);
   friend detail::ModelProblem& detail::bind_displacement_problem(const StaticModel&, ModelWorkspace&,
                                                                  const ModelInput&, const SolverOptions&,
-                                                                 const Solution*);
+                                                                 const Solution*, const Solution*);
   // Made on the first displacement-input solve.
   detail::DisplacementProblem& displacement_problem();
   std::weak_ptr<const int> owner_;
@@ -143,7 +145,7 @@ class StaticModel {
                         const Solution*);
   friend detail::ModelProblem& detail::bind_displacement_problem(const StaticModel&, ModelWorkspace&,
                                                                  const ModelInput&, const SolverOptions&,
-                                                                 const Solution*);
+                                                                 const Solution*, const Solution*);
   /// @brief Bind the workspace to one input and options: the problem the solve driver works on.
   /// `workspace` belongs to this model (checked by the caller).
   virtual detail::ModelProblem& bind(ModelWorkspace& workspace, const ModelInput& input,
