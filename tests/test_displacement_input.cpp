@@ -329,6 +329,29 @@ TEST_P(DisplacementInputLoaded, PullsLongerThanThePathAreInfeasible) {
   ASSERT_FALSE(s.disk_frames.empty());  // the robot at rest, a shape to show
 }
 
+// Pulls at the edge of the geometric limit: T1 pulled 49.5, 49.7 and 49.9 mm on segment 1 (50 mm
+// long; at curvature x offset 1 a fully constrained path gives 50 mm), T2 let out as much. Each
+// model either converges with no tendon past its limit or names T1 infeasible: never a numerical
+// failure (PRB, whose 3R links reach T1's limit before these pulls, ended line_search_failed).
+TEST_P(DisplacementInputLoaded, PullsAtTheGeometricLimitConvergeOrAreNamed) {
+  const auto m = make_model(GetParam(), paper::robot(10), Effects{});
+  const auto ws = m->make_workspace();
+  for (double pull : {0.0495, 0.0497, 0.0499}) {
+    ModelInput in;
+    in.actuation.kind = K::Displacements;
+    in.actuation.values = {pull, -pull, 0.0, 0.0};
+    const Solution s = solve(*m, *ws, in);
+    if (s.converged()) {
+      EXPECT_TRUE(s.geometry_warnings.empty() || s.geometry_warnings.front().what.find("limit") != std::string::npos)
+          << pull << ": " << s.geometry_warnings.front().what;
+      EXPECT_NEAR(s.tendon_displacements[0], pull, 1e-12);
+    } else {
+      EXPECT_EQ(s.summary.termination, TerminationType::Infeasible) << pull << ": " << s.summary.message;
+      EXPECT_NE(s.summary.message.find("tendon T1"), std::string::npos) << s.summary.message;
+    }
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(StaticModels, DisplacementInputLoaded,
                          ::testing::Values(ModelKind::CCsub, ModelKind::PRB, ModelKind::VC, ModelKind::VCref),
                          [](const auto& info) { return to_string(info.param); });

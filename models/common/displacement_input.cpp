@@ -11,6 +11,7 @@
 #include <Eigen/SVD>
 
 #include "common/newton_summary.hpp"
+#include "physics/geometry_check.hpp"
 #include "physics/tendon_path.hpp"
 #include "tdcr/core/error.hpp"
 #include "tdcr/models/model_registry.hpp"
@@ -579,7 +580,16 @@ ModelProblem::Completion DisplacementProblem::complete(Eigen::VectorXd& y, const
   fresh.reuse_jacobian = false;
   fresh.max_setup_calls = 1;
   if (compliance_ > 0.0) {
-    if (!stiffen(y, options, summary)) return Completion::Done;
+    if (!stiffen(y, options, summary)) {
+      // The compliant tendons' answer with a tendon at its geometric limit: the commanded pulls
+      // need it past the limit (the compliance only let it stop short).
+      std::string why;
+      if (at_limit(y, why)) {
+        summary.termination = TerminationType::Infeasible;
+        summary.message = why + "; the commanded pulls need it further (" + summary.message + ")";
+      }
+      return Completion::Done;
+    }
     what = "homotopy compliance " + format_value(kStartCompliance) + " taken to zero";
   }
   int updates = 0;
@@ -618,6 +628,15 @@ ModelProblem::Completion DisplacementProblem::complete(Eigen::VectorXd& y, const
   refine(y, options);
   if (!what.empty()) summary.message = path + "; then " + what + ": " + summary.message;
   return Completion::Done;
+}
+
+bool DisplacementProblem::at_limit(const Eigen::VectorXd& y, std::string& why) {
+  if (infeasibility(y, physics::kTendonLimitNear, why)) return true;
+  Solution shape;
+  Eigen::VectorXd f(size());
+  const bool evaluated = final_residual(y, f);
+  extract(y, evaluated, shape);
+  return evaluated && physics::tendon_limit(model_->routing(), shape, physics::kTendonLimitNear, why);
 }
 
 void DisplacementProblem::refine(Eigen::VectorXd& y, const bvp::NewtonOptions& options) {

@@ -141,6 +141,9 @@ class DisplacementProblem final : public ModelProblem, public bvp::Parameterized
   // residual at the tolerance leaves it loose).
   bool stiffen(Eigen::VectorXd& y, const bvp::NewtonOptions& options, SolverSummary& summary);
   bool flip(const Eigen::VectorXd& y);
+  // True and the reason if a tensioned tendon is at its geometric limit at y (the model's test,
+  // else the disk frames': physics::tendon_limit with kTendonLimitNear).
+  bool at_limit(const Eigen::VectorXd& y, std::string& why);
   void refine(Eigen::VectorXd& y, const bvp::NewtonOptions& options);
   // T_s-scaled tensions of a Solution's driven tendons (false if it has none).
   bool tensions_of(const Solution& s, Eigen::VectorXd& tau) const;
