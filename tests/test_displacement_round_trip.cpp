@@ -283,8 +283,8 @@ struct Listed {
 // forces of these scenes (0.01-0.06 N, except s1012 0.48 N and s1054 1.5 N) a pair at lower
 // co-tension, with one tendon slack or nearly, meets the same pulls (a slack path at most as long
 // as commanded).
-// The tension solve carried co-tension; the displacement solve, from the tendons' compliance
-// taken to zero, the least tension (tendon_slack names the slack ones).
+// The tension solve carried co-tension; the displacement solve, started at the linear guess's
+// tensions (no co-tension), reaches less (tendon_slack names the slack ones).
 const std::vector<Listed> kOtherEquilibria = {
     {"s1012", ModelKind::CCsub, false, "T (3.12, 9.47, 6.12, 1.57) N back as (0, 6.45, 4.55, 0), tip 0.36 mm away"},
     {"s1016", ModelKind::CCsub, false, "T (0.66, 8.01, 6.22, 0) N back as (0, 7.36, 6.22, 0), tip 7 um away"},

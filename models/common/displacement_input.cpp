@@ -206,7 +206,8 @@ bool DisplacementProblem::final_residual(const Eigen::VectorXd& y, Eigen::Ref<Ei
   return f.allFinite();
 }
 
-bool DisplacementProblem::border(const Eigen::Ref<const Eigen::VectorXd>& y, const Eigen::Ref<const Eigen::VectorXd>& f) {
+bool DisplacementProblem::border(const Eigen::Ref<const Eigen::VectorXd>& y, const Eigen::Ref<const Eigen::VectorXd>& f,
+                                 Eigen::Ref<Eigen::MatrixXd>* Jxx) {
   const double noise = sys_->relative_noise();
   Eigen::VectorXd tau = y.tail(k_);
   x_ = y.head(n_);
@@ -230,7 +231,9 @@ bool DisplacementProblem::border(const Eigen::Ref<const Eigen::VectorXd>& y, con
     tt_(j, j) += taut_[static_cast<std::size_t>(j)] ? stretch_[j] * ts_[j] / r_[j] + compliance_ : 1.0;
   }
   if (!apply(tau)) return false;
-  // d rows / dx: the pulls with each unknown moved.
+  // d rows / dx: the pulls with each unknown moved; with Jxx, also the model's residual there
+  // (its forward-difference Jacobian from the same evaluations: VC's shots record the tendon
+  // lengths, so its pulls come with its residual).
   Eigen::VectorXd uscale(n_);
   sys_->unknown_scale(uscale);
   row_.setZero(k_, n_);
@@ -238,7 +241,12 @@ bool DisplacementProblem::border(const Eigen::Ref<const Eigen::VectorXd>& y, con
     const double h = bvp::finite_difference_step(x_[j], uscale[j], noise);
     const double xj = x_[j];
     x_[j] = xj + h;
-    const bool ok = inner_->tendon_pulls(x_, dp_);
+    bool ok = true;
+    if (Jxx) {
+      ok = sys_->residual(x_, fp_);
+      if (ok) Jxx->col(j) = (fp_ - f.head(n_)) / h;
+    }
+    ok = ok && inner_->tendon_pulls(x_, dp_);
     x_[j] = xj;
     if (!ok) return false;
     for (int i = 0; i < k_; ++i)
@@ -253,10 +261,12 @@ bool DisplacementProblem::jacobian(const Eigen::Ref<const Eigen::VectorXd>& y, c
   if (!apply(y.tail(k_))) return false;
   x_ = y.head(n_);
   J.setZero();
-  auto Jxx = J.topLeftCorner(n_, n_);
-  const bool ok = sys_->has_jacobian() ? bvp::analytic_jacobian_dense(*sys_, x_, f.head(n_), Jxx)
-                                       : bvp::finite_difference_jacobian(*sys_, x_, f.head(n_), Jxx, &fd_);
-  if (!ok || !border(y, f)) return false;
+  Eigen::Ref<Eigen::MatrixXd> Jxx = J.topLeftCorner(n_, n_);
+  if (sys_->has_jacobian()) {
+    if (!bvp::analytic_jacobian_dense(*sys_, x_, f.head(n_), Jxx) || !border(y, f, nullptr)) return false;
+  } else if (!border(y, f, &Jxx)) {  // forward differences with the pulls'
+    return false;
+  }
   J.topRightCorner(n_, k_) = col_;
   J.bottomLeftCorner(k_, n_) = row_;
   J.bottomRightCorner(k_, k_) = tt_;
@@ -271,7 +281,7 @@ bool DisplacementProblem::sparse_jacobian(const Eigen::Ref<const Eigen::VectorXd
   const bool ok = sys_->has_jacobian()
                       ? sys_->sparse_jacobian(x_, f.head(n_), inner_values_.data())
                       : bvp::finite_difference_sparse_jacobian(*sys_, x_, f.head(n_), p, inner_values_.data(), &fd_);
-  if (!ok || !border(y, f)) return false;
+  if (!ok || !border(y, f, nullptr)) return false;
   std::fill(values, values + pattern_.nnz(), 0.0);
   for (std::size_t q = 0; q < inner_pos_.size(); ++q) values[inner_pos_[q]] = inner_values_[q];
   for (int j = 0; j < n_; ++j) {

@@ -131,7 +131,9 @@ class DisplacementProblem final : public ModelProblem, public bvp::Parameterized
   // The rows of the driven tendons at y (pulls d_ evaluated at x): into r.
   void driven_rows(const Eigen::Ref<const Eigen::VectorXd>& tau, Eigen::Ref<Eigen::VectorXd> r) const;
   // The border of the Jacobian at y (f = F(y)): col_, row_, tt_.
-  bool border(const Eigen::Ref<const Eigen::VectorXd>& y, const Eigen::Ref<const Eigen::VectorXd>& f);
+  // With Jxx (not null), the model's forward-difference Jacobian from the pulls' evaluations.
+  bool border(const Eigen::Ref<const Eigen::VectorXd>& y, const Eigen::Ref<const Eigen::VectorXd>& f,
+              Eigen::Ref<Eigen::MatrixXd>* Jxx);
   // complete()'s parts. stiffen(): the compliance from its value down to zero in Newton solves
   // from the last answer (straight to zero, else decades, else shorter steps). flip(): move the tendons whose
   // complementarity y violates (true if any moved). refine(): Newton iterations (fresh Jacobians,
