@@ -412,136 +412,138 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
     else start_failure = "the tension solve at the linear guess's tensions failed: " + start.summary.message;
     start_work = start.summary;
   }
-  const auto bind_problem = [&]() -> detail::ModelProblem& {
-    return displacement
-               ? detail::bind_displacement_problem(model, workspace, input, options, warm_start, tension_start)
-               : model.bind(workspace, input, options);
+  // One solve of the bound problem; `from`: the displacement solve's tension start, if any.
+  const auto solve_from = [&](const Solution* from) -> Solution {
+    const auto bind_problem = [&]() -> detail::ModelProblem& {
+      return displacement ? detail::bind_displacement_problem(model, workspace, input, options, warm_start, from)
+                          : model.bind(workspace, input, options);
+    };
+    detail::ModelProblem* bound = &bind_problem();
+    std::string coarse_failure;  // why a coarse loading path was not the answer ("" if none was tried)
+    SolverSummary coarse_work;   // the work it took (counted in this solve's summary)
+    if (bound->system() &&
+        wants_coarse_path(model, options, warm_start, path_reason(model, input, bound->cold_start()))) {
+      Solution answer = solve_with_coarse_path(model, workspace, input, options, coarse_failure);
+      workspace.history_.valid = false;  // a cold solve leaves no warm-start history
+      if (answer.converged()) {
+        answer.summary.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        return answer;
+      }
+      coarse_work = answer.summary;
+      bound = &bind_problem();  // back to the requested mesh: the whole path there
+    }
+    detail::ModelProblem& P = *bound;
+    Solution sol;
+    sol.model = model.name();
+    sol.model_fingerprint = model.fingerprint();
+    SolverSummary& sum = sol.summary;
+    sum.integrator = P.integrator_name();
+
+    bvp::ParameterizedSystem* sys = P.system();
+    double reached = 1.0;  // load factor of the answer (< 1: loading from rest stopped there)
+    Eigen::VectorXd x;     // the system's unknowns (none for a closed form)
+    std::string impossible;
+    if (sys && P.impossible_input(impossible)) {
+      // The robot at rest, named infeasible: nothing to solve.
+      sys->set_parameter(0.0);
+      P.rest_state(x);
+      reached = 0.0;
+      sum.unknowns = sys->size();
+      sum.termination = TerminationType::Infeasible;
+      sum.message = impossible + " (the robot at rest returned, nothing solved)";
+      Eigen::VectorXd f(sys->size());
+      sol.unknowns = x;
+      P.extract(x, P.final_residual(x, f), sol);
+      sys->set_parameter(1.0);
+    } else if (!sys) {
+      // Closed form: the problem computes the answer and its summary.
+      sum.linear_solver = "none";
+      P.extract(Eigen::VectorXd(), true, sol);
+    } else {
+      sum.unknowns = sys->size();
+      bvp::NewtonOptions nopt = bvp::NewtonOptions::from(options);
+      P.adjust(nopt);
+      sys->set_parameter(1.0);
+      const bool warm = warm_start && P.warm_guess(*warm_start, x);
+      // The secant predictor: this solve's input, its warm start's, and the model's warm guess.
+      detail::SolveHistory& history = workspace.history_;
+      Eigen::VectorXd u, from, unpredicted;
+      bool predicted = false;
+      if (warm) {
+        input_vector(input.actuation.values, input.loads, u);
+        input_vector(warm_start->tensions, warm_start->loads, from);
+        if (options.reuse_jacobian) P.adjust_warm(nopt, from == u);
+        unpredicted = x;
+        if (options.extrapolate_warm_starts && !displacement) predicted = extrapolate(history, from, u, x);
+      }
+      if (sys->size() == 0) {
+        x.resize(0);
+        sum.termination = TerminationType::Converged;
+        sum.message = "no unknowns: the answer follows from the input alone";
+        sum.linear_solver = "none";
+      } else {
+        const detail::Rebind rebind = [&](const ModelInput& in) -> detail::ModelProblem& {
+          return model.bind(workspace, in, options);
+        };
+        reached = solve_on_loading_path(model, input, P, *sys, nopt, options, warm ? warm_start : nullptr, rebind, x,
+                                        predicted ? &unpredicted : nullptr, sol);
+        // The problem's own completion (displacement input: compliance to zero, slack and taut
+        // tendons); where it changed its equations and cannot solve them from the answer, the
+        // solve again, cold.
+        constexpr int kMaxFollowAgain = 3;
+        for (int again = 0; sum.converged(); ++again) {
+          if (P.complete(x, nopt, sum) == detail::ModelProblem::Completion::Done) break;
+          if (again == kMaxFollowAgain) {
+            sum.termination = TerminationType::NoConvergence;
+            sum.message += "; the problem's equations changed " + std::to_string(kMaxFollowAgain + 1) +
+                           " times after a converged solve";
+            break;
+          }
+          sys->set_parameter(1.0);
+          sol.path_events.clear();
+          reached = solve_on_loading_path(model, input, P, *sys, nopt, options, nullptr, rebind, x, nullptr, sol);
+        }
+      }
+      if (sum.converged()) reached = 1.0;
+      const bool evaluated = final_check(P, *sys, x, reached, options.function_tolerance, sum);
+      sol.unknowns = x;
+      P.extract(x, evaluated, sol);
+      // Remembered for the next solve's predictor: a converged warm solve (a cold one has no
+      // warm guess to correct); anything else clears it.
+      history.valid = warm && sum.converged() && x.size() > 0;
+      if (history.valid) {
+        history.from.swap(from);
+        history.input.swap(u);
+        history.guess.swap(unpredicted);
+        history.unknowns = x;
+      }
+      if (sum.converged() && options.stability) sol.stability = P.stability(x, 1.0);
+    }
+    if (sol.converged() && options.differential_kinematics && !displacement)
+      add_differential_kinematics(
+          model, [&](const ModelInput& in) -> detail::ModelProblem& { return model.bind(workspace, in, options); },
+          input, options.function_tolerance, x, sol);
+    if (sol.tensions.empty() && input.actuation.kind == Actuation::Kind::Tensions) sol.tensions = input.actuation.values;
+    // The displacement a motor sets: the path's pull plus an elastic tendon's stretch.
+    tendon::add_elastic_stretch(model.robot(), model.routing(), sol.tensions, sol.tendon_displacements);
+    sol.loads = input.loads;
+    if (!sum.converged() && reached < 1.0 && impossible.empty())
+      name_infeasibility(P, model.routing(), sol.unknowns, reached, sol);
+    physics::check_geometry(model.robot(), model.routing(), sol, P.max_curvature());
+    if (!coarse_failure.empty()) {
+      sum.message += " (followed on the requested mesh because " + coarse_failure + ")";
+      add_work(coarse_work, sum);
+    }
+    return sol;
   };
 
-  for (;;) {
-  detail::ModelProblem* bound = &bind_problem();
-  std::string coarse_failure;  // why a coarse loading path was not the answer ("" if none was tried)
-  SolverSummary coarse_work;   // the work it took (counted in this solve's summary)
-  if (bound->system() &&
-      wants_coarse_path(model, options, warm_start, path_reason(model, input, bound->cold_start()))) {
-    Solution answer = solve_with_coarse_path(model, workspace, input, options, coarse_failure);
-    workspace.history_.valid = false;  // a cold solve leaves no warm-start history
-    if (answer.converged()) {
-      answer.summary.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      return answer;
-    }
-    coarse_work = answer.summary;
-    bound = &bind_problem();  // back to the requested mesh: the whole path there
-  }
-  detail::ModelProblem& P = *bound;
-  Solution sol;
-  sol.model = model.name();
-  sol.model_fingerprint = model.fingerprint();
-  SolverSummary& sum = sol.summary;
-  sum.integrator = P.integrator_name();
-
-  bvp::ParameterizedSystem* sys = P.system();
-  double reached = 1.0;  // load factor of the answer (< 1: loading from rest stopped there)
-  Eigen::VectorXd x;     // the system's unknowns (none for a closed form)
-  std::string impossible;
-  if (sys && P.impossible_input(impossible)) {
-    // The robot at rest, named infeasible: nothing to solve.
-    sys->set_parameter(0.0);
-    P.rest_state(x);
-    reached = 0.0;
-    sum.unknowns = sys->size();
-    sum.termination = TerminationType::Infeasible;
-    sum.message = impossible + " (the robot at rest returned, nothing solved)";
-    Eigen::VectorXd f(sys->size());
-    sol.unknowns = x;
-    P.extract(x, P.final_residual(x, f), sol);
-    sys->set_parameter(1.0);
-  } else if (!sys) {
-    // Closed form: the problem computes the answer and its summary.
-    sum.linear_solver = "none";
-    P.extract(Eigen::VectorXd(), true, sol);
-  } else {
-    sum.unknowns = sys->size();
-    bvp::NewtonOptions nopt = bvp::NewtonOptions::from(options);
-    P.adjust(nopt);
-    sys->set_parameter(1.0);
-    const bool warm = warm_start && P.warm_guess(*warm_start, x);
-    // The secant predictor: this solve's input, its warm start's, and the model's warm guess.
-    detail::SolveHistory& history = workspace.history_;
-    Eigen::VectorXd u, from, unpredicted;
-    bool predicted = false;
-    if (warm) {
-      input_vector(input.actuation.values, input.loads, u);
-      input_vector(warm_start->tensions, warm_start->loads, from);
-      if (options.reuse_jacobian) P.adjust_warm(nopt, from == u);
-      unpredicted = x;
-      if (options.extrapolate_warm_starts && !displacement) predicted = extrapolate(history, from, u, x);
-    }
-    if (sys->size() == 0) {
-      x.resize(0);
-      sum.termination = TerminationType::Converged;
-      sum.message = "no unknowns: the answer follows from the input alone";
-      sum.linear_solver = "none";
-    } else {
-      const detail::Rebind rebind = [&](const ModelInput& in) -> detail::ModelProblem& {
-        return model.bind(workspace, in, options);
-      };
-      reached = solve_on_loading_path(model, input, P, *sys, nopt, options, warm ? warm_start : nullptr, rebind, x,
-                                      predicted ? &unpredicted : nullptr, sol);
-      // The problem's own completion (displacement input: compliance to zero, slack and taut
-      // tendons); where it changed its equations and cannot solve them from the answer, the
-      // solve again, cold.
-      constexpr int kMaxFollowAgain = 3;
-      for (int again = 0; sum.converged(); ++again) {
-        if (P.complete(x, nopt, sum) == detail::ModelProblem::Completion::Done) break;
-        if (again == kMaxFollowAgain) {
-          sum.termination = TerminationType::NoConvergence;
-          sum.message += "; the problem's equations changed " + std::to_string(kMaxFollowAgain + 1) +
-                         " times after a converged solve";
-          break;
-        }
-        sys->set_parameter(1.0);
-        sol.path_events.clear();
-        reached = solve_on_loading_path(model, input, P, *sys, nopt, options, nullptr, rebind, x, nullptr, sol);
-      }
-    }
-    if (sum.converged()) reached = 1.0;
-    const bool evaluated = final_check(P, *sys, x, reached, options.function_tolerance, sum);
-    sol.unknowns = x;
-    P.extract(x, evaluated, sol);
-    // Remembered for the next solve's predictor: a converged warm solve (a cold one has no
-    // warm guess to correct); anything else clears it.
-    history.valid = warm && sum.converged() && x.size() > 0;
-    if (history.valid) {
-      history.from.swap(from);
-      history.input.swap(u);
-      history.guess.swap(unpredicted);
-      history.unknowns = x;
-    }
-    if (sum.converged() && options.stability) sol.stability = P.stability(x, 1.0);
-  }
-  if (sol.converged() && options.differential_kinematics && !displacement)
-    add_differential_kinematics(
-        model, [&](const ModelInput& in) -> detail::ModelProblem& { return model.bind(workspace, in, options); },
-        input, options.function_tolerance, x, sol);
-  if (sol.tensions.empty() && input.actuation.kind == Actuation::Kind::Tensions) sol.tensions = input.actuation.values;
-  // The displacement a motor sets: the path's pull plus an elastic tendon's stretch.
-  tendon::add_elastic_stretch(model.robot(), model.routing(), sol.tensions, sol.tendon_displacements);
-  sol.loads = input.loads;
-  if (!sum.converged() && reached < 1.0 && impossible.empty())
-    name_infeasibility(P, model.routing(), sol.unknowns, reached, sol);
-  physics::check_geometry(model.robot(), model.routing(), sol, P.max_curvature());
-  if (!coarse_failure.empty()) {
-    sum.message += " (followed on the requested mesh because " + coarse_failure + ")";
-    add_work(coarse_work, sum);
-  }
-
+  Solution sol = solve_from(tension_start);
   if (tension_start && !sol.converged()) {  // from rest instead
-    start_failure = "from the tension solve at the linear guess's tensions: " + sum.message;
-    add_work(sum, start_work);
-    tension_start = nullptr;
-    continue;
+    start_failure = "from the tension solve at the linear guess's tensions: " + sol.summary.message;
+    add_work(sol.summary, start_work);
+    sol = solve_from(nullptr);
   }
+  SolverSummary& sum = sol.summary;
   if (!start_failure.empty()) {
     sum.message += " (from rest because " + start_failure + ")";
     add_work(start_work, sum);
@@ -552,7 +554,6 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
   }
   sum.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return sol;
-  }
 }
 
 }  // namespace tdcr
