@@ -49,7 +49,8 @@ std::string usage() {
     models += "  " + name + m.description + "\n";
   }
   return "usage: tdcr solve SCENE.json [--model NAME] [--accuracy FRACTION] [--json] [--repeat N]\n"
-         "                             [--integrator rk4|cvode] [--continuation] [--jacobian]\n"
+         "                             [--integrator rk4|rk4_fixed|cvode] [--tip-tolerance M] [--continuation]\n"
+         "                             [--jacobian]\n"
          + tdcr::cli::inverse_usage() +
          "       tdcr sweep SWEEP.json -o OUT.csv [--threads N] [--shard i/N]   (tdcr sweep --help)\n"
          "       tdcr sweep-merge OUT.csv SHARD.csv...\n"
@@ -68,7 +69,8 @@ std::string usage() {
          "                        residual_norm, tip, disks, tendon_displacements, timing, summary)\n"
          "  --repeat N            solve N times (N >= 1) from the same initial guess and report the\n"
          "                        median and minimum solve time\n"
-         "  --integrator NAME     rk4 or cvode; overrides the scene's solver.integrator\n"
+         "  --integrator NAME     rk4, rk4_fixed or cvode; overrides the scene's solver.integrator\n"
+         "  --tip-tolerance M     accuracy of the tip position (m); overrides solver.tip_tolerance\n"
          "  --continuation        if a direct solve fails, ramp actuation and loads (continuation)\n"
          "  --jacobian            also compute the tip Jacobian (d tip pose / d actuation) and the\n"
          "                        tip compliance (d tip pose / d tip wrench); --json prints them\n"
@@ -95,6 +97,7 @@ struct SolveArgs {
   std::string scene_path;
   std::optional<std::string> model;
   std::optional<std::string> integrator;
+  std::optional<double> tip_tolerance;
   bool json = false;
   bool continuation = false;
   bool jacobian = false;
@@ -107,6 +110,15 @@ double parse_accuracy(const std::string& text) {
   const double v = std::strtod(text.c_str(), &end);
   if (text.empty() || *end != '\0' || !std::isfinite(v) || v <= 0.0 || v >= 1.0)
     throw UsageError("--accuracy: expected a fraction of the robot length in (0, 1) (got '" + text + "')");
+  return v;
+}
+
+// A number for --tip-tolerance; its range is SolverOptions::validate()'s (solver.tip_tolerance).
+double parse_tip_tolerance(const std::string& text) {
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (text.empty() || *end != '\0' || !std::isfinite(v))
+    throw UsageError("--tip-tolerance: expected a number of metres (got '" + text + "')");
   return v;
 }
 
@@ -146,6 +158,8 @@ SolveArgs parse_solve_args(const std::vector<std::string>& args) {
       out.accuracy = parse_accuracy(value());
     } else if (name == "--integrator") {
       out.integrator = value();
+    } else if (name == "--tip-tolerance") {
+      out.tip_tolerance = parse_tip_tolerance(value());
     } else if (name == "--repeat") {
       out.repeat = parse_repeat(value());
     } else if (name == "--json") {
@@ -180,11 +194,21 @@ void apply_overrides(const SolveArgs& args, tdcr::Scene& scene) {
   if (args.model) scene.model = *args.model;
   if (args.integrator) {
     if (*args.integrator == "rk4")
+      scene.solver.integrator = tdcr::IntegratorKind::AccuracyDrivenRK4;
+    else if (*args.integrator == "rk4_fixed")
       scene.solver.integrator = tdcr::IntegratorKind::FixedStepRK4;
     else if (*args.integrator == "cvode")
       scene.solver.integrator = tdcr::IntegratorKind::Cvode;
     else
-      throw tdcr::InputError("--integrator", *args.integrator, "must be rk4 or cvode");
+      throw tdcr::InputError("--integrator", *args.integrator, "must be rk4, rk4_fixed or cvode");
+  }
+  if (args.tip_tolerance) {
+    scene.solver.tip_tolerance = *args.tip_tolerance;
+    try {
+      scene.solver.validate();
+    } catch (const tdcr::InputError& e) {
+      throw UsageError(std::string("--tip-tolerance: ") + e.what());
+    }
   }
   if (args.continuation) scene.solver.continuation = true;
   if (args.jacobian) scene.solver.differential_kinematics = true;

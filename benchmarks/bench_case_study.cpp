@@ -300,6 +300,7 @@ void tradeoff(const Settings& cfg) {
     run(ModelKind::PRB, input, SolverOptions(), "default");
     for (int steps : {1, 2, 4, 8, 16}) {
       SolverOptions o;
+      o.integrator = IntegratorKind::FixedStepRK4;
       o.rk4_steps = steps;
       o.rk4_max_step = std::numeric_limits<double>::infinity();  // exactly rk4_steps per interval
       run(ModelKind::VC, input, o, "rk4_" + std::to_string(steps));

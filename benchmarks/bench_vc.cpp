@@ -82,6 +82,7 @@ int main(int argc, char** argv) {
   for (VcInitialGuess guess : {VcInitialGuess::Zero, VcInitialGuess::Equilibrium}) {
     for (int steps : {1, 2, 4, 8}) {
       Scene s = base;
+      s.solver.integrator = IntegratorKind::FixedStepRK4;
       s.solver.rk4_steps = steps;
       s.solver.rk4_max_step = std::numeric_limits<double>::infinity();  // exactly rk4_steps per interval
       rows.push_back(run(std::string(guess == VcInitialGuess::Zero ? "zero" : "equil") + " rk4 x" +

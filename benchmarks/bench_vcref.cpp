@@ -191,6 +191,7 @@ int main(int argc, char** argv) {
     for (int steps : {1, 2, 4, 8}) {
       if (quick && steps != 4) continue;
       Scene s = paper::scene(10, 2);
+      s.solver.integrator = IntegratorKind::FixedStepRK4;
       s.solver.rk4_steps = steps;
       s.solver.rk4_max_step = std::numeric_limits<double>::infinity();  // exactly rk4_steps per interval
       VcrefOptions opt;

@@ -41,6 +41,7 @@
 #include "tdcr/core/scene_io.hpp"
 #include "tdcr/models/model_registry.hpp"
 #include "tdcr/models/static_model.hpp"
+#include "fixed_mesh_settings.hpp"
 
 using namespace tdcr;
 using namespace tdcr::loaded;
@@ -150,7 +151,7 @@ Outcome round_trip(const RoundTripScene& s, ModelKind kind, bool mixed) {
   Outcome o;
   const auto model = make_model(kind, s.robot, s.effects);
   const auto ws = model->make_workspace();
-  const Solution ref = solve(*model, *ws, s.input);
+  const Solution ref = solve(*model, *ws, s.input, test::fixed_mesh_settings());
   if (!ref.converged() || !ref.geometry_warnings.empty()) return o;
   o.took_part = true;
   o.edge = max_bend(s.robot, ref) >= 0.9;
@@ -182,7 +183,7 @@ Outcome round_trip(const RoundTripScene& s, ModelKind kind, bool mixed) {
     }
   }
   const auto t0 = std::chrono::steady_clock::now();
-  const Solution back = solve(*model, *ws, in);
+  const Solution back = solve(*model, *ws, in, test::fixed_mesh_settings());
   o.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   o.converged = back.converged();
   o.infeasible = back.summary.termination == TerminationType::Infeasible &&
@@ -202,7 +203,7 @@ Outcome round_trip(const RoundTripScene& s, ModelKind kind, bool mixed) {
     }
     ModelInput at = s.input;
     at.actuation.values = back.tensions;
-    const Solution held = solve(*model, *ws, at, SolverOptions(), &back);
+    const Solution held = solve(*model, *ws, at, test::fixed_mesh_settings(), &back);
     o.equilibrium = meets && held.converged() && (held.tip().p - back.tip().p).norm() <= 1e-9;
   }
   const int m = static_cast<int>(ref.tensions.size());
@@ -229,8 +230,8 @@ Outcome round_trip(const RoundTripScene& s, ModelKind kind, bool mixed) {
     ModelInput plus = s.input, minus = s.input;
     plus.actuation.values[static_cast<std::size_t>(kj)] += h;
     if (central) minus.actuation.values[static_cast<std::size_t>(kj)] -= h;
-    const Solution sp = solve(*model, *ws, plus, SolverOptions(), &ref);
-    const Solution sm = central ? solve(*model, *ws, minus, SolverOptions(), &ref) : ref;
+    const Solution sp = solve(*model, *ws, plus, test::fixed_mesh_settings(), &ref);
+    const Solution sm = central ? solve(*model, *ws, minus, test::fixed_mesh_settings(), &ref) : ref;
     if (!sp.converged() || !sm.converged()) return o;  // unexplained stays the full difference
     for (int i = 0; i < n; ++i) {
       const auto ki = static_cast<std::size_t>(driven[static_cast<std::size_t>(i)]);
@@ -243,7 +244,7 @@ Outcome round_trip(const RoundTripScene& s, ModelKind kind, bool mixed) {
   const Eigen::VectorXd c = svd.matrixV().transpose() * dTd;
   double worst = 0.0;
   for (int i = 0; i < n; ++i) {
-    const double allowed = 100.0 * SolverOptions().function_tolerance / svd.singularValues()[i];
+    const double allowed = 100.0 * test::fixed_mesh_settings().function_tolerance / svd.singularValues()[i];
     worst = std::max(worst, std::max(0.0, std::abs(c[i]) - allowed));
   }
   for (int k = 0; k < m; ++k)  // tendons given by tension must come back exactly

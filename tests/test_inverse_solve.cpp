@@ -22,6 +22,7 @@
 #include "tdcr/core/scene_io.hpp"
 #include "tdcr/models/inverse_solve.hpp"
 #include "tdcr/models/static_model.hpp"
+#include "fixed_mesh_settings.hpp"
 
 using namespace tdcr;
 
@@ -34,7 +35,7 @@ Solution forward(const StaticModel& model, const Scene& s, const std::vector<dou
   auto ws = model.make_workspace();
   ModelInput in = s.input();
   in.actuation.values = T;
-  return solve(model, *ws, in, s.solver);
+  return solve(model, *ws, in, test::fixed_mesh_settings(s.solver));
 }
 
 std::vector<double> random_tensions(std::mt19937& rng, std::size_t m, double max) {
@@ -58,7 +59,7 @@ InverseResult reach(const StaticModel& model, const Scene& s, const InverseTarge
   auto ws = model.make_workspace();
   ModelInput start = s.input();
   start.actuation.values.assign(generating.size(), 0.0);
-  const InverseResult r = inverse_solve(model, *ws, start, target, s.solver);
+  const InverseResult r = inverse_solve(model, *ws, start, target, test::fixed_mesh_settings(s.solver));
   std::printf("%s: %s\n", model.name().c_str(), r.brief_report().c_str());
   EXPECT_TRUE(r.converged()) << r.brief_report();
   EXPECT_TRUE(r.minimum_norm) << r.brief_report();
@@ -200,7 +201,7 @@ TEST(InverseSolve, UnreachableTargetFailsWithDistance) {
     target.position = p;
     InverseOptions o;
     o.max_iterations = 40;
-    const InverseResult r = inverse_solve(*model, *ws, start, target, s.solver, o);
+    const InverseResult r = inverse_solve(*model, *ws, start, target, test::fixed_mesh_settings(s.solver), o);
     std::printf("target (%g, %g, %g): %s\n", p.x(), p.y(), p.z(), r.brief_report().c_str());
     EXPECT_FALSE(r.converged());
     EXPECT_NE(r.status, InverseStatus::ForwardFailed);
@@ -213,7 +214,7 @@ TEST(InverseSolve, UnreachableTargetFailsWithDistance) {
   // Straight up: zero tensions are the closest, and the distance is exactly 0.3 - 0.1 m.
   InverseTarget up;
   up.position = Vec3(0, 0, 0.3);
-  const InverseResult r = inverse_solve(*model, *ws, start, up, s.solver);
+  const InverseResult r = inverse_solve(*model, *ws, start, up, test::fixed_mesh_settings(s.solver));
   EXPECT_EQ(r.status, InverseStatus::Unreachable);
   EXPECT_NEAR(r.position_error, 0.2, 1e-12);
 }
@@ -226,7 +227,7 @@ TEST(InverseSolve, BadInputNamesTheField) {
   InverseTarget t;
   t.position = Vec3(0, std::nan(""), 0.1);
   try {
-    inverse_solve(*model, *ws, start, t, s.solver);
+    inverse_solve(*model, *ws, start, t, test::fixed_mesh_settings(s.solver));
     FAIL() << "no InputError";
   } catch (const InputError& e) {
     EXPECT_EQ(e.field(), "target.position[1]");
@@ -234,12 +235,12 @@ TEST(InverseSolve, BadInputNamesTheField) {
   }
   t.position = Vec3(0, 0, 0.1);
   t.rotation = Vec3(0, INFINITY, 0);
-  EXPECT_THROW(inverse_solve(*model, *ws, start, t, s.solver), InputError);
+  EXPECT_THROW(inverse_solve(*model, *ws, start, t, test::fixed_mesh_settings(s.solver)), InputError);
   t.rotation.reset();
   InverseOptions o;
   o.position_tolerance = 0;
   try {
-    inverse_solve(*model, *ws, start, t, s.solver, o);
+    inverse_solve(*model, *ws, start, t, test::fixed_mesh_settings(s.solver), o);
     FAIL() << "no InputError";
   } catch (const InputError& e) {
     EXPECT_EQ(e.field(), "inverse.position_tolerance");
@@ -247,7 +248,7 @@ TEST(InverseSolve, BadInputNamesTheField) {
   ModelInput displaced = start;
   displaced.actuation.kind = Actuation::Kind::Displacements;
   try {
-    inverse_solve(*model, *ws, displaced, t, s.solver);
+    inverse_solve(*model, *ws, displaced, t, test::fixed_mesh_settings(s.solver));
     FAIL() << "no InputError";
   } catch (const InputError& e) {
     EXPECT_EQ(e.field(), "actuation");
@@ -416,7 +417,7 @@ InverseResult round_trip(const StaticModel& model, const Scene& s, const std::ve
   auto ws = model.make_workspace();
   ModelInput in = s.input();
   in.actuation.values = generating;
-  const Solution f = solve(model, *ws, in, s.solver);
+  const Solution f = solve(model, *ws, in, test::fixed_mesh_settings(s.solver));
   EXPECT_TRUE(f.converged()) << name << ": " << f.summary.brief_report();
   if (!f.converged()) return InverseResult();
   InverseTarget target;
@@ -424,7 +425,7 @@ InverseResult round_trip(const StaticModel& model, const Scene& s, const std::ve
   ModelInput start = s.input();
   start.actuation.values.assign(generating.size(), 0.0);
   auto ws2 = model.make_workspace();
-  const InverseResult r = inverse_solve(model, *ws2, start, target, s.solver);
+  const InverseResult r = inverse_solve(model, *ws2, start, target, test::fixed_mesh_settings(s.solver));
   double t0 = 0.0;
   for (double t : generating) t0 += t * t;
   std::printf("%s: %s (generating |T| = %.6g N)\n", name.c_str(), r.brief_report().c_str(), std::sqrt(t0));

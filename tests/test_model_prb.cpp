@@ -222,7 +222,7 @@ TEST(PrbModel, NonConvergentSolveReportsFailure) {
   const Solution sol = solve_prb(s);
   EXPECT_FALSE(sol.converged());
   EXPECT_EQ(sol.summary.termination, TerminationType::MaxIterations) << sol.summary.message;
-  EXPECT_GT(sol.summary.residual_norm, s.solver.function_tolerance);
+  EXPECT_GT(sol.summary.residual_norm, sol.summary.function_tolerance);
   EXPECT_GT(sol.summary.iterations, 0);
 }
 

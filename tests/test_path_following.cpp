@@ -153,7 +153,8 @@ TEST(PathFollowing, IssueExampleBAllStaticModelsOnOneStableBranch) {
 // Newton solve. A mesh no finer than the coarse one, or the option off, follows the path as
 // before.
 TEST(PathFollowing, CoarseLoadingPathKeepsTheAnswer) {
-  const Scene scene = scene_file("issue12_b.json");
+  Scene scene = scene_file("issue12_b.json");
+  scene.solver.integrator = IntegratorKind::FixedStepRK4;  // the coarse path serves the fixed mesh
   for (ModelKind kind : {ModelKind::VCref, ModelKind::VC}) {
     auto m = make_model(kind, scene.robot, scene.effects);
     auto ws = m->make_workspace();
@@ -178,6 +179,7 @@ TEST(PathFollowing, CoarseLoadingPathKeepsTheAnswer) {
     // A requested mesh finer in one setting only: the path's mesh takes the coarser of each (one
     // step per interval here, never two), and the answer is that of the whole path on it.
     SolverOptions one_step = scene.solver;
+    one_step.integrator = IntegratorKind::FixedStepRK4;
     one_step.rk4_steps = 1;
     one_step.rk4_max_step = 1e-3;
     const Solution mixed = solve(*m, *ws, scene.input(), one_step);
@@ -189,6 +191,7 @@ TEST(PathFollowing, CoarseLoadingPathKeepsTheAnswer) {
     EXPECT_LT((mixed.tip().p - mixed_whole.tip().p).norm(), 1e-9) << m->name();
     // On the coarse mesh itself nothing changes: the path is followed there, as with the option off.
     SolverOptions on_coarse = scene.solver;
+    on_coarse.integrator = IntegratorKind::FixedStepRK4;
     on_coarse.rk4_steps = SolverOptions::kCoarsePathRk4Steps;
     on_coarse.rk4_max_step = SolverOptions::kCoarsePathRk4MaxStep;
     const Solution plain = solve(*m, *ws, scene.input(), on_coarse);

@@ -1,6 +1,6 @@
-// Accuracy-driven RK4 (SolverOptions::rk4_tip_tolerance, models/common/solve_driver.cpp): VC and
-// VCref refine the RK4 mesh until the Richardson estimate of the tip error is within the
-// tolerance. Checked against CVODE at rtol 1e-12: the answer's tip is within the tolerance, the
+// Accuracy-driven RK4 (the default integrator "rk4" and SolverOptions::tip_tolerance,
+// models/common/solve_driver.cpp): VC and VCref refine the RK4 mesh until the Richardson estimate
+// of the tip error is within the tolerance. Checked against CVODE at rtol 1e-12: the answer's tip is within the tolerance, the
 // estimate is a true estimate of the error (RK4's h^4 law), the refined solve reuses the coarse
 // solve's Jacobian, an unreachable tolerance is a failure that says so, bad values are rejected.
 #include <cmath>
@@ -30,9 +30,16 @@ Scene loaded_case() {
 
 SolverOptions coarse(double tolerance) {
   SolverOptions o;
-  o.rk4_steps = 1;
-  o.rk4_max_step = 8e-3;
-  o.rk4_tip_tolerance = tolerance;
+  o.tip_tolerance = tolerance;
+  return o;
+}
+
+// The accuracy-driven solve's first mesh, as a fixed mesh.
+SolverOptions first_mesh() {
+  SolverOptions o;
+  o.integrator = IntegratorKind::FixedStepRK4;
+  o.rk4_steps = SolverOptions::kFirstMeshRk4Steps;
+  o.rk4_max_step = SolverOptions::kFirstMeshRk4MaxStep;
   return o;
 }
 
@@ -88,14 +95,13 @@ TEST_P(Rk4Tolerance, UnreachableToleranceFailsAndSaysWhy) {
   const Scene scene = loaded_case();
   auto model = make_model(GetParam(), scene);
   auto ws = model->make_workspace();
-  SolverOptions o = coarse(1e-18);  // below the round-off of a 0.1 m robot
-  o.rk4_max_step = 0.02;            // few steps: 64 times as many stay cheap
+  const SolverOptions o = coarse(1e-18);  // below the round-off of a 0.1 m robot
   const Solution s = solve(*model, *ws, scene.input(), o);
   EXPECT_FALSE(s.converged());
   EXPECT_EQ(s.summary.termination, TerminationType::NoConvergence);
   EXPECT_GE(s.summary.rk4_refinements, 1);
   EXPECT_LE(s.summary.rk4_refinements, SolverOptions::kMaxRk4Halvings);
-  EXPECT_NE(s.summary.message.find("rk4_tip_tolerance"), std::string::npos) << s.summary.message;
+  EXPECT_NE(s.summary.message.find("tip_tolerance"), std::string::npos) << s.summary.message;
   EXPECT_NE(s.summary.message.find("64 times the first"), std::string::npos) << s.summary.message;
   EXPECT_TRUE(std::isfinite(s.summary.tip_error_estimate));
 }
@@ -109,8 +115,7 @@ TEST(Rk4ToleranceVc, RefinedSolveReusesTheCoarseJacobian) {
   const Scene scene = loaded_case();
   auto model = make_model(ModelKind::VC, scene);
   auto ws = model->make_workspace();
-  SolverOptions fixed = coarse(0.0);
-  const Solution c = solve(*model, *ws, scene.input(), fixed);
+  const Solution c = solve(*model, *ws, scene.input(), first_mesh());
   const Solution s = solve(*model, *ws, scene.input(), coarse(1e-8));
   ASSERT_TRUE(c.converged() && s.converged());
   ASSERT_EQ(s.summary.rk4_refinements, 1);
@@ -118,16 +123,27 @@ TEST(Rk4ToleranceVc, RefinedSolveReusesTheCoarseJacobian) {
   EXPECT_GT(s.summary.iterations, c.summary.iterations);  // the refined solve's work is counted
 }
 
-TEST(Rk4ToleranceVc, OffByDefaultAndIgnoredByCvodeAndLumpedModels) {
+// The default: accuracy-driven RK4 to 1e-7 of the robot's length (1e-8 m here), Newton's
+// tolerance tied to it; the fixed mesh and CVODE on request; the lumped models integrate nothing.
+TEST(Rk4ToleranceVc, OnByDefaultAndIgnoredByFixedMeshCvodeAndLumpedModels) {
   const Scene scene = loaded_case();
   auto vc = make_model(ModelKind::VC, scene);
   auto ws = vc->make_workspace();
+  const Solution ref = reference(*vc, *ws, scene.input());
   const Solution plain = solve(*vc, *ws, scene.input(), SolverOptions());
-  EXPECT_EQ(plain.summary.rk4_refinements, 0);
-  EXPECT_TRUE(std::isnan(plain.summary.tip_error_estimate));
+  ASSERT_TRUE(plain.converged()) << plain.summary.brief_report();
+  EXPECT_GE(plain.summary.rk4_refinements, 1);
+  EXPECT_LE(plain.summary.tip_error_estimate, 1e-8);
+  EXPECT_LE((plain.tip().p - ref.tip().p).norm(), 1e-8);
+  SolverOptions fixed;
+  fixed.integrator = IntegratorKind::FixedStepRK4;
+  const Solution f = solve(*vc, *ws, scene.input(), fixed);
+  EXPECT_TRUE(f.converged());
+  EXPECT_EQ(f.summary.rk4_refinements, 0);
+  EXPECT_TRUE(std::isnan(f.summary.tip_error_estimate));
   SolverOptions cv;
   cv.integrator = IntegratorKind::Cvode;
-  cv.rk4_tip_tolerance = 1e-8;
+  cv.tip_tolerance = 1e-8;
   const Solution c = solve(*vc, *ws, scene.input(), cv);
   EXPECT_TRUE(c.converged());
   EXPECT_EQ(c.summary.rk4_refinements, 0);
@@ -138,16 +154,98 @@ TEST(Rk4ToleranceVc, OffByDefaultAndIgnoredByCvodeAndLumpedModels) {
   EXPECT_EQ(l.summary.rk4_refinements, 0);
 }
 
+// A warm-started solve starts one halving below its warm start's mesh, so along a trajectory it
+// solves two meshes, not every mesh from the first; its answer meets the tolerance all the same.
+TEST(Rk4ToleranceVc, WarmSolveStartsBelowTheWarmStartsMesh) {
+  Scene scene = loaded_case();
+  auto vc = make_model(ModelKind::VC, scene);
+  auto ws = vc->make_workspace();
+  const Solution cold = solve(*vc, *ws, scene.input(), coarse(1e-10));
+  ASSERT_TRUE(cold.converged()) << cold.summary.brief_report();
+  ASSERT_GE(cold.summary.rk4_halvings, 2);
+  scene.actuation.values[0] *= 1.01;
+  const Solution warm = solve(*vc, *ws, scene.input(), coarse(1e-10), &cold);
+  ASSERT_TRUE(warm.converged()) << warm.summary.brief_report();
+  EXPECT_EQ(warm.summary.rk4_refinements, 1);
+  EXPECT_EQ(warm.summary.rk4_halvings, cold.summary.rk4_halvings);
+  EXPECT_LE(warm.summary.tip_error_estimate, 1e-10);
+  const Solution ref = reference(*vc, *ws, scene.input());
+  EXPECT_LE((warm.tip().p - ref.tip().p).norm(), 1e-10);
+}
+
+// One option moves both: the tip tolerance (0: 1e-7 of the length) and Newton's tolerance tied
+// to it (0: a hundredth of the tip tolerance over the length), each kept where it is set.
+TEST(TipTolerance, ResolvedTiesNewtonsToleranceToTheTipTolerance) {
+  const SolverOptions d = SolverOptions().resolved(0.1);
+  EXPECT_DOUBLE_EQ(d.tip_tolerance, 1e-8);
+  EXPECT_DOUBLE_EQ(d.function_tolerance, 1e-9);
+  SolverOptions o;
+  o.tip_tolerance = 1e-10;
+  EXPECT_DOUBLE_EQ(o.resolved(0.1).function_tolerance, 1e-11);
+  EXPECT_DOUBLE_EQ(o.resolved(1.0).function_tolerance, 1e-12);
+  o.function_tolerance = 1e-6;
+  EXPECT_DOUBLE_EQ(o.resolved(0.1).function_tolerance, 1e-6);
+  EXPECT_DOUBLE_EQ(o.resolved(0.1).tip_tolerance, 1e-10);
+  // The bounds hold for any length.
+  EXPECT_GE(SolverOptions().resolved(1e-6).tip_tolerance, SolverOptions::kMinTipTolerance);
+  o = SolverOptions();
+  o.tip_tolerance = 1e-18;
+  EXPECT_GE(o.resolved(10.0).function_tolerance, SolverOptions::kMinFunctionTolerance);
+}
+
+// A looser tip tolerance moves the lumped models' Newton tolerance too: their tip moves by less
+// than either tolerance.
+TEST(TipTolerance, MovesTheLumpedModelsNewtonTolerance) {
+  const Scene scene = loaded_case();
+  for (ModelKind kind : {ModelKind::CCsub, ModelKind::PRB}) {
+    auto model = make_model(kind, scene);
+    auto ws = model->make_workspace();
+    SolverOptions tight;
+    tight.function_tolerance = 1e-13;
+    const Solution ref = solve(*model, *ws, scene.input(), tight);
+    for (double tol : {1e-6, 1e-8, 1e-10}) {
+      const Solution s = solve(*model, *ws, scene.input(), coarse(tol));
+      ASSERT_TRUE(s.converged()) << to_string(kind) << " " << tol << ": " << s.summary.brief_report();
+      EXPECT_LE((s.tip().p - ref.tip().p).norm(), tol) << to_string(kind) << " " << tol;
+    }
+  }
+}
+
 TEST(Rk4ToleranceVc, BadToleranceNamesTheField) {
-  for (double bad : {-1e-8, std::nan(""), std::numeric_limits<double>::infinity()}) {
+  for (double bad : {-1e-8, std::nan(""), std::numeric_limits<double>::infinity(), 1e-19, 1.0}) {
     SolverOptions o;
-    o.rk4_tip_tolerance = bad;
+    o.tip_tolerance = bad;
     try {
       o.validate();
       ADD_FAILURE() << "accepted " << bad;
     } catch (const InputError& e) {
-      EXPECT_EQ(e.field(), "solver.rk4_tip_tolerance");
+      EXPECT_EQ(e.field(), "solver.tip_tolerance");
     }
+  }
+}
+
+// The fixed mesh's settings belong to the fixed-mesh integrator: with another one they would be
+// ignored, so they are refused (C++ options and scene keys alike), naming the field.
+TEST(Rk4ToleranceVc, FixedMeshSettingsNeedTheFixedMeshIntegrator) {
+  SolverOptions o;
+  o.rk4_steps = 4;
+  try {
+    o.validate();
+    ADD_FAILURE() << "rk4_steps accepted with the accuracy-driven integrator";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "solver.rk4_steps");
+    EXPECT_NE(std::string(e.what()).find("rk4_fixed"), std::string::npos) << e.what();
+  }
+  o.integrator = IntegratorKind::FixedStepRK4;
+  EXPECT_NO_THROW(o.validate());
+  const std::string scene = R"({"model": "vc",
+    "robot": {"segments": [{"length": 0.05, "disks": 3, "tendons": [{"x": 0, "y": 0.008}]}]},
+    "actuation": {"tensions": [1.0]}, "solver": {"rk4_max_step": 0.002}})";
+  try {
+    parse_scene(scene);
+    ADD_FAILURE() << "solver.rk4_max_step accepted with the default integrator";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "solver.rk4_max_step");
   }
 }
 
@@ -155,15 +253,16 @@ TEST(Rk4ToleranceVc, SceneKeyAndJsonOutput) {
   const std::string text = R"({"model": "vc",
     "robot": {"segments": [{"length": 0.05, "disks": 3, "tendons": [{"x": 0, "y": 0.008}]}]},
     "actuation": {"tensions": [1.0]}, "loads": {"tip_force": [0, 0.1, 0]},
-    "solver": {"rk4_steps": 1, "rk4_max_step": 0.008, "rk4_tip_tolerance": 1e-8}})";
+    "solver": {"tip_tolerance": 1e-9}})";
   const Scene s = parse_scene(text);
-  EXPECT_EQ(s.solver.rk4_tip_tolerance, 1e-8);
+  EXPECT_EQ(s.solver.tip_tolerance, 1e-9);
   const Solution sol = solve(s);
   ASSERT_TRUE(sol.converged()) << sol.summary.brief_report();
-  EXPECT_LE(sol.summary.tip_error_estimate, 1e-8);
+  EXPECT_LE(sol.summary.tip_error_estimate, 1e-9);
   const std::string json = solution_to_json(sol);
   EXPECT_NE(json.find("\"tip_error_estimate\""), std::string::npos);
   EXPECT_NE(json.find("\"rk4_refinements\""), std::string::npos);
+  EXPECT_NE(json.find("\"rk4_halvings\""), std::string::npos);
 }
 
 }  // namespace

@@ -140,13 +140,12 @@ TEST(SceneIo, SolverOptionsOutsideTheirBoundsNameFieldAndValue) {
       {{{"rk4_steps", 100000000}}, "solver.rk4_steps", "100000000"},
       {{{"rk4_steps", 4097}}, "solver.rk4_steps", "4097"},
       {{{"rk4_steps", 0}}, "solver.rk4_steps", "0"},
-      {{{"rk4_steps", 65}, {"rk4_tip_tolerance", 1e-8}}, "solver.rk4_steps", "65"},  // 64 x 65 > 4096
       {{{"rk4_max_step", 1e-7}}, "solver.rk4_max_step", "1e-07"},
       {{{"rk4_max_step", 0}}, "solver.rk4_max_step", "0"},
-      {{{"rk4_max_step", 6e-5}, {"rk4_tip_tolerance", 1e-8}}, "solver.rk4_max_step", "6e-05"},  // / 64 < 1e-6
-      {{{"rk4_tip_tolerance", 1e-19}}, "solver.rk4_tip_tolerance", "1e-19"},
-      {{{"rk4_tip_tolerance", 0.1}}, "solver.rk4_tip_tolerance", "0.1"},
-      {{{"rk4_tip_tolerance", -1e-8}}, "solver.rk4_tip_tolerance", "-1e-08"},
+      {{{"tip_tolerance", 1e-19}}, "solver.tip_tolerance", "1e-19"},
+      {{{"tip_tolerance", 0.1}}, "solver.tip_tolerance", "0.1"},
+      {{{"tip_tolerance", -1e-8}}, "solver.tip_tolerance", "-1e-08"},
+      {{{"function_tolerance", -1e-8}}, "solver.function_tolerance", "-1e-08"},
       {{{"function_tolerance", 1e-16}}, "solver.function_tolerance", "1e-16"},
       {{{"function_tolerance", 0.1}}, "solver.function_tolerance", "0.1"},
       {{{"step_tolerance", 1e-21}}, "solver.step_tolerance", "1e-21"},
@@ -172,15 +171,16 @@ TEST(SceneIo, SolverOptionsOutsideTheirBoundsNameFieldAndValue) {
   }
 }
 
-// The bounds themselves are accepted (the ranges are closed), and so is every mesh an
-// accuracy-driven solve refines to from its extreme first mesh: the solve validates each
-// refined mesh's options again (2^kMaxRk4Halvings times the first's steps at most).
+// The bounds themselves are accepted (the ranges are closed), and so is the finest mesh an
+// accuracy-driven solve refines to: the solve validates each refined mesh's options again
+// (2^kMaxRk4Halvings times the first's steps at most).
 TEST(SceneIo, SolverOptionsAtTheirBoundsAreValid) {
   using S = tdcr::SolverOptions;
   const std::vector<json> valid = {
-      {{"rk4_steps", S::kMaxRk4Steps}, {"rk4_max_step", S::kMinRk4MaxStep}},
-      {{"rk4_steps", 1}, {"rk4_tip_tolerance", S::kMaxRk4TipTolerance}},
-      {{"rk4_tip_tolerance", S::kMinRk4TipTolerance}},
+      {{"integrator", "rk4_fixed"}, {"rk4_steps", S::kMaxRk4Steps}, {"rk4_max_step", S::kMinRk4MaxStep}},
+      {{"tip_tolerance", S::kMaxTipTolerance}},
+      {{"tip_tolerance", S::kMinTipTolerance}},
+      {{"tip_tolerance", 0}, {"function_tolerance", 0}},
       {{"function_tolerance", S::kMinFunctionTolerance}, {"step_tolerance", S::kMinStepTolerance},
        {"cvode_rtol", S::kMinCvodeRtol}, {"cvode_atol", S::kMinCvodeAtol}, {"max_iterations", 1},
        {"max_continuation_steps", 1}},
@@ -190,18 +190,14 @@ TEST(SceneIo, SolverOptionsAtTheirBoundsAreValid) {
   };
   for (const json& solver : valid) EXPECT_NO_THROW(tdcr::parse_scene(with("/solver", solver))) << solver.dump();
 
-  S first;
-  first.rk4_tip_tolerance = 1e-9;
-  first.rk4_steps = S::kMaxRk4Steps >> S::kMaxRk4Halvings;
-  first.rk4_max_step = S::kMinRk4MaxStep * (1 << S::kMaxRk4Halvings);
-  ASSERT_NO_THROW(first.validate());
-  S finest = first;  // as the refinement makes it (solve_driver.cpp, solve_refined)
-  finest.rk4_tip_tolerance = 0.0;
-  finest.rk4_steps <<= S::kMaxRk4Halvings;
-  finest.rk4_max_step /= 1 << S::kMaxRk4Halvings;
+  S finest;  // as the refinement makes it (solve_driver.cpp, solve_refined)
+  finest.integrator = tdcr::IntegratorKind::FixedStepRK4;
+  finest.rk4_steps = S::kFirstMeshRk4Steps << S::kMaxRk4Halvings;
+  finest.rk4_max_step = S::kFirstMeshRk4MaxStep / (1 << S::kMaxRk4Halvings);
   EXPECT_NO_THROW(finest.validate());
   // C++ only (JSON has no infinity): exactly rk4_steps steps per interval.
   S exact;
+  exact.integrator = tdcr::IntegratorKind::FixedStepRK4;
   exact.rk4_max_step = std::numeric_limits<double>::infinity();
   EXPECT_NO_THROW(exact.validate());
 }
@@ -260,7 +256,7 @@ TEST(SceneIo, ParsesFullKeySet) {
                 "kink_forces": false,
                 "prb": {"gamma": [0.1, 0.3, 0.4, 0.2], "k_theta": [3, 2.5, 2.75]}},
     "model": "ccsub",
-    "solver": {"integrator": "cvode", "rk4_steps": 16, "cvode_rtol": 1e-6, "cvode_atol": 1e-9,
+    "solver": {"integrator": "rk4_fixed", "rk4_steps": 16, "tip_tolerance": 1e-9, "cvode_rtol": 1e-6, "cvode_atol": 1e-9,
                "function_tolerance": 1e-8, "step_tolerance": 1e-12, "max_iterations": 50,
                "linear_solver": "klu", "continuation": true, "max_continuation_steps": 20,
                "coarse_loading_path": false}
@@ -295,8 +291,9 @@ TEST(SceneIo, ParsesFullKeySet) {
   EXPECT_EQ(s.effects.prb.gamma[3], 0.2);
   EXPECT_EQ(s.effects.prb.k_theta[2], 2.75);
   EXPECT_EQ(s.model, "ccsub");
-  EXPECT_EQ(s.solver.integrator, tdcr::IntegratorKind::Cvode);
+  EXPECT_EQ(s.solver.integrator, tdcr::IntegratorKind::FixedStepRK4);
   EXPECT_EQ(s.solver.rk4_steps, 16);
+  EXPECT_EQ(s.solver.tip_tolerance, 1e-9);
   EXPECT_EQ(s.solver.cvode_rtol, 1e-6);
   EXPECT_EQ(s.solver.cvode_atol, 1e-9);
   EXPECT_EQ(s.solver.function_tolerance, 1e-8);

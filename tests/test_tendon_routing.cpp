@@ -267,6 +267,7 @@ struct RwHelix {
 TEST(TendonRouting, VcMatchesIndependentRuckerWebster) {
   Scene s = helical_robot(20, 0.75, 1.5);
   s.loads.tip_force = Vec3(0.05, -0.02, 0.0);
+  s.solver.integrator = IntegratorKind::FixedStepRK4;
   s.solver.rk4_steps = 10;
   const BackboneStiffness k = s.robot.backbone.effective_stiffness();
   RwHelix rw{0.1, 0.008, 2 * M_PI * 0.75 / 0.1, 1.5, Eigen::Vector3d(k.GA, k.GA, k.EA),

@@ -14,6 +14,7 @@
 #include "tdcr/models/static_model.hpp"
 #include "tdcr/models/vc.hpp"
 #include "tdcr/models/verification.hpp"
+#include "fixed_mesh_settings.hpp"
 
 using namespace tdcr;
 
@@ -24,7 +25,7 @@ using Motion = TendonFriction::Motion;
 Solution solve_with(ModelKind kind, const Robot& robot, const Effects& effects, const ModelInput& in) {
   const auto model = make_model(kind, robot, effects);
   auto ws = model->make_workspace();
-  return tdcr::solve(*model, *ws, in, SolverOptions{}, nullptr);
+  return tdcr::solve(*model, *ws, in, test::fixed_mesh_settings(), nullptr);
 }
 
 ModelInput tensions(const std::vector<double>& T, const Vec3& tip_force = Vec3::Zero()) {
@@ -165,7 +166,7 @@ TEST(VcFriction, LoadingAndUnloadingDiffer) {
     auto ws = m.make_workspace();
     Solution s;
     for (double T : path) {
-      s = tdcr::solve(m, *ws, tensions({T}), SolverOptions{}, s.summary.converged() ? &s : nullptr);
+      s = tdcr::solve(m, *ws, tensions({T}), test::fixed_mesh_settings(), s.summary.converged() ? &s : nullptr);
       EXPECT_TRUE(s.converged()) << " at T = " << T;
     }
     return s;
@@ -216,13 +217,13 @@ TEST(VcFriction, DisplacementInputAndStability) {
   const Effects e = friction(0.2, Motion::Pulling);
   const auto model = make_model(ModelKind::VC, s.robot, e);
   auto ws = model->make_workspace();
-  const Solution ref = tdcr::solve(*model, *ws, s.input(), SolverOptions{}, nullptr);
+  const Solution ref = tdcr::solve(*model, *ws, s.input(), test::fixed_mesh_settings(), nullptr);
   ASSERT_TRUE(ref.converged());
   EXPECT_EQ(ref.stability.status, StabilityStatus::Undetermined);
   ModelInput in;
   in.actuation.kind = Actuation::Kind::Displacements;
   in.actuation.values = ref.tendon_displacements;
-  const Solution back = tdcr::solve(*model, *ws, in, SolverOptions{}, nullptr);
+  const Solution back = tdcr::solve(*model, *ws, in, test::fixed_mesh_settings(), nullptr);
   ASSERT_TRUE(back.converged()) << back.summary.message;
   double diff = 0.0, scale = 0.0;
   for (int k = 0; k < 4; ++k) {

@@ -13,6 +13,7 @@
 
 #include "tdcr/core/paper_robot.hpp"
 #include "tdcr/models/static_model.hpp"
+#include "fixed_mesh_settings.hpp"
 
 using namespace tdcr;
 
@@ -35,7 +36,7 @@ struct Ramp {
 // k = 0..steps: T1 = k dT, each solve warm-started from the last (the first cold).
 Ramp ramp(const StaticModel& m, const Scene& base, bool extrapolate, int steps, double dT) {
   auto ws = m.make_workspace();
-  SolverOptions o = base.solver;
+  SolverOptions o = test::fixed_mesh_settings(base.solver);
   o.extrapolate_warm_starts = extrapolate;
   o.reuse_jacobian = false;
   Ramp r;
@@ -88,7 +89,7 @@ TEST(WarmExtrapolation, OnlyFromTheLastAnswerAlongTheLastStep) {
     SCOPED_TRACE(m->name());
     auto iterations_of_last = [&](bool extrapolate, bool from_older, bool turn) {
       auto ws = m->make_workspace();
-      SolverOptions o = base.solver;
+      SolverOptions o = test::fixed_mesh_settings(base.solver);
       o.reuse_jacobian = false;
       const Solution a = solve(*m, *ws, ramp_input(base, 2 * dT), o);
       const Solution b = solve(*m, *ws, ramp_input(base, 3 * dT), o, &a);

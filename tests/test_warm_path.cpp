@@ -9,6 +9,7 @@
 #include "tdcr/core/paper_robot.hpp"
 #include "tdcr/core/scene_io.hpp"
 #include "tdcr/models/static_model.hpp"
+#include "fixed_mesh_settings.hpp"
 
 using namespace tdcr;
 
@@ -31,12 +32,12 @@ TEST(WarmPath, LargeLoadChangeFollowsTheInputPathToTheColdAnswer) {
     auto m = make_model(kind, scene.robot, scene.effects);
     SCOPED_TRACE(m->name());
     auto ws = m->make_workspace();
-    const Solution cold = solve(*m, *ws, scene.input(), scene.solver);
+    const Solution cold = solve(*m, *ws, scene.input(), test::fixed_mesh_settings(scene.solver));
     ASSERT_TRUE(cold.converged()) << cold.summary.message;
-    const Solution start = solve(*m, *ws, unloaded.input(), unloaded.solver);
+    const Solution start = solve(*m, *ws, unloaded.input(), test::fixed_mesh_settings(unloaded.solver));
     ASSERT_TRUE(start.converged()) << start.summary.message;
     EXPECT_TRUE(start.loads.tip_force.isZero());
-    const Solution warm = solve(*m, *ws, scene.input(), scene.solver, &start);
+    const Solution warm = solve(*m, *ws, scene.input(), test::fixed_mesh_settings(scene.solver), &start);
     ASSERT_TRUE(warm.converged()) << warm.summary.message;
     EXPECT_NE(warm.summary.message.find("input path"), std::string::npos) << warm.summary.message;
     std::printf("%s: %.0f ms: %s\n", m->name().c_str(), 1e3 * warm.summary.solve_time_s, warm.summary.message.c_str());
@@ -56,9 +57,9 @@ TEST(WarmPath, SmallChangeStaysADirectSolve) {
     auto m = make_model(kind, scene.robot, scene.effects);
     SCOPED_TRACE(m->name());
     auto ws = m->make_workspace();
-    const Solution start = solve(*m, *ws, scene.input(), scene.solver);
+    const Solution start = solve(*m, *ws, scene.input(), test::fixed_mesh_settings(scene.solver));
     ASSERT_TRUE(start.converged()) << start.summary.message;
-    const Solution warm = solve(*m, *ws, nearby.input(), nearby.solver, &start);
+    const Solution warm = solve(*m, *ws, nearby.input(), test::fixed_mesh_settings(nearby.solver), &start);
     ASSERT_TRUE(warm.converged()) << warm.summary.message;
     EXPECT_EQ(warm.summary.message.find("input path"), std::string::npos) << warm.summary.message;
     EXPECT_EQ(warm.summary.continuation_steps, 0);
@@ -76,7 +77,7 @@ TEST(WarmPath, WarmStartsKeepTheBranchOfThePreviousAnswer) {
   const Scene scene = scene_file("issue12_b.json");
   auto m = make_model(ModelKind::CCsub, scene.robot, scene.effects);
   auto ws = m->make_workspace();
-  const Solution full = solve(*m, *ws, scene.input(), scene.solver);
+  const Solution full = solve(*m, *ws, scene.input(), test::fixed_mesh_settings(scene.solver));
   ASSERT_TRUE(full.converged()) << full.summary.message;
   ASSERT_FALSE(full.path_events.empty());
   const double fold = full.path_events.front().load_fraction;
@@ -90,14 +91,14 @@ TEST(WarmPath, WarmStartsKeepTheBranchOfThePreviousAnswer) {
     ModelInput in = scene.input();
     for (double& v : in.actuation.values) v *= f;
     in.loads.tip_force *= f;
-    const Solution s = solve(*m, *ws, in, scene.solver, &prev);
+    const Solution s = solve(*m, *ws, in, test::fixed_mesh_settings(scene.solver), &prev);
     ASSERT_TRUE(s.converged()) << "step " << k << ": " << s.summary.message;
     prev = s;
   }
   ModelInput low = scene.input();
   for (double& v : low.actuation.values) v *= target;
   low.loads.tip_force *= target;
-  const Solution cold_low = solve(*m, *ws, low, scene.solver);
+  const Solution cold_low = solve(*m, *ws, low, test::fixed_mesh_settings(scene.solver));
   ASSERT_TRUE(cold_low.converged()) << cold_low.summary.message;
   EXPECT_TRUE(cold_low.path_events.empty());
   EXPECT_GT((prev.tip().p - cold_low.tip().p).norm(), 0.01)
@@ -120,9 +121,9 @@ TEST(WarmPath, WarmStartIntoAnInfeasibleActuationIsNamed) {
     auto m = make_model(kind, scene.robot, scene.effects);
     SCOPED_TRACE(m->name());
     auto ws = m->make_workspace();
-    const Solution start = solve(*m, *ws, scene.input(), scene.solver);
+    const Solution start = solve(*m, *ws, scene.input(), test::fixed_mesh_settings(scene.solver));
     ASSERT_TRUE(start.converged()) << start.summary.message;
-    const Solution warm = solve(*m, *ws, past.input(), past.solver, &start);
+    const Solution warm = solve(*m, *ws, past.input(), test::fixed_mesh_settings(past.solver), &start);
     EXPECT_FALSE(warm.converged());
     EXPECT_EQ(warm.summary.termination, TerminationType::Infeasible) << warm.summary.message;
     EXPECT_NE(warm.summary.message.find("T1"), std::string::npos) << warm.summary.message;

@@ -288,8 +288,7 @@ std::unique_ptr<Integrator> make_integrator(const SolverOptions& options) {
   switch (options.integrator) {
     case IntegratorKind::Cvode:
       return std::make_unique<CvodeIntegrator>(options.cvode_rtol, options.cvode_atol);
-    case IntegratorKind::FixedStepRK4:
-    default:
+    default:  // both RK4s: the accuracy-driven one hands each of its solves a fixed mesh
       return std::make_unique<Rk4Integrator>(options.rk4_steps, options.rk4_max_step);
   }
 }

@@ -27,7 +27,9 @@ const Names<TendonFriction::Motion> kMotion = {{"pulling", TendonFriction::Motio
 const Names<TendonRoutingSpec::Type> kRoutingTypes = {{"straight", TendonRoutingSpec::Type::Straight},
                                                       {"helical", TendonRoutingSpec::Type::Helical},
                                                       {"points", TendonRoutingSpec::Type::Points}};
-const Names<IntegratorKind> kIntegrators = {{"rk4", IntegratorKind::FixedStepRK4}, {"cvode", IntegratorKind::Cvode}};
+const Names<IntegratorKind> kIntegrators = {{"rk4", IntegratorKind::AccuracyDrivenRK4},
+                                            {"rk4_fixed", IntegratorKind::FixedStepRK4},
+                                            {"cvode", IntegratorKind::Cvode}};
 const Names<LinearSolverKind> kLinearSolvers = {
     {"auto", LinearSolverKind::Automatic}, {"dense", LinearSolverKind::Dense}, {"klu", LinearSolverKind::SparseKLU}};
 
@@ -397,27 +399,29 @@ std::string range_text(double lo, double hi) {
 const Schema<SolverOptions>& solver_schema() {
   using S = SolverOptions;
   constexpr const char* kOde = "VC, VCref";
-  constexpr const char* kRk4 = "VC, VCref (with `\"rk4\"`)";
+  constexpr const char* kRk4 = "VC, VCref (with `\"rk4_fixed\"`)";
   constexpr const char* kCvode = "VC, VCref (with `\"cvode\"`)";
   // The bounds of SolverOptions::validate(), written from its constants (the Doxygen of
   // SolverOptions justifies them).
   constexpr int kFinest = 1 << S::kMaxRk4Halvings;
-  static const std::string rk4_steps = "1 to " + std::to_string(S::kMaxRk4Steps) + " (1 to " +
-                                       std::to_string(S::kMaxRk4Steps / kFinest) +
-                                       " with `rk4_tip_tolerance`); minimum RK4 steps per disk interval";
+  static const std::string rk4_steps = "1 to " + std::to_string(S::kMaxRk4Steps) +
+                                       "; minimum RK4 steps per disk interval of the fixed mesh";
   static const std::string rk4_max_step =
-      ">= " + reference_text(ojson(S::kMinRk4MaxStep)) + " (>= " + reference_text(ojson(S::kMinRk4MaxStep * kFinest)) +
-      " with `rk4_tip_tolerance`); longest RK4 step: a disk interval longer than `rk4_steps` times this takes more "
-      "steps";
-  static const std::string rk4_tip_tolerance =
-      "0 or " + range_text(S::kMinRk4TipTolerance, S::kMaxRk4TipTolerance) +
-      "; accuracy-driven RK4: refine the mesh from `rk4_steps` / `rk4_max_step` until the estimated tip error is at "
-      "most this (0: off; the finest mesh allowed has " + std::to_string(kFinest) + " times the first's steps)";
+      ">= " + reference_text(ojson(S::kMinRk4MaxStep)) +
+      "; longest RK4 step of the fixed mesh: a disk interval longer than `rk4_steps` times this takes more steps";
+  static const std::string tip_tolerance =
+      "0 or " + range_text(S::kMinTipTolerance, S::kMaxTipTolerance) +
+      "; accuracy of the tip position: with `\"rk4\"` the mesh is refined from " +
+      std::to_string(S::kFirstMeshRk4Steps) + " step per disk interval, h <= " +
+      reference_text(ojson(S::kFirstMeshRk4MaxStep)) + " m, until the estimated tip error is at most this (at most " +
+      std::to_string(kFinest) + " times the first mesh's steps), and Newton's `function_tolerance` is tied to it; 0: " +
+      reference_text(ojson(S::kTipToleranceOverLength)) + " times the robot's length (1e-8 m on the paper robot)";
   static const std::string cvode_rtol = range_text(S::kMinCvodeRtol, S::kMaxCvodeRtol);
   static const std::string cvode_atol = range_text(S::kMinCvodeAtol, S::kMaxCvodeAtol);
   static const std::string function_tolerance =
-      range_text(S::kMinFunctionTolerance, S::kMaxFunctionTolerance) +
-      "; Newton stops when the scaled residual max-norm is below it";
+      "0 or " + range_text(S::kMinFunctionTolerance, S::kMaxFunctionTolerance) +
+      "; Newton stops when the scaled residual max-norm is below it; 0: " +
+      reference_text(ojson(S::kNewtonPerTipTolerance)) + " times `tip_tolerance` over the robot's length";
   static const std::string step_tolerance =
       range_text(S::kMinStepTolerance, S::kMaxStepTolerance) +
       "; KINSOL's scaled step tolerance (a step-size stop counts as converged only if the residual tolerance holds)";
@@ -429,12 +433,15 @@ const Schema<SolverOptions>& solver_schema() {
   static const Schema<S> s({
       choice_field("integrator", &S::integrator, kIntegrators,
                    {"", nullptr,
-                    "`\"rk4\"` (fixed-step RK4, fast) or `\"cvode\"` (SUNDIALS CVODE, Adams, error controlled)", kOde}),
+                    "`\"rk4\"` (RK4 on a mesh refined until the estimated tip error is within `tip_tolerance`), "
+                    "`\"rk4_fixed\"` (RK4 on the fixed mesh of `rk4_steps` and `rk4_max_step`) or `\"cvode\"` "
+                    "(SUNDIALS CVODE, Adams, error controlled)",
+                    kOde}),
       integer_field("rk4_steps", &S::rk4_steps, {"", nullptr, rk4_steps.c_str(), kRk4}),
       number_field("rk4_max_step", &S::rk4_max_step, {"m", nullptr, rk4_max_step.c_str(), kRk4}),
-      number_field("rk4_tip_tolerance", &S::rk4_tip_tolerance, {"m", nullptr, rk4_tip_tolerance.c_str(), kRk4}),
       number_field("cvode_rtol", &S::cvode_rtol, {"", nullptr, cvode_rtol.c_str(), kCvode}),
       number_field("cvode_atol", &S::cvode_atol, {"state units", nullptr, cvode_atol.c_str(), kCvode}),
+      number_field("tip_tolerance", &S::tip_tolerance, {"m", nullptr, tip_tolerance.c_str(), "all models"}),
       number_field("function_tolerance", &S::function_tolerance, {"", nullptr, function_tolerance.c_str(), kNewton}),
       number_field("step_tolerance", &S::step_tolerance, {"", nullptr, step_tolerance.c_str(), kNewton}),
       integer_field("max_iterations", &S::max_iterations, {"", nullptr, max_iterations.c_str(), kNewton}),

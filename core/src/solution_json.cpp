@@ -40,6 +40,9 @@ ojson summary_json(const SolverSummary& s) {
                {"integrator", s.integrator},
                {"tip_error_estimate", number(s.tip_error_estimate)},
                {"rk4_refinements", s.rk4_refinements},
+               {"rk4_halvings", s.rk4_halvings},
+               {"function_tolerance", s.function_tolerance},
+               {"tip_tolerance", s.tip_tolerance},
                {"solve_time_s", number(s.solve_time_s)}};
 }
 

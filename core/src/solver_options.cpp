@@ -1,5 +1,6 @@
 #include "tdcr/core/solver_options.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -26,36 +27,57 @@ void check_count(const char* name, int v, int lo, int hi, const std::string& wha
 
 }  // namespace
 
+std::string fixed_mesh_only(IntegratorKind integrator) {
+  return "sets the fixed RK4 mesh, used only with solver.integrator \"rk4_fixed\" (the integrator is \"" +
+         to_string(integrator) + "\"; the default \"rk4\" refines its mesh until solver.tip_tolerance holds)";
+}
+
 void SolverOptions::validate() const {
-  using S = SolverOptions;
-  check_range("function_tolerance", function_tolerance, kMinFunctionTolerance, kMaxFunctionTolerance,
-              "Newton's scaled residual tolerance");
+  if (function_tolerance != 0.0)
+    check_range("function_tolerance", function_tolerance, kMinFunctionTolerance, kMaxFunctionTolerance,
+                "Newton's scaled residual tolerance; 0: tied to tip_tolerance");
+  if (tip_tolerance != 0.0)
+    check_range("tip_tolerance", tip_tolerance, kMinTipTolerance, kMaxTipTolerance,
+                "accuracy of the tip position in m; 0: " + format_value(kTipToleranceOverLength) +
+                    " times the robot's length");
   check_range("step_tolerance", step_tolerance, kMinStepTolerance, kMaxStepTolerance, "Newton's scaled step tolerance");
   check_range("cvode_rtol", cvode_rtol, kMinCvodeRtol, kMaxCvodeRtol, "CVODE's relative tolerance");
   check_range("cvode_atol", cvode_atol, kMinCvodeAtol, kMaxCvodeAtol, "CVODE's absolute tolerance");
   check_count("max_iterations", max_iterations, 1, kMaxIterations, "Newton iterations per solve");
   check_count("max_continuation_steps", max_continuation_steps, 1, kMaxContinuationSteps,
               "Newton solves of a loading path");
-  if (!(std::isfinite(rk4_tip_tolerance) &&
-        (rk4_tip_tolerance == 0.0 || (rk4_tip_tolerance >= kMinRk4TipTolerance && rk4_tip_tolerance <= kMaxRk4TipTolerance))))
-    throw InputError("solver.rk4_tip_tolerance", format_value(rk4_tip_tolerance),
-                     "must be 0 (off: fixed RK4 steps) or " + range_text(kMinRk4TipTolerance, kMaxRk4TipTolerance) +
-                         " m (accuracy-driven RK4)");
-  // An accuracy-driven solve refines the first mesh up to 2^kMaxRk4Halvings times: its finest
-  // mesh must be valid too.
-  const bool refined = rk4_tip_tolerance > 0.0;
-  const int factor = refined ? 1 << S::kMaxRk4Halvings : 1;
-  const std::string with_refinement =
-      refined ? "; with rk4_tip_tolerance the finest mesh has " + std::to_string(factor) + " times the steps" : "";
-  check_count("rk4_steps", rk4_steps, 1, kMaxRk4Steps / factor, "RK4 steps per disk interval" + with_refinement);
+  check_count("rk4_steps", rk4_steps, 1, kMaxRk4Steps, "RK4 steps per disk interval of the fixed mesh");
+  // The fixed mesh's settings with another integrator would be ignored without a word.
+  const SolverOptions defaults;
+  if (integrator == IntegratorKind::AccuracyDrivenRK4) {
+    if (rk4_steps != defaults.rk4_steps)
+      throw InputError("solver.rk4_steps", std::to_string(rk4_steps), fixed_mesh_only(integrator));
+    if (rk4_max_step != defaults.rk4_max_step)
+      throw InputError("solver.rk4_max_step", format_value(rk4_max_step), fixed_mesh_only(integrator));
+  }
   // +infinity is allowed (C++ only; JSON has no infinity): exactly rk4_steps steps per interval.
-  if (!(rk4_max_step >= kMinRk4MaxStep * factor))
+  if (!(rk4_max_step >= kMinRk4MaxStep))
     throw InputError("solver.rk4_max_step", format_value(rk4_max_step),
-                     "must be at least " + format_value(kMinRk4MaxStep * factor) + " m (longest RK4 step" +
-                         with_refinement + ")");
+                     "must be at least " + format_value(kMinRk4MaxStep) + " m (longest RK4 step of the fixed mesh)");
 }
 
-std::string to_string(IntegratorKind k) { return k == IntegratorKind::Cvode ? "cvode" : "rk4"; }
+SolverOptions SolverOptions::resolved(double robot_length) const {
+  SolverOptions o = *this;
+  if (o.tip_tolerance == 0.0)
+    o.tip_tolerance = std::clamp(kTipToleranceOverLength * robot_length, kMinTipTolerance, kMaxTipTolerance);
+  if (o.function_tolerance == 0.0)
+    o.function_tolerance = std::clamp(kNewtonPerTipTolerance * o.tip_tolerance / robot_length,
+                                      kMinFunctionTolerance, kMaxFunctionTolerance);
+  return o;
+}
+
+std::string to_string(IntegratorKind k) {
+  switch (k) {
+    case IntegratorKind::Cvode: return "cvode";
+    case IntegratorKind::FixedStepRK4: return "rk4_fixed";
+    default: return "rk4";
+  }
+}
 
 std::string to_string(LinearSolverKind k) {
   switch (k) {

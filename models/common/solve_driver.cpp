@@ -248,7 +248,7 @@ void add_differential_kinematics(const StaticModel& model, const detail::Rebind&
   detail::differential_kinematics(rebind, input, load.force_scale(), load.moment_scale(), tolerance, x, sol);
 }
 
-// --- Accuracy-driven RK4 (SolverOptions::rk4_tip_tolerance). ---
+// --- Accuracy-driven RK4 (IntegratorKind::AccuracyDrivenRK4, SolverOptions::tip_tolerance). ---
 
 // RK4 steps of one integration over `length` (bvp::Rk4Integrator's rule).
 int rk4_steps_over(double length, int steps, double max_step) {
@@ -276,23 +276,59 @@ void add_work(const SolverSummary& from, SolverSummary& to) {
   to.continuation_steps += from.continuation_steps;
 }
 
-// Solve on the options' mesh, then on finer meshes, each warm-started from the last, until the
+// Cold solves that follow their loading path from rest follow it on the mesh of the fixed mesh's
+// coarse loading path (2 steps per disk interval, h <= 4 mm: one halving of the first mesh), and
+// if that fails on the fixed mesh's default (8 steps, h <= 1 mm: three halvings), as the fixed
+// mesh's cold rule does: on the first mesh, 1 step and 8 mm, curvature near a tendon's limit is
+// judged too coarsely (VC called a feasible loaded scene infeasible at 99 % of its load).
+constexpr int kPathHalvings = 1;
+constexpr int kFinePathHalvings = 3;
+static_assert((SolverOptions::kFirstMeshRk4Steps << kPathHalvings) == SolverOptions::kCoarsePathRk4Steps);
+
+// Solve on the first mesh, then on finer meshes, each warm-started from the last, until the
 // Richardson estimate of the tip error is within the tolerance. RK4's error goes like h^4, so
 // the finer answer's error is about |tip_fine - tip_coarse| / (r^4 - 1) for a step ratio r. The
 // first refinement halves the steps; later ones jump by as many halvings as the last estimate
 // says are needed (its error / 16 per halving), so that a tight tolerance does not solve every
-// mesh on the way.
+// mesh on the way. A warm-started solve starts one halving below the mesh its warm start ended
+// on: along a trajectory the mesh the last answer needed is the likely one, and the solve
+// before it is the coarse half of the estimate.
+// `path`: a cold tension solve whose cold rule follows the loading path from rest.
 Solution solve_refined(const StaticModel& model, ModelWorkspace& workspace, const ModelInput& input,
-                       const SolverOptions& options, const Solution* warm_start) {
+                       const SolverOptions& options, const Solution* warm_start, bool path) {
   const auto t0 = std::chrono::steady_clock::now();
-  const double tol = options.rk4_tip_tolerance;
+  const double tol = options.tip_tolerance;
   SolverOptions o = options;
-  o.rk4_tip_tolerance = 0.0;
+  o.integrator = IntegratorKind::FixedStepRK4;
+  o.rk4_steps = SolverOptions::kFirstMeshRk4Steps;
+  o.rk4_max_step = SolverOptions::kFirstMeshRk4MaxStep;
+  // The first solve's mesh, as halvings of the first mesh's steps.
+  int halvings = path ? kPathHalvings : 0;
+  if (warm_start && warm_start->summary.rk4_halvings > 0)
+    halvings = std::min(warm_start->summary.rk4_halvings - 1, SolverOptions::kMaxRk4Halvings - 1);
+  const auto set_mesh = [&](int h) {
+    o.rk4_steps = SolverOptions::kFirstMeshRk4Steps << h;
+    o.rk4_max_step = SolverOptions::kFirstMeshRk4MaxStep / (1 << h);
+  };
+  set_mesh(halvings);
   Solution coarse = tdcr::solve(model, workspace, input, o, warm_start);
+  if (path && !coarse.converged()) {
+    // As the fixed mesh's cold rule does: the whole path again on the fine mesh.
+    const SolverSummary first = coarse.summary;
+    halvings = kFinePathHalvings;
+    set_mesh(halvings);
+    o.coarse_loading_path = false;
+    coarse = tdcr::solve(model, workspace, input, o, nullptr);
+    o.coarse_loading_path = options.coarse_loading_path;
+    add_work(first, coarse.summary);
+    coarse.summary.message += " (followed on a finer mesh, " + std::to_string(o.rk4_steps) +
+                              " steps per disk interval at least, h <= " + format_value(o.rk4_max_step) +
+                              " m, because on the coarse one: " + first.message + ")";
+  }
   if (!coarse.converged() || coarse.summary.integrator != "rk4" || coarse.disk_frames.empty()) return coarse;
   SolverSummary work = coarse.summary;
   const std::vector<PathEvent> events = coarse.path_events;
-  int halvings = 0, solves = 0, next = 1;
+  int solves = 0, next = 1;
   for (;;) {
     const int factor = 1 << next;
     const double r = refinement_ratio(model.robot(), o.rk4_steps, o.rk4_max_step, factor);
@@ -308,6 +344,7 @@ Solution solve_refined(const StaticModel& model, ModelWorkspace& workspace, cons
     sum.jacobian_evaluations = work.jacobian_evaluations;
     sum.continuation_steps = work.continuation_steps;
     sum.rk4_refinements = solves;
+    sum.rk4_halvings = halvings;
     if (fine.path_events.empty()) fine.path_events = events;
     const auto finish = [&]() {
       sum.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -324,7 +361,7 @@ Solution solve_refined(const StaticModel& model, ModelWorkspace& workspace, cons
     if (halvings >= SolverOptions::kMaxRk4Halvings) {
       sum.termination = TerminationType::NoConvergence;
       sum.message = "accuracy-driven RK4: tip error estimate " + format_value(sum.tip_error_estimate) +
-                    " m above solver.rk4_tip_tolerance " + format_value(tol) + " m on the finest mesh allowed (" +
+                    " m above solver.tip_tolerance " + format_value(tol) + " m on the finest mesh allowed (" +
                     mesh + ", " + std::to_string(1 << halvings) + " times the first)";
       return finish();
     }
@@ -341,7 +378,7 @@ Solution solve_refined(const StaticModel& model, ModelWorkspace& workspace, cons
 bool wants_coarse_path(const StaticModel& model, const SolverOptions& options, const Solution* warm_start,
                        const std::string& reason) {
   return options.coarse_loading_path && !warm_start && options.continuation && !reason.empty() &&
-         options.integrator == IntegratorKind::FixedStepRK4 && options.rk4_tip_tolerance == 0.0 &&
+         options.integrator == IntegratorKind::FixedStepRK4 &&
          (model.kind() == ModelKind::VC || model.kind() == ModelKind::VCref) &&
          (options.rk4_steps > SolverOptions::kCoarsePathRk4Steps ||
           options.rk4_max_step < SolverOptions::kCoarsePathRk4MaxStep);
@@ -384,18 +421,30 @@ Solution solve_with_coarse_path(const StaticModel& model, ModelWorkspace& worksp
 }  // namespace
 
 Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelInput& input,
-               const SolverOptions& options, const Solution* warm_start) {
+               const SolverOptions& requested, const Solution* warm_start) {
   const auto t0 = std::chrono::steady_clock::now();
-  options.validate();
-  if (options.rk4_tip_tolerance > 0.0 && options.integrator == IntegratorKind::FixedStepRK4 &&
-      (model.kind() == ModelKind::VC || model.kind() == ModelKind::VCref))
-    return solve_refined(model, workspace, input, options, warm_start);
+  requested.validate();
+  // The tip tolerance and the Newton tolerance tied to it, for this robot.
+  const SolverOptions options = requested.resolved(model.robot().total_length());
   input.validate(model.robot());
   model.check_input(input);
   if (!workspace.belongs_to(model))
     throw InputError("workspace", "a workspace of another model",
                      "use the workspace made by this model's make_workspace() (" + model.name() + ")");
   if (warm_start) check_warm_start(model, *warm_start);
+  if (options.integrator == IntegratorKind::AccuracyDrivenRK4 &&
+      (model.kind() == ModelKind::VC || model.kind() == ModelKind::VCref)) {
+    bool path = false;
+    if (!warm_start && options.continuation && !detail::needs_displacement_solve(model, input)) {
+      SolverOptions first = options;
+      first.integrator = IntegratorKind::FixedStepRK4;
+      first.rk4_steps = SolverOptions::kFirstMeshRk4Steps;
+      first.rk4_max_step = SolverOptions::kFirstMeshRk4MaxStep;
+      detail::ModelProblem& P = model.bind(workspace, input, first);
+      path = P.system() && !path_reason(model, input, P.cold_start()).empty();
+    }
+    return solve_refined(model, workspace, input, options, warm_start, path);
+  }
   // Displacement input: the driven tendons' tensions join the model's unknowns. A cold solve
   // starts from the tension solve at the tensions linear beam theory gives its pulls (that solve
   // by its own rule: direct, or along its loading path from rest): the commanded pulls are then
@@ -552,6 +601,8 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
     sum.message = "from the tension solve at the linear guess's tensions (" + start_work.brief_report() +
                   "): " + sum.message;
   }
+  sum.function_tolerance = options.function_tolerance;
+  sum.tip_tolerance = options.tip_tolerance;
   sum.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return sol;
 }

@@ -130,10 +130,9 @@ void bind_input(VcWorkspace::Impl& W, const VcModel& model, const ModelInput& in
   }
 
   if (W.shot_integrator && same_integration(W.integration, options)) return;
-  if (W.shot_integrator && W.integration.integrator == IntegratorKind::FixedStepRK4 &&
-      options.integrator == IntegratorKind::FixedStepRK4) {
+  if (W.shot_integrator && is_rk4(W.integration.integrator) && is_rk4(options.integrator)) {
     // Only the RK4 mesh changes (e.g. an accuracy-driven refinement, SolverOptions::
-    // rk4_tip_tolerance): refine the integrators in place, so that the formulations, and the
+    // tip_tolerance): refine the integrators in place, so that the formulations, and the
     // Jacobian their Newton solver holds factored, survive for the warm-started re-solve.
     static_cast<bvp::Rk4Integrator&>(*W.shot_integrator).set_mesh(options.rk4_steps, options.rk4_max_step);
     static_cast<bvp::Rk4Integrator&>(*W.final_integrator).set_mesh(options.rk4_steps, options.rk4_max_step);

@@ -38,7 +38,8 @@ const Names<tdcr::DiskNormalForce> kDiskNormalForce = {{"removed", tdcr::DiskNor
                                                        {"kept", tdcr::DiskNormalForce::Kept}};
 const Names<tdcr::TendonPath> kTendonPath = {{"fully_constrained", tdcr::TendonPath::FullyConstrained},
                                              {"partially_constrained", tdcr::TendonPath::PartiallyConstrained}};
-const Names<tdcr::IntegratorKind> kIntegrator = {{"rk4", tdcr::IntegratorKind::FixedStepRK4},
+const Names<tdcr::IntegratorKind> kIntegrator = {{"rk4", tdcr::IntegratorKind::AccuracyDrivenRK4},
+                                                 {"rk4_fixed", tdcr::IntegratorKind::FixedStepRK4},
                                                  {"cvode", tdcr::IntegratorKind::Cvode}};
 const Names<tdcr::TendonRoutingSpec::Type> kRoutingType = {{"straight", tdcr::TendonRoutingSpec::Type::Straight},
                                                            {"helical", tdcr::TendonRoutingSpec::Type::Helical},
@@ -379,7 +380,7 @@ void bind_effects(py::module_& m) {
       .def_readwrite("max_iterations", &tdcr::SolverOptions::max_iterations)
       .def_readwrite("rk4_steps", &tdcr::SolverOptions::rk4_steps)
       .def_readwrite("rk4_max_step", &tdcr::SolverOptions::rk4_max_step)
-      .def_readwrite("rk4_tip_tolerance", &tdcr::SolverOptions::rk4_tip_tolerance)
+      .def_readwrite("tip_tolerance", &tdcr::SolverOptions::tip_tolerance)
       .def_readwrite("cvode_rtol", &tdcr::SolverOptions::cvode_rtol)
       .def_readwrite("cvode_atol", &tdcr::SolverOptions::cvode_atol)
       .def_readwrite("continuation", &tdcr::SolverOptions::continuation)

@@ -42,15 +42,23 @@ struct SolverSummary {
   int residual_evaluations = 0;  ///< Residual evaluations (excluding Jacobian ones).
   int jacobian_evaluations = 0;  ///< Jacobian evaluations.
   double residual_norm = 0.0;    ///< Final scaled residual max-norm (dimensionless).
+  /// The Newton tolerance the solve used (SolverOptions::function_tolerance, resolved: 0 there is
+  /// tied to the tip tolerance); converged means residual_norm at most this.
+  double function_tolerance = 0.0;
+  /// The tip tolerance the solve used (m; SolverOptions::tip_tolerance, resolved for the robot).
+  double tip_tolerance = 0.0;
   double physical_residual = 0.0;///< Final unscaled residual 2-norm (mixed N, N m, m).
   int unknowns = 0;              ///< Size of the nonlinear system.
   int continuation_steps = 0;    ///< Load steps used by continuation (0: direct solve).
   std::string linear_solver;     ///< "dense", "klu", "system" (the model's own Newton steps), or "none" (closed form).
   std::string integrator;        ///< "rk4", "cvode", or "none".
-  /// Accuracy-driven RK4 (SolverOptions::rk4_tip_tolerance): Richardson estimate of the tip
-  /// position error of the answer (m), from its mesh and the next coarser one; NaN otherwise.
+  /// Accuracy-driven RK4 (integrator "rk4", SolverOptions::tip_tolerance): Richardson estimate of
+  /// the tip position error of the answer (m), from its mesh and the next coarser one; NaN otherwise.
   double tip_error_estimate = std::numeric_limits<double>::quiet_NaN();
   int rk4_refinements = 0;       ///< Accuracy-driven RK4: solves on refined meshes (0 otherwise).
+  /// Accuracy-driven RK4: halvings of the first mesh's steps in the answer's mesh (it has 2^this
+  /// times the first mesh's steps; 0 otherwise). A warm start from this answer starts one below.
+  int rk4_halvings = 0;
   double solve_time_s = 0.0;     ///< Wall time of the solve (s).
 
   /// @brief True only if termination is Converged: the returned shape is an equilibrium within

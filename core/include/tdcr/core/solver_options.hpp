@@ -9,9 +9,14 @@ namespace tdcr {
 
 /// @brief Integrator for the Cosserat-rod ODEs (VC, VCref).
 enum class IntegratorKind {
-  FixedStepRK4,  ///< Classical RK4 with a fixed number of steps: fast path, allocation free.
-  Cvode          ///< SUNDIALS CVODE, Adams, error controlled: the reference integrator.
+  AccuracyDrivenRK4,  ///< "rk4" (default): classical RK4 on a mesh refined until the estimated tip
+                      ///< error is within SolverOptions::tip_tolerance; allocation free.
+  FixedStepRK4,       ///< "rk4_fixed": classical RK4 on the mesh of rk4_steps and rk4_max_step.
+  Cvode               ///< "cvode": SUNDIALS CVODE, Adams, error controlled: the reference integrator.
 };
+
+/// @brief True for both RK4 integrators (the accuracy-driven one solves on RK4 meshes too).
+inline bool is_rk4(IntegratorKind k) { return k != IntegratorKind::Cvode; }
 
 /// @brief Linear solver used inside KINSOL's Newton iteration.
 enum class LinearSolverKind {
@@ -23,36 +28,55 @@ enum class LinearSolverKind {
 
 /// @brief Numerical settings of a static solve.
 struct SolverOptions {
-  /// Newton stops when the scaled residual max-norm is below this (KINSOL fnormtol).
-  double function_tolerance = 1e-10;
+  /// Accuracy of the answer's tip position (m): one option that moves both the integration mesh
+  /// (VC and VCref with the default integrator "rk4": the mesh is refined until the Richardson
+  /// estimate of the tip error is at most this) and Newton's tolerance (every model: unless
+  /// function_tolerance is set, it is kNewtonPerTipTolerance times this over the robot's length).
+  /// 0 (default): kTipToleranceOverLength times the robot's length, 1e-8 m on the paper robot
+  /// (0.1 m), the paper code's own integration error at n >= 10. resolved() turns 0 into the
+  /// value.
+  double tip_tolerance = 0.0;
+  /// Default tip tolerance over the robot's length (tip_tolerance 0).
+  static constexpr double kTipToleranceOverLength = 1e-7;
+  /// Newton's scaled residual tolerance per unit of tip tolerance over the robot's length
+  /// (function_tolerance 0). On the 60 loaded cases of bench_loaded a residual tolerance of
+  /// 1e-8 left CCsub's tip within 3.2e-9 m and PRB's within 4.5e-9 m of their tight references
+  /// (0.1 m robot): a hundredth of tip_tolerance / length keeps Newton's share of the tip error
+  /// near a twentieth of the tolerance, below the integration mesh's share.
+  static constexpr double kNewtonPerTipTolerance = 1e-2;
+  /// Newton stops when the scaled residual max-norm is below this (KINSOL fnormtol). 0 (default):
+  /// tied to tip_tolerance (kNewtonPerTipTolerance tip_tolerance / robot length: 1e-9 on the
+  /// paper robot); resolved() turns 0 into the value.
+  double function_tolerance = 0.0;
   /// KINSOL scaled step tolerance.
   double step_tolerance = 1e-14;
   int max_iterations = 200;  ///< Newton iterations per solve.
   /// Integrator of the Cosserat-rod ODEs (VC, VCref; the other models integrate nothing).
-  IntegratorKind integrator = IntegratorKind::FixedStepRK4;
-  /// Minimum RK4 steps per disk interval (one subsegment, length L_i / n_i), for VC and VCref
-  /// alike; rk4_max_step may ask for more.
-  int rk4_steps = 8;
-  /// Longest RK4 step (m): a disk interval longer than rk4_steps * rk4_max_step takes more steps.
-  /// Keeps the integration error of long intervals (few disks) small: with 1 mm the VCref tip of
-  /// the paper robot (configuration 8) is within 5e-8 m of CVODE at rtol 1e-12 for n = 1, 7e-9 m
-  /// for n = 2 and 7e-10 m for n = 10 (was 3.3e-5 m for n = 1 with 8 steps per interval alone).
-  double rk4_max_step = 1e-3;
-  /// Accuracy-driven RK4 (m; 0: off, the fixed steps above). With a positive tolerance a VC or
-  /// VCref solve with RK4 starts on the mesh of rk4_steps and rk4_max_step and refines it
-  /// (steps per interval doubled and the longest step halved, once or as often as the last
-  /// estimate asks for) until the Richardson estimate of its tip position error, from the last
-  /// two meshes, is at most this; each finer solve is warm-started from the coarser answer and
-  /// its Jacobian. SolverSummary::tip_error_estimate and rk4_refinements report it; a solve that
-  /// cannot meet the tolerance within kMaxRk4Halvings halvings of the first mesh's steps is
-  /// reported as not converged. The estimate is an estimate, not a bound: on the 60 loaded cases
-  /// of bench_loaded it was 0.90-1.15 times the true tip error. Start coarse: e.g.
-  /// rk4_steps 1 and rk4_max_step 8e-3 on the paper robot (docs/design-notes/vc.md). CVODE and
-  /// the models that integrate nothing ignore it.
-  double rk4_tip_tolerance = 0.0;
-  /// Most halvings of the first mesh's steps in an accuracy-driven RK4 solve (rk4_tip_tolerance):
-  /// the finest mesh has 64 times its steps.
+  /// The default, accuracy-driven RK4, starts on a coarse mesh (kFirstMeshRk4Steps per disk
+  /// interval, steps of at most kFirstMeshRk4MaxStep) and refines it (steps per interval doubled
+  /// and the longest step halved, once or as often as the last estimate asks for) until the
+  /// Richardson estimate of its tip position error, from the last two meshes, is at most
+  /// tip_tolerance; each finer solve is warm-started from the coarser answer and its Jacobian. A
+  /// warm-started solve starts one halving below the mesh its warm start ended on.
+  /// SolverSummary::tip_error_estimate, rk4_refinements and the mesh report it; a solve that
+  /// cannot meet the tolerance within kMaxRk4Halvings halvings of the first mesh is reported as
+  /// not converged. The estimate is an estimate, not a bound: on the 60 loaded cases of
+  /// bench_loaded it was 0.90-1.15 times the true tip error.
+  IntegratorKind integrator = IntegratorKind::AccuracyDrivenRK4;
+  /// Steps per disk interval of the accuracy-driven RK4's first mesh.
+  static constexpr int kFirstMeshRk4Steps = 1;
+  /// Longest step of the accuracy-driven RK4's first mesh (m).
+  static constexpr double kFirstMeshRk4MaxStep = 8e-3;
+  /// Most halvings of the first mesh's steps in an accuracy-driven RK4 solve: the finest mesh has
+  /// 64 times its steps.
   static constexpr int kMaxRk4Halvings = 6;
+  /// Fixed-mesh RK4 (integrator "rk4_fixed"): minimum RK4 steps per disk interval (one
+  /// subsegment, length L_i / n_i), for VC and VCref alike; rk4_max_step may ask for more.
+  int rk4_steps = 8;
+  /// Fixed-mesh RK4: longest RK4 step (m); a disk interval longer than rk4_steps * rk4_max_step
+  /// takes more steps. With 8 steps and 1 mm the VCref tip of the paper robot (configuration 8)
+  /// is within 5e-8 m of CVODE at rtol 1e-12 for n = 1, 7e-9 m for n = 2 and 7e-10 m for n = 10.
+  double rk4_max_step = 1e-3;
   double cvode_rtol = 1e-8;   ///< CVODE relative tolerance.
   double cvode_atol = 1e-10;  ///< CVODE absolute tolerance.
   /// Linear solver inside Newton (VC, VCref; CCsub and PRB always use dense LU, CC solves no
@@ -74,8 +98,8 @@ struct SolverOptions {
   /// warm-started Newton solve. The path only carries the solve to the loading branch; the
   /// answer has the requested mesh's accuracy. If the coarse path or the final solve fails, the
   /// whole path is followed again on the requested mesh. Path events (folds, snaps) are those of
-  /// the coarse path. No effect when the requested mesh is not finer than the coarse one, with
-  /// rk4_tip_tolerance (which starts coarse anyway) or with CVODE.
+  /// the coarse path. For integrator "rk4_fixed" only, and only when its mesh is finer than the
+  /// coarse one (the accuracy-driven "rk4" starts coarser anyway; CVODE has no mesh).
   bool coarse_loading_path = true;
   /// RK4 steps per disk interval of a coarse loading path (coarse_loading_path).
   static constexpr int kCoarsePathRk4Steps = 2;
@@ -150,15 +174,15 @@ struct SolverOptions {
   /// better (rtol governs), above 1e-2 a centimetre or a hundredth of a newton is ignored.
   static constexpr double kMinCvodeAtol = 1e-20;
   static constexpr double kMaxCvodeAtol = 1e-2;  ///< @copydoc kMinCvodeAtol
-  /// Bounds of the accuracy-driven RK4 tip tolerance (m; rk4_tip_tolerance when not 0): the
+  /// Bounds of the tip tolerance (m; tip_tolerance when not 0): the
   /// smallest estimate reached on "tip force" from rk4_steps 1, rk4_max_step 8e-3 is 7.0e-15 m
   /// (VC) and 7.2e-15 m (VCref), after two refinements, in under 2 ms. A tolerance below what is
   /// reachable is harmless: the solve ends after kMaxRk4Halvings halvings as not converged and
   /// says so (test_rk4_tolerance asks for 1e-18 m to see this). Below 1e-18 m, under a tenth of
   /// the spacing of doubles at 0.1 m (1.4e-17 m), no value means anything else. Above 1 cm every
   /// mesh passes.
-  static constexpr double kMinRk4TipTolerance = 1e-18;
-  static constexpr double kMaxRk4TipTolerance = 1e-2;  ///< @copydoc kMinRk4TipTolerance
+  static constexpr double kMinTipTolerance = 1e-18;
+  static constexpr double kMaxTipTolerance = 1e-2;  ///< @copydoc kMinTipTolerance
   /// Most Newton iterations per solve (max_iterations): 5 times the default 200; a Newton solve
   /// that has not converged in 1000 iterations will not.
   static constexpr int kMaxIterations = 1000;
@@ -171,14 +195,20 @@ struct SolverOptions {
 
   /// @brief Throws InputError (field `solver.<name>`, the value, and the allowed range) on a
   /// numeric option outside its bounds above, or not finite (rk4_max_step may be +infinity:
-  /// exactly rk4_steps steps per interval). With rk4_tip_tolerance > 0 the finest mesh of the
-  /// refinement (2^kMaxRk4Halvings times the first) must stay within them too: rk4_steps at most
-  /// kMaxRk4Steps / 64 and rk4_max_step at least 64 kMinRk4MaxStep.
+  /// exactly rk4_steps steps per interval). tip_tolerance and function_tolerance may be 0 (tied
+  /// to the robot, see resolved()).
   void validate() const;
+
+  /// @brief These options with tip_tolerance and function_tolerance made concrete for a robot of
+  /// total length `robot_length` (m): 0 is replaced by the default tied to the length (tip
+  /// tolerance) and to the tip tolerance (function tolerance). Idempotent; the solve entry calls it.
+  SolverOptions resolved(double robot_length) const;
 };
 
-/// @brief Name of an integrator as used in scene files ("rk4", "cvode").
+/// @brief Name of an integrator as used in scene files ("rk4", "rk4_fixed", "cvode").
 std::string to_string(IntegratorKind k);
+/// @brief Why a fixed-mesh setting (rk4_steps, rk4_max_step) is refused with `integrator`.
+std::string fixed_mesh_only(IntegratorKind integrator);
 /// @brief Name of a linear solver as used in scene files ("auto", "dense", "klu").
 std::string to_string(LinearSolverKind k);
 
