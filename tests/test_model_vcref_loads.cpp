@@ -178,7 +178,7 @@ TEST(VcrefLargeLoads, RuleDecidedOnceFromExternalLoads) {
   const Solution warm = tdcr::solve(m, *ws, heavy.input(), heavy.solver, &cold);
   ASSERT_TRUE(warm.converged());
   EXPECT_EQ(warm.summary.continuation_steps, 0);
-  EXPECT_LE(warm.summary.iterations, 1);
+  EXPECT_LE(warm.summary.iterations, 2);  // one on each of the accuracy-driven estimate's two meshes
   VcrefOptions bad;
   bad.load_threshold = 0.0;
   EXPECT_THROW(VcrefModel(heavy.robot, heavy.effects, bad), InputError);

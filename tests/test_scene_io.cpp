@@ -21,6 +21,7 @@
 #include "tdcr/core/scene_io.hpp"
 #include "tdcr/models/static_model.hpp"
 #include "bad_scene_inputs.hpp"
+#include "fixed_mesh_settings.hpp"
 
 namespace {
 
@@ -439,6 +440,7 @@ TEST(SceneIo, KinkForcesFalseReproducesPaperCodeVc) {
     tdcr::Scene s = tdcr::paper::scene(n, 1, "vc");
     s.actuation.values = {v[2], v[3], v[4], v[5]};
     s.loads.tip_force = force;
+    s.solver.integrator = tdcr::IntegratorKind::FixedStepRK4;
     s.solver.rk4_steps = std::max(4, 160 / n);
     nlohmann::json j = nlohmann::json::parse(tdcr::scene_to_json(s));
     j["effects"]["kink_forces"] = false;

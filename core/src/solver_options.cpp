@@ -47,6 +47,10 @@ void SolverOptions::validate() const {
   check_count("max_continuation_steps", max_continuation_steps, 1, kMaxContinuationSteps,
               "Newton solves of a loading path");
   check_count("rk4_steps", rk4_steps, 1, kMaxRk4Steps, "RK4 steps per disk interval of the fixed mesh");
+  // +infinity is allowed (C++ only; JSON has no infinity): exactly rk4_steps steps per interval.
+  if (!(rk4_max_step >= kMinRk4MaxStep))
+    throw InputError("solver.rk4_max_step", format_value(rk4_max_step),
+                     "must be at least " + format_value(kMinRk4MaxStep) + " m (longest RK4 step of the fixed mesh)");
   // The fixed mesh's settings with another integrator would be ignored without a word.
   const SolverOptions defaults;
   if (integrator == IntegratorKind::AccuracyDrivenRK4) {
@@ -55,10 +59,6 @@ void SolverOptions::validate() const {
     if (rk4_max_step != defaults.rk4_max_step)
       throw InputError("solver.rk4_max_step", format_value(rk4_max_step), fixed_mesh_only(integrator));
   }
-  // +infinity is allowed (C++ only; JSON has no infinity): exactly rk4_steps steps per interval.
-  if (!(rk4_max_step >= kMinRk4MaxStep))
-    throw InputError("solver.rk4_max_step", format_value(rk4_max_step),
-                     "must be at least " + format_value(kMinRk4MaxStep) + " m (longest RK4 step of the fixed mesh)");
 }
 
 SolverOptions SolverOptions::resolved(double robot_length) const {
@@ -67,7 +67,7 @@ SolverOptions SolverOptions::resolved(double robot_length) const {
     o.tip_tolerance = std::clamp(kTipToleranceOverLength * robot_length, kMinTipTolerance, kMaxTipTolerance);
   if (o.function_tolerance == 0.0)
     o.function_tolerance = std::clamp(kNewtonPerTipTolerance * o.tip_tolerance / robot_length,
-                                      kMinFunctionTolerance, kMaxFunctionTolerance);
+                                      kMinTiedFunctionTolerance, kMaxFunctionTolerance);
   return o;
 }
 

@@ -44,6 +44,10 @@ struct SolverOptions {
   /// (0.1 m robot): a hundredth of tip_tolerance / length keeps Newton's share of the tip error
   /// near a twentieth of the tolerance, below the integration mesh's share.
   static constexpr double kNewtonPerTipTolerance = 1e-2;
+  /// Smallest tied Newton tolerance: a tip tolerance far below what RK4 can reach must not take
+  /// Newton to the rounding floor of the residual (near 1e-15, kMinFunctionTolerance), where
+  /// solves fail; an explicit function_tolerance may still go there.
+  static constexpr double kMinTiedFunctionTolerance = 1e-13;
   /// Newton stops when the scaled residual max-norm is below this (KINSOL fnormtol). 0 (default):
   /// tied to tip_tolerance (kNewtonPerTipTolerance tip_tolerance / robot length: 1e-9 on the
   /// paper robot); resolved() turns 0 into the value.
