@@ -284,7 +284,7 @@ double bending_tension(const Robot& robot) {
 Solution solve_tight(const StaticModel& model, ModelWorkspace& ws, ModelInput in, const std::vector<double>& T,
                      const Solution* warm) {
   in.actuation.values = T;
-  SolverOptions o;
+  SolverOptions o = test::fixed_mesh_settings();  // the mesh of the inverse solves checked
   o.reuse_jacobian = false;
   o.extrapolate_warm_starts = false;
   o.continuation = warm == nullptr;
