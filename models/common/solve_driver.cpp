@@ -2,9 +2,11 @@
 // options, warm_start). It owns the policy; the model's ModelProblem owns the physics.
 #include <algorithm>
 #include <chrono>
+#include <functional>
 #include <cstdio>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include "common/differential_kinematics.hpp"
 #include "common/displacement_input.hpp"
@@ -293,42 +295,101 @@ static_assert((SolverOptions::kFirstMeshRk4Steps << kPathHalvings) == SolverOpti
 // mesh on the way. A warm-started solve starts one halving below the mesh its warm start ended
 // on: along a trajectory the mesh the last answer needed is the likely one, and the solve
 // before it is the coarse half of the estimate.
+// Runs a solve and leaves the workspace's warm-start history as it was before it.
+using KeepHistory = std::function<Solution(const std::function<Solution()>&)>;
+
 // `path`: a cold tension solve whose cold rule follows the loading path from rest.
 Solution solve_refined(const StaticModel& model, ModelWorkspace& workspace, const ModelInput& input,
-                       const SolverOptions& options, const Solution* warm_start, bool path) {
+                       const SolverOptions& options, const Solution* warm_start, bool path,
+                       const KeepHistory& keep_history) {
   const auto t0 = std::chrono::steady_clock::now();
   const double tol = options.tip_tolerance;
   SolverOptions o = options;
   o.integrator = IntegratorKind::FixedStepRK4;
-  o.rk4_steps = SolverOptions::kFirstMeshRk4Steps;
-  o.rk4_max_step = SolverOptions::kFirstMeshRk4MaxStep;
-  // The first solve's mesh, as halvings of the first mesh's steps.
-  int halvings = path ? kPathHalvings : 0;
-  if (warm_start && warm_start->summary.rk4_halvings > 0)
-    halvings = std::min(warm_start->summary.rk4_halvings - 1, SolverOptions::kMaxRk4Halvings - 1);
-  const auto set_mesh = [&](int h) {
-    o.rk4_steps = SolverOptions::kFirstMeshRk4Steps << h;
-    o.rk4_max_step = SolverOptions::kFirstMeshRk4MaxStep / (1 << h);
+  const auto set_mesh = [&](SolverOptions& opt, int h) {
+    opt.rk4_steps = SolverOptions::kFirstMeshRk4Steps << h;
+    opt.rk4_max_step = SolverOptions::kFirstMeshRk4MaxStep / (1 << h);
   };
-  set_mesh(halvings);
-  Solution coarse = tdcr::solve(model, workspace, input, o, warm_start);
-  if (path && !coarse.converged()) {
-    // As the fixed mesh's cold rule does: the whole path again on the fine mesh.
-    const SolverSummary first = coarse.summary;
-    halvings = kFinePathHalvings;
-    set_mesh(halvings);
-    o.coarse_loading_path = false;
-    coarse = tdcr::solve(model, workspace, input, o, nullptr);
-    o.coarse_loading_path = options.coarse_loading_path;
-    add_work(first, coarse.summary);
-    coarse.summary.message += " (followed on a finer mesh, " + std::to_string(o.rk4_steps) +
-                              " steps per disk interval at least, h <= " + format_value(o.rk4_max_step) +
-                              " m, because on the coarse one: " + first.message + ")";
+  SolverSummary spent;  // work of solves whose answers are not the refinement's
+  // The refinement's last converged answer and the number of halvings of its mesh.
+  std::optional<Solution> last;
+  int halvings = 0, next = 1;
+  // A warm start that ended on a refined mesh: along a trajectory that mesh is the likely one.
+  // Solve there first (its Jacobian and the secant predictor fit it), then once on the mesh one
+  // halving coarser from that answer, for the estimate only: Newton's tolerance ten times looser
+  // there, and the workspace's warm-start history left as the fine solve made it. If the
+  // estimate is above the tolerance, the refinement goes on from the fine answer.
+  if (warm_start && warm_start->summary.rk4_halvings > 0) {
+    const int h = std::min(warm_start->summary.rk4_halvings, SolverOptions::kMaxRk4Halvings);
+    set_mesh(o, h);
+    Solution fine = tdcr::solve(model, workspace, input, o, warm_start);
+    if (fine.converged() && fine.summary.integrator == "rk4" && !fine.disk_frames.empty()) {
+      SolverOptions oc = o;
+      set_mesh(oc, h - 1);
+      oc.function_tolerance = std::min(10.0 * o.function_tolerance, SolverOptions::kMaxFunctionTolerance);
+      oc.stability = false;
+      oc.differential_kinematics = false;
+      const double r = refinement_ratio(model.robot(), oc.rk4_steps, oc.rk4_max_step, 2);
+      const Solution c = keep_history([&]() { return tdcr::solve(model, workspace, input, oc, &fine); });
+      if (c.converged()) {
+        SolverSummary& sum = fine.summary;
+        add_work(c.summary, sum);
+        add_work(spent, sum);
+        spent = SolverSummary();
+        sum.tip_error_estimate = (fine.tip().p - c.tip().p).norm() / (std::pow(r, 4) - 1.0);
+        sum.rk4_refinements = 1;
+        sum.rk4_halvings = h;
+        if (sum.tip_error_estimate <= tol || h >= SolverOptions::kMaxRk4Halvings) {
+          if (sum.tip_error_estimate > tol) {
+            sum.termination = TerminationType::NoConvergence;
+            sum.message = "accuracy-driven RK4: tip error estimate " + format_value(sum.tip_error_estimate) +
+                          " m above solver.tip_tolerance " + format_value(tol) + " m on the finest mesh allowed";
+          }
+          sum.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+          return fine;
+        }
+        halvings = h;
+        next = static_cast<int>(std::ceil(std::log(sum.tip_error_estimate / tol) / std::log(16.0)));
+        next = std::clamp(next, 1, SolverOptions::kMaxRk4Halvings - halvings);
+        last = std::move(fine);
+      } else {
+        add_work(fine.summary, spent);
+        add_work(c.summary, spent);
+      }
+    } else {
+      add_work(fine.summary, spent);
+    }
+    // Otherwise the refinement from one halving below the warm start's mesh, as from a cold start.
   }
-  if (!coarse.converged() || coarse.summary.integrator != "rk4" || coarse.disk_frames.empty()) return coarse;
+  if (!last) {
+    // The first solve's mesh, as halvings of the first mesh's steps.
+    halvings = path ? kPathHalvings : 0;
+    if (warm_start && warm_start->summary.rk4_halvings > 0)
+      halvings = std::min(warm_start->summary.rk4_halvings - 1, SolverOptions::kMaxRk4Halvings - 1);
+    set_mesh(o, halvings);
+    Solution first_answer = tdcr::solve(model, workspace, input, o, warm_start);
+    add_work(spent, first_answer.summary);
+    if (path && !first_answer.converged()) {
+      // As the fixed mesh's cold rule does: the whole path again on the fine mesh.
+      const SolverSummary first = first_answer.summary;
+      halvings = kFinePathHalvings;
+      set_mesh(o, halvings);
+      o.coarse_loading_path = false;
+      first_answer = tdcr::solve(model, workspace, input, o, nullptr);
+      o.coarse_loading_path = options.coarse_loading_path;
+      add_work(first, first_answer.summary);
+      first_answer.summary.message += " (followed on a finer mesh, " + std::to_string(o.rk4_steps) +
+                                      " steps per disk interval at least, h <= " + format_value(o.rk4_max_step) +
+                                      " m, because on the coarse one: " + first.message + ")";
+    }
+    if (!first_answer.converged() || first_answer.summary.integrator != "rk4" || first_answer.disk_frames.empty())
+      return first_answer;
+    last = std::move(first_answer);
+  }
+  Solution coarse = std::move(*last);
   SolverSummary work = coarse.summary;
   const std::vector<PathEvent> events = coarse.path_events;
-  int solves = 0, next = 1;
+  int solves = coarse.summary.rk4_refinements;
   for (;;) {
     const int factor = 1 << next;
     const double r = refinement_ratio(model.robot(), o.rk4_steps, o.rk4_max_step, factor);
@@ -443,7 +504,13 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
       detail::ModelProblem& P = model.bind(workspace, input, first);
       path = P.system() && !path_reason(model, input, P.cold_start()).empty();
     }
-    return solve_refined(model, workspace, input, options, warm_start, path);
+    const KeepHistory keep_history = [&workspace](const std::function<Solution()>& run) {
+      detail::SolveHistory saved = workspace.history_;
+      Solution s = run();
+      workspace.history_ = std::move(saved);
+      return s;
+    };
+    return solve_refined(model, workspace, input, options, warm_start, path, keep_history);
   }
   // Displacement input: the driven tendons' tensions join the model's unknowns. A cold solve
   // starts from the tension solve at the tensions linear beam theory gives its pulls (that solve
