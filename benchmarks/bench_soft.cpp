@@ -78,11 +78,7 @@ double thread_cpu_us() {
   return 1e6 * double(t.tv_sec) + 1e-3 * double(t.tv_nsec);
 }
 
-double median(std::vector<double> v) {
-  if (v.empty()) return kNaN;
-  std::sort(v.begin(), v.end());
-  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
-}
+using bench::median;
 
 }  // namespace
 
