@@ -2,6 +2,8 @@
 // the loaded cases of the paper code's reference data, the machine stamp of a run.
 #pragma once
 
+#include <time.h>  // clock_gettime, CLOCK_THREAD_CPUTIME_ID
+
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -32,6 +34,28 @@ double wall_us(F&& f) {
   const auto t0 = std::chrono::steady_clock::now();
   f();
   return std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count();
+}
+
+/// CPU time (us) the calling thread has used so far.
+inline double thread_cpu_us() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return 1e6 * double(t.tv_sec) + 1e-3 * double(t.tv_nsec);
+}
+
+/// Wall time and the calling thread's CPU time (us) of one call. The CPU time leaves out the
+/// time other jobs on the machine hold the core; the wall time does not.
+struct CallTime {
+  double wall_us = 0.0, cpu_us = 0.0;
+};
+
+template <typename F>
+CallTime time_call(F&& f) {
+  CallTime t;
+  const double c0 = thread_cpu_us();
+  t.wall_us = wall_us(f);
+  t.cpu_us = thread_cpu_us() - c0;
+  return t;
 }
 
 /// Median and minimum wall time (us) of `repeat` solves of one model from the same initial guess
@@ -97,7 +121,8 @@ inline void progress(const std::string& what, int done, int total) {
 
 // ---- the paper code's reference data (benchmarks/data) ---------------------------------------
 
-/// A CSV file of benchmarks/data (TDCR_SOURCE_DIR: the benchmark targets define it) as rows of named fields ('#' lines are comments).
+/// A CSV file of benchmarks/data as rows of named fields ('#' lines are comments). TDCR_SOURCE_DIR:
+/// the benchmark targets define it.
 inline std::vector<std::map<std::string, std::string>> read_data_csv(const std::string& name) {
   const std::string path = std::string(TDCR_SOURCE_DIR) + "/benchmarks/data/" + name;
   std::ifstream in(path);

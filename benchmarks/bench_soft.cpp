@@ -20,10 +20,7 @@
 // n = 10, the +y case, R = 1 (the ctest smoke run). --rk4-tip-tol M: VC and VCref solve with
 // accuracy-driven RK4 (SolverOptions::rk4_tip_tolerance = M from 1 step per interval, h <= 8 mm)
 // instead of the default fixed steps; the output file is then DIR/soft_tol.csv.
-#include <time.h>
-
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -72,12 +69,6 @@ struct Row {
 };
 
 /// CPU time of this thread (us): on a shared machine it is what the solve cost, wall time is not.
-double thread_cpu_us() {
-  timespec t{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return 1e6 * double(t.tv_sec) + 1e-3 * double(t.tv_nsec);
-}
-
 using bench::median;
 
 }  // namespace
@@ -163,12 +154,12 @@ int main(int argc, char** argv) {
             std::vector<double> wall, cpu;
             Solution last;
             for (int k = 0; k < repeat; ++k) {
-              const double c0 = thread_cpu_us();
-              const auto t0 = std::chrono::steady_clock::now();
-              last = solve(*model, *ws, input,
-                           kind == ModelKind::VC || kind == ModelKind::VCref ? integrating : scene.solver);
-              wall.push_back(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
-              cpu.push_back(thread_cpu_us() - c0);
+              const bench::CallTime t = bench::time_call([&] {
+                last = solve(*model, *ws, input,
+                             kind == ModelKind::VC || kind == ModelKind::VCref ? integrating : scene.solver);
+              });
+              wall.push_back(t.wall_us);
+              cpu.push_back(t.cpu_us);
             }
             r.status = to_string(last.summary.termination);
             r.steps = last.summary.continuation_steps;

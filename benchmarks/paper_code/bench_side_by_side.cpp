@@ -28,7 +28,9 @@
 // returned (its squared residual <= 1e-6; the GSL status is ignored by the code).
 // Speed-up of a case: the paper code's median over tdcr's median, on cases both converged; per
 // model the median and the minimum over the cases; beside it the paper code's minimum over tdcr's
-// minimum (the times least disturbed by other jobs), median over the cases. Tip distance:
+// minimum, median over the cases (in the CSV); and the same speed-ups of the CPU times of the
+// calling thread, medians of R (CPU time leaves out the time other jobs hold the core, which on a
+// busy machine lands on one solve and not the other at random). Tip distance:
 // |tdcr tip - paper code tip| of the last solves; the summary's largest counts only cases whose
 // paper-code squared residual is below 1e-12 (its tip is trusted only there). The paper code's
 // median against its stored median (benchmarks/data/paper_code_cases_timing.csv) says how this
@@ -84,10 +86,11 @@ struct Settings {
 // ---- the paper's code ------------------------------------------------------------------------
 
 // One solve of the paper's code: its flag, its squared residual, the tip of its last frame, and the
-// wall time of the forwardKinematics call alone.
+// wall and CPU time of the forwardKinematics call alone.
 struct PaperSolve {
   bool converged = false;
-  double residual = kNaN, time_us = kNaN;
+  double residual = kNaN;
+  tdcr::bench::CallTime time;
   Vec3 tip = Vec3::Constant(kNaN);
 };
 
@@ -133,7 +136,7 @@ class PaperModelOf final : public PaperModel {
     q << t.at(0), t.at(1), 0.0, t.at(2), t.at(3), 0.0;
     Eigen::MatrixXd frames;
     PaperSolve out;
-    out.time_us = tdcr::bench::wall_us(
+    out.time = tdcr::bench::time_call(
         [&] { out.converged = model_.forwardKinematics(frames, q, input.loads.tip_force, input.loads.tip_moment); });
     out.residual = model_.getFinalResudial();
     if (frames.rows() == 4 && frames.cols() >= 4) out.tip = frames.rightCols<4>().block<3, 1>(0, 3);
@@ -177,7 +180,8 @@ std::string load_average() {
 
 struct Tally {
   int cases = 0, tdcr_converged = 0, paper_converged = 0, both = 0, tips_compared = 0, tips_over = 0;
-  std::vector<double> tdcr_us, paper_us, speedup, speedup_of_mins, paper_vs_stored;
+  std::vector<double> tdcr_us, paper_us, speedup, speedup_of_mins, tdcr_cpu_us, paper_cpu_us, cpu_speedup,
+      paper_vs_stored;
   double max_tip_distance = 0.0, tdcr_total_us = 0.0, paper_total_us = 0.0;
 };
 
@@ -195,9 +199,10 @@ int run(const Settings& cfg) {
   tdcr::bench::Csv csv(cfg.out + "/side_by_side.csv",
                        machine + "; load average at start " + load_start + about +
                            "\ncase_id,model,options,n,paper_median_us,paper_min_us,tdcr_median_us,tdcr_min_us,speedup,"
-                           "speedup_of_mins,paper_converged,paper_residual,tdcr_converged,tdcr_status,tdcr_iterations,"
-                           "tdcr_continuation_steps,tip_distance_m,paper_tip_x,paper_tip_y,paper_tip_z,tdcr_tip_x,"
-                           "tdcr_tip_y,tdcr_tip_z,paper_stored_median_us");
+                           "speedup_of_mins,paper_cpu_median_us,tdcr_cpu_median_us,cpu_speedup,paper_converged,"
+                           "paper_residual,tdcr_converged,tdcr_status,tdcr_iterations,tdcr_continuation_steps,"
+                           "tip_distance_m,paper_tip_x,paper_tip_y,paper_tip_z,tdcr_tip_x,tdcr_tip_y,tdcr_tip_z,"
+                           "paper_stored_median_us");
   if (!csv.ok()) throw std::runtime_error("cannot write to " + cfg.out);
 
   std::map<ModelKind, Tally> tally;
@@ -210,16 +215,19 @@ int run(const Settings& cfg) {
       const auto model = tdcr::make_model(kind, robot);
       const auto ws = model->make_workspace();
       const auto paper = make_paper_model(kind, robot);
-      std::vector<double> t_tdcr, t_paper;
+      std::vector<double> t_tdcr, t_paper, cpu_tdcr, cpu_paper;
       tdcr::Solution s;
       PaperSolve p;
       for (int r = 0; r < cfg.repeat; ++r) {
         auto tdcr_solve = [&] {
-          t_tdcr.push_back(tdcr::bench::wall_us([&] { s = tdcr::solve(*model, *ws, c.input, cfg.options); }));
+          const auto t = tdcr::bench::time_call([&] { s = tdcr::solve(*model, *ws, c.input, cfg.options); });
+          t_tdcr.push_back(t.wall_us);
+          cpu_tdcr.push_back(t.cpu_us);
         };
         auto paper_solve = [&] {
           p = paper->solve(c.input);
-          t_paper.push_back(p.time_us);
+          t_paper.push_back(p.time.wall_us);
+          cpu_paper.push_back(p.time.cpu_us);
         };
         if (r % 2 == 0) {
           paper_solve();
@@ -235,6 +243,8 @@ int run(const Settings& cfg) {
       const bool both = s.converged() && p.converged;
       const double speedup = both ? paper_med / tdcr_med : kNaN;
       const double speedup_of_mins = both ? paper_min / tdcr_min : kNaN;
+      const double tdcr_cpu = tdcr::bench::median(cpu_tdcr), paper_cpu = tdcr::bench::median(cpu_paper);
+      const double cpu_speedup = both ? paper_cpu / tdcr_cpu : kNaN;
       const Vec3 tip = s.disk_frames.empty() ? Vec3::Constant(kNaN) : s.tip().p;
       const double distance = (tip - p.tip).norm();
       const auto stored = c.paper.find(kind);
@@ -246,6 +256,8 @@ int run(const Settings& cfg) {
       t.paper_converged += p.converged;
       t.tdcr_us.push_back(tdcr_med);
       t.paper_us.push_back(paper_med);
+      t.tdcr_cpu_us.push_back(tdcr_cpu);
+      t.paper_cpu_us.push_back(paper_cpu);
       for (double x : t_tdcr) t.tdcr_total_us += x;
       for (double x : t_paper) t.paper_total_us += x;
       if (!std::isnan(stored_us)) t.paper_vs_stored.push_back(paper_med / stored_us);
@@ -253,6 +265,7 @@ int run(const Settings& cfg) {
         ++t.both;
         t.speedup.push_back(speedup);
         t.speedup_of_mins.push_back(speedup_of_mins);
+        t.cpu_speedup.push_back(cpu_speedup);
         if (p.residual < 1e-12) {
           ++t.tips_compared;
           t.max_tip_distance = std::max(t.max_tip_distance, std::isnan(distance) ? kNaN : distance);
@@ -260,7 +273,7 @@ int run(const Settings& cfg) {
         }
       }
       csv.row(c.id, tdcr::to_string(kind), options, c.n, paper_med, paper_min, tdcr_med, tdcr_min, speedup,
-              speedup_of_mins, p.converged ? 1 : 0, p.residual, s.converged() ? 1 : 0,
+              speedup_of_mins, paper_cpu, tdcr_cpu, cpu_speedup, p.converged ? 1 : 0, p.residual, s.converged() ? 1 : 0,
               tdcr::to_string(s.summary.termination), s.summary.iterations, s.summary.continuation_steps, distance,
               p.tip.x(), p.tip.y(), p.tip.z(), tip.x(), tip.y(), tip.z(), stored_us);
       tdcr::bench::progress("side by side: case " + std::to_string(c.id) + " " + tdcr::to_string(kind), ++done,
@@ -278,14 +291,15 @@ int run(const Settings& cfg) {
                        stamp.str() +
                            "\nmodel,options,cases,tdcr_converged,tdcr_failed,paper_converged,paper_failed,"
                            "both_converged,tdcr_median_us,paper_median_us,speedup_median,speedup_min,speedup_max,"
-                           "speedup_of_mins_median,"
+                           "speedup_of_mins_median,tdcr_cpu_median_us,paper_cpu_median_us,cpu_speedup_median,"
+                           "cpu_speedup_min,"
                            "paper_vs_stored_median,tips_compared,max_tip_distance_m,tip_distance_over_1e-6,"
                            "tdcr_total_s,paper_total_s");
   std::ofstream md(cfg.out + "/side_by_side_summary.md");
   md << "| model | tdcr options | tdcr converged | paper's code converged | tdcr median | paper's code median "
-        "| speed-up median | speed-up min | speed-up of the minimum times (median) | paper's code / its stored "
-        "times (median) | max tip distance (cases) |\n"
-     << "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n";
+        "| speed-up median | speed-up min | CPU time: speed-up median | CPU time: speed-up min | paper's code / "
+        "its stored times (median) | max tip distance (cases) |\n"
+     << "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n";
   auto time = [](double us) {
     std::ostringstream s;
     s.precision(3);
@@ -298,17 +312,20 @@ int run(const Settings& cfg) {
     const double smin = t.speedup.empty() ? kNaN : *std::min_element(t.speedup.begin(), t.speedup.end());
     const double smax = t.speedup.empty() ? kNaN : *std::max_element(t.speedup.begin(), t.speedup.end());
     const double max_dist = t.tips_compared ? t.max_tip_distance : kNaN;
+    const double cpu_min = t.cpu_speedup.empty() ? kNaN : *std::min_element(t.cpu_speedup.begin(), t.cpu_speedup.end());
     sum.row(tdcr::to_string(kind), options, t.cases, t.tdcr_converged, t.cases - t.tdcr_converged, t.paper_converged,
             t.cases - t.paper_converged, t.both, tdcr::bench::median(t.tdcr_us), tdcr::bench::median(t.paper_us),
             tdcr::bench::median(t.speedup), smin, smax, tdcr::bench::median(t.speedup_of_mins),
-            tdcr::bench::median(t.paper_vs_stored), t.tips_compared,
+            tdcr::bench::median(t.tdcr_cpu_us), tdcr::bench::median(t.paper_cpu_us), tdcr::bench::median(t.cpu_speedup),
+            cpu_min, tdcr::bench::median(t.paper_vs_stored), t.tips_compared,
             max_dist, t.tips_over, 1e-6 * t.tdcr_total_us, 1e-6 * t.paper_total_us);
     std::ostringstream row;
     row.precision(3);
     row << "| " << tdcr::bench::paper_name(kind) << " | " << options << " | " << t.tdcr_converged << " / " << t.cases
         << " | " << t.paper_converged << " / " << t.cases << " | " << time(tdcr::bench::median(t.tdcr_us)) << " | "
         << time(tdcr::bench::median(t.paper_us)) << " | " << tdcr::bench::median(t.speedup) << "x | " << smin
-        << "x | " << tdcr::bench::median(t.speedup_of_mins) << "x | " << tdcr::bench::median(t.paper_vs_stored)
+        << "x | " << tdcr::bench::median(t.cpu_speedup) << "x | " << cpu_min << "x | "
+        << tdcr::bench::median(t.paper_vs_stored)
         << " | " << std::scientific << std::setprecision(1) << max_dist << " m (" << t.tips_compared << ") |\n";
     md << row.str();
     std::printf("%-6s tdcr converged %3d/%d  paper converged %3d/%d  tdcr median %9.1f us  paper median %11.1f us  "
