@@ -36,7 +36,8 @@ mkdir -p "$out"
 snapshot() {
   echo "== $1: $(date -u +%Y-%m-%dT%H:%M:%SZ)"
   uptime
-  top -bn1 -o %CPU | sed -n '1,5p;7,12p'
+  # top's second frame: the CPU line of its first is not a measurement.
+  top -bn2 -d 0.5 -o %CPU | awk '/^top -/ { n++ } n == 2' | sed -n '1,5p;7,12p'
 }
 snapshot before >"$out/side_by_side_load.txt"
 "$build/bin/bench_side_by_side" --out "$out" "$@"
