@@ -1,7 +1,8 @@
 // Side by side with the paper's own code: tdcr and the paper's C++ code (tdcr-modeling at commit
 // 379d34a, built by benchmarks/paper_code/CMakeLists.txt from the checkout TDCR_PAPER_CODE_DIR
-// names) timed in one run on one machine, their cold solves interleaved so that whatever else
-// runs on the machine slows both alike. The speed-ups of the loaded cases in docs/benchmarks.md
+// names) timed in one run on one machine, their cold solves interleaved so that the busy and quiet
+// spells of a shared machine fall on both (wall and CPU times are kept: other jobs preempt the
+// paper code's long solves more than tdcr's short ones). The speed-ups of the loaded cases in docs/benchmarks.md
 // ("Loaded cases") divide stored times of the paper's code, recorded on another day, by tdcr's;
 // this benchmark measures both at once.
 //
