@@ -13,15 +13,17 @@
 # too (benchmarks/make_report.py), as benchmarks/run_all.sh does.
 # BENCH_ARGS: passed on, e.g. --cases 4 --repeat 5 --models vc,ccsub or tdcr's options as a
 # scene file's solver object: --solver '{"rk4_tip_tolerance": 1e-8, "rk4_steps": 1, "rk4_max_step": 0.008}'.
-# Environment: BUILD_DIR (default build; configured with -DTDCR_PAPER_CODE_DIR added, Release),
+# Environment: BUILD_DIR (default build; configured with -DTDCR_PAPER_CODE_DIR added, Release; the
+# option stays in its cache until -DTDCR_PAPER_CODE_DIR= clears it),
 # JOBS (default 2). Only bench_side_by_side and what it links are built. Paths other than
 # PAPER_CODE_DIR are taken from the repository's root.
 # The load average before and after goes to OUT_DIR/side_by_side_load.txt (and into the tables'
-# first lines): other jobs on the machine slow both codes alike, since their solves alternate,
-# but a run alone on the machine is the cleaner measurement.
+# first lines). The two codes' solves alternate, but other jobs preempt the paper code's long
+# solves more than tdcr's short ones: compare the wall-time and CPU-time speed-ups, and prefer a
+# run alone on the machine.
 set -euo pipefail
 if [ $# -lt 1 ] || [ ! -d "$1" ]; then
-  sed -n '2,21p' "$0"
+  sed -n '2,23p' "$0"
   exit 2
 fi
 paper=$(cd "$1" && pwd)
