@@ -1,16 +1,62 @@
-// Shared helpers of the benchmark executables: timing of repeated solves, CSV output, progress.
+// Shared helpers of the benchmark executables: timing of repeated solves, CSV output, progress,
+// the loaded cases of the paper code's reference data, the machine stamp of a run.
 #pragma once
+
+#include <time.h>  // clock_gettime, CLOCK_THREAD_CPUTIME_ID
 
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <ctime>
 #include <fstream>
+#include <limits>
+#include <map>
+#include <sstream>
+#include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "tdcr/models/static_model.hpp"
 
 namespace tdcr::bench {
+
+/// Median of the values (NaN if there are none).
+inline double median(std::vector<double> v) {
+  if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
+  std::sort(v.begin(), v.end());
+  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+}
+
+/// Wall time (us) of one call of `f`.
+template <typename F>
+double wall_us(F&& f) {
+  const auto t0 = std::chrono::steady_clock::now();
+  f();
+  return std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count();
+}
+
+/// CPU time (us) the calling thread has used so far.
+inline double thread_cpu_us() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return 1e6 * double(t.tv_sec) + 1e-3 * double(t.tv_nsec);
+}
+
+/// Wall time and the calling thread's CPU time (us) of one call. The CPU time leaves out the
+/// time other jobs on the machine hold the core; the wall time does not.
+struct CallTime {
+  double wall_us = 0.0, cpu_us = 0.0;
+};
+
+template <typename F>
+CallTime time_call(F&& f) {
+  CallTime t;
+  const double c0 = thread_cpu_us();
+  t.wall_us = wall_us(f);
+  t.cpu_us = thread_cpu_us() - c0;
+  return t;
+}
 
 /// Median and minimum wall time (us) of `repeat` solves of one model from the same initial guess
 /// (no warm start), on one reused workspace, plus the last solution.
@@ -25,15 +71,10 @@ inline Timing time_solves(const StaticModel& model, ModelWorkspace& ws, const Mo
                           const SolverOptions& options, int repeat, const Solution* warm = nullptr) {
   std::vector<double> t;
   Timing out;
-  for (int i = 0; i < repeat; ++i) {
-    const auto t0 = std::chrono::steady_clock::now();
-    out.last = solve(model, ws, input, options, warm);
-    t.push_back(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
-  }
-  std::sort(t.begin(), t.end());
+  for (int i = 0; i < repeat; ++i) t.push_back(wall_us([&] { out.last = solve(model, ws, input, options, warm); }));
   out.repeat = repeat;
-  out.min_us = t.front();
-  out.median_us = t.size() % 2 ? t[t.size() / 2] : 0.5 * (t[t.size() / 2 - 1] + t[t.size() / 2]);
+  out.min_us = *std::min_element(t.begin(), t.end());
+  out.median_us = median(t);
   return out;
 }
 
@@ -41,6 +82,14 @@ inline Timing time_solves(const StaticModel& model, ModelWorkspace& ws, const Mo
 inline Timing time_solves(const StaticModel& model, const Scene& scene, int repeat, const Solution* warm = nullptr) {
   auto ws = model.make_workspace();
   return time_solves(model, *ws, scene.input(), scene.solver, repeat, warm);
+}
+
+/// The models of a comma-separated list of names (`vc,ccsub,vcref,prb`: a --models argument).
+inline std::vector<ModelKind> parse_models(const std::string& list) {
+  std::vector<ModelKind> out;
+  std::stringstream in(list);
+  for (std::string name; std::getline(in, name, ',');) out.push_back(parse_model_kind(name));
+  return out;
 }
 
 /// A CSV file with a header row; rows are written as they come (a sweep cut short keeps its rows).
@@ -68,6 +117,114 @@ inline void progress(const std::string& what, int done, int total) {
   std::fprintf(stderr, "\r%-60s %4d/%-4d", what.c_str(), done, total);
   if (done == total) std::fprintf(stderr, "\n");
   std::fflush(stderr);
+}
+
+// ---- the paper code's reference data (benchmarks/data) ---------------------------------------
+
+/// A CSV file of benchmarks/data as rows of named fields ('#' lines are comments). TDCR_SOURCE_DIR:
+/// the benchmark targets define it.
+inline std::vector<std::map<std::string, std::string>> read_data_csv(const std::string& name) {
+  const std::string path = std::string(TDCR_SOURCE_DIR) + "/benchmarks/data/" + name;
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot read " + path);
+  std::vector<std::string> header;
+  std::vector<std::map<std::string, std::string>> rows;
+  std::string line;
+  auto split = [](const std::string& s) {
+    std::vector<std::string> v;
+    std::stringstream ss(s);
+    std::string x;
+    while (std::getline(ss, x, ',')) v.push_back(x);
+    return v;
+  };
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    if (header.empty()) {
+      header = split(line);
+      continue;
+    }
+    const auto v = split(line);
+    std::map<std::string, std::string> r;
+    for (size_t i = 0; i < header.size() && i < v.size(); ++i) r[header[i]] = v[i];
+    rows.push_back(r);
+  }
+  return rows;
+}
+
+/// The paper's name of a model, as in the reference data's `model` column.
+inline std::string paper_name(ModelKind k) {
+  switch (k) {
+    case ModelKind::VC: return "VC";
+    case ModelKind::CCsub: return "CCsub";
+    case ModelKind::VCref: return "VCref";
+    case ModelKind::PRB: return "PRB";
+    default: return to_string(k);
+  }
+}
+
+/// One model's row of benchmarks/data/paper_code_cases_timing.csv: the paper's code on a loaded
+/// case (its flag, squared residual, tip, and the stored times of 3 cold solves).
+struct PaperResult {
+  bool converged = false;
+  double residual = std::numeric_limits<double>::quiet_NaN();
+  double median_us = std::numeric_limits<double>::quiet_NaN();
+  double min_us = std::numeric_limits<double>::quiet_NaN();
+  Vec3 tip = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
+};
+
+/// A loaded case of benchmarks/data/paper_code_cases_inputs.csv (paper robot with n disks per
+/// segment, tensions T1..T4, tip force in the base frame) and the paper code's stored results of
+/// it per model (VC, CCsub, VCref, PRB).
+struct LoadedCase {
+  int id = 0, n = 0;
+  ModelInput input;
+  std::map<ModelKind, PaperResult> paper;
+};
+
+/// The 60 loaded cases, by case id.
+inline std::vector<LoadedCase> loaded_cases() {
+  std::map<int, LoadedCase> by_id;
+  for (const auto& r : read_data_csv("paper_code_cases_inputs.csv")) {
+    LoadedCase& c = by_id[std::stoi(r.at("case_id"))];
+    c.id = std::stoi(r.at("case_id"));
+    c.n = std::stoi(r.at("n"));
+    c.input.actuation.kind = Actuation::Kind::Tensions;
+    c.input.actuation.values = {std::stod(r.at("T1")), std::stod(r.at("T2")), std::stod(r.at("T3")),
+                                std::stod(r.at("T4"))};
+    c.input.loads.tip_force = Vec3(std::stod(r.at("Fx")), std::stod(r.at("Fy")), std::stod(r.at("Fz")));
+  }
+  for (const auto& r : read_data_csv("paper_code_cases_timing.csv")) {
+    LoadedCase& c = by_id.at(std::stoi(r.at("case_id")));
+    for (ModelKind k : {ModelKind::VC, ModelKind::CCsub, ModelKind::VCref, ModelKind::PRB}) {
+      if (paper_name(k) != r.at("model")) continue;
+      PaperResult& p = c.paper[k];
+      p.converged = r.at("converged") == "1";
+      p.residual = std::stod(r.at("residual"));
+      p.median_us = std::stod(r.at("median_us"));
+      p.min_us = std::stod(r.at("min_us"));
+      p.tip = Vec3(std::stod(r.at("tip_x")), std::stod(r.at("tip_y")), std::stod(r.at("tip_z")));
+    }
+  }
+  std::vector<LoadedCase> out;
+  for (auto& [id, c] : by_id) out.push_back(std::move(c));
+  return out;
+}
+
+/// The first line of a run's CSV files: "# machine: <cpu>, <cores> cores; date: <UTC>".
+inline std::string machine_stamp() {
+  std::string cpu = "unknown";
+  std::ifstream in("/proc/cpuinfo");
+  std::string line;
+  while (std::getline(in, line))
+    if (line.rfind("model name", 0) == 0) {
+      cpu = line.substr(line.find(':') + 2);
+      break;
+    }
+  const std::time_t now = std::time(nullptr);
+  char date[32];
+  std::strftime(date, sizeof date, "%Y-%m-%dT%H:%MZ", std::gmtime(&now));
+  return "# machine: " + cpu + ", " + std::to_string(std::thread::hardware_concurrency()) + " cores; date: " + date +
+         "\n";
 }
 
 }  // namespace tdcr::bench

@@ -37,7 +37,6 @@
 // subset of vc, ccsub, vcref, prb (for focused runs; benchmarks/run_all.sh runs all four). --quick = --cases 2 --repeat 1 --steps 20 (the ctest smoke run).
 #include <chrono>
 #include <cmath>
-#include <ctime>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -46,7 +45,6 @@
 #include <map>
 #include <optional>
 #include <sstream>
-#include <thread>
 
 #include "bench_common.hpp"
 #include "tdcr/core/error.hpp"
@@ -73,84 +71,9 @@ struct Settings {
 
 // ---- data ------------------------------------------------------------------------------------
 
-// A CSV file of benchmarks/data as rows of named fields ('#' lines are comments).
-std::vector<std::map<std::string, std::string>> read_csv(const std::string& name) {
-  const std::string path = std::string(TDCR_SOURCE_DIR) + "/benchmarks/data/" + name;
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error("cannot read " + path);
-  std::vector<std::string> header;
-  std::vector<std::map<std::string, std::string>> rows;
-  std::string line;
-  auto split = [](const std::string& s) {
-    std::vector<std::string> v;
-    std::stringstream ss(s);
-    std::string x;
-    while (std::getline(ss, x, ',')) v.push_back(x);
-    return v;
-  };
-  while (std::getline(in, line)) {
-    if (line.empty() || line[0] == '#') continue;
-    if (header.empty()) {
-      header = split(line);
-      continue;
-    }
-    const auto v = split(line);
-    std::map<std::string, std::string> r;
-    for (size_t i = 0; i < header.size() && i < v.size(); ++i) r[header[i]] = v[i];
-    rows.push_back(r);
-  }
-  return rows;
-}
-
-std::string paper_name(ModelKind k) {
-  switch (k) {
-    case ModelKind::VC: return "VC";
-    case ModelKind::CCsub: return "CCsub";
-    case ModelKind::VCref: return "VCref";
-    case ModelKind::PRB: return "PRB";
-    default: return to_string(k);
-  }
-}
-
-struct PaperResult {
-  bool converged = false;
-  double residual = kNaN, median_us = kNaN, min_us = kNaN;
-  Vec3 tip = Vec3::Constant(kNaN);
-};
-
-struct Case {
-  int id = 0, n = 0;
-  ModelInput input;
-  std::map<ModelKind, PaperResult> paper;
-};
-
-std::vector<Case> load_cases() {
-  std::map<int, Case> by_id;
-  for (const auto& r : read_csv("paper_code_cases_inputs.csv")) {
-    Case& c = by_id[std::stoi(r.at("case_id"))];
-    c.id = std::stoi(r.at("case_id"));
-    c.n = std::stoi(r.at("n"));
-    c.input.actuation.kind = Actuation::Kind::Tensions;
-    c.input.actuation.values = {std::stod(r.at("T1")), std::stod(r.at("T2")), std::stod(r.at("T3")),
-                                std::stod(r.at("T4"))};
-    c.input.loads.tip_force = Vec3(std::stod(r.at("Fx")), std::stod(r.at("Fy")), std::stod(r.at("Fz")));
-  }
-  for (const auto& r : read_csv("paper_code_cases_timing.csv")) {
-    Case& c = by_id.at(std::stoi(r.at("case_id")));
-    for (ModelKind k : kModels) {
-      if (paper_name(k) != r.at("model")) continue;
-      PaperResult& p = c.paper[k];
-      p.converged = r.at("converged") == "1";
-      p.residual = std::stod(r.at("residual"));
-      p.median_us = std::stod(r.at("median_us"));
-      p.min_us = std::stod(r.at("min_us"));
-      p.tip = Vec3(std::stod(r.at("tip_x")), std::stod(r.at("tip_y")), std::stod(r.at("tip_z")));
-    }
-  }
-  std::vector<Case> out;
-  for (auto& [id, c] : by_id) out.push_back(std::move(c));
-  return out;
-}
+// The loaded cases and the paper code's stored results (benchmarks/data, bench_common.hpp).
+using Case = bench::LoadedCase;
+using bench::PaperResult;
 
 // ---- options ---------------------------------------------------------------------------------
 
@@ -239,11 +162,7 @@ double tip_error(const Solution& s, const std::optional<Solution>& ref) {
   return (s.tip().p - ref->tip().p).norm();
 }
 
-double median(std::vector<double> v) {
-  if (v.empty()) return kNaN;
-  std::sort(v.begin(), v.end());
-  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
-}
+using bench::median;
 
 // Calibration: every candidate solved once per case; the chosen one is the cheapest whose tip error
 // is within the tolerance on every case the reference solves.
@@ -296,7 +215,7 @@ struct Tally {
 };
 
 void loaded(const Settings& cfg, std::map<ModelKind, Candidate>& matched, const std::string& stamp) {
-  std::vector<Case> cases = load_cases();
+  std::vector<Case> cases = bench::loaded_cases();
   if (static_cast<int>(cases.size()) > cfg.cases) cases.resize(cfg.cases);
   bench::Csv csv(cfg.out + "/loaded.csv",
                  stamp + "case_id,model,options,n,tdcr_median_us,tdcr_min_us,paper_median_us,paper_min_us,speedup,"
@@ -477,22 +396,6 @@ void trajectory(const Settings& cfg, const std::map<ModelKind, Candidate>& match
   }
 }
 
-std::string machine_stamp() {
-  std::string cpu = "unknown";
-  std::ifstream in("/proc/cpuinfo");
-  std::string line;
-  while (std::getline(in, line))
-    if (line.rfind("model name", 0) == 0) {
-      cpu = line.substr(line.find(':') + 2);
-      break;
-    }
-  const std::time_t now = std::time(nullptr);
-  char date[32];
-  std::strftime(date, sizeof date, "%Y-%m-%dT%H:%MZ", std::gmtime(&now));
-  return "# machine: " + cpu + ", " + std::to_string(std::thread::hardware_concurrency()) + " cores; date: " + date +
-         "\n";
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -521,9 +424,7 @@ int main(int argc, char** argv) {
       } else if (a == "--traj-tol") {
         cfg.traj_tol = number(i);
       } else if (a == "--models" && i + 1 < argc) {
-        kModels.clear();
-        std::stringstream list(argv[++i]);
-        for (std::string name; std::getline(list, name, ',');) kModels.push_back(parse_model_kind(name));
+        kModels = bench::parse_models(argv[++i]);
       } else {
         throw std::invalid_argument(a);
       }
@@ -535,7 +436,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   std::filesystem::create_directories(cfg.out);
-  const std::string stamp = machine_stamp();
+  const std::string stamp = bench::machine_stamp();
   std::map<ModelKind, Candidate> matched;
   try {
     loaded(cfg, matched, stamp);

@@ -20,10 +20,7 @@
 // n = 10, the +y case, R = 1 (the ctest smoke run). --rk4-tip-tol M: every model solves with
 // SolverOptions::tip_tolerance = M instead of the default (1e-7 of the robot's length); the
 // output file is then DIR/soft_tol.csv.
-#include <time.h>
-
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -72,17 +69,7 @@ struct Row {
 };
 
 /// CPU time of this thread (us): on a shared machine it is what the solve cost, wall time is not.
-double thread_cpu_us() {
-  timespec t{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return 1e6 * double(t.tv_sec) + 1e-3 * double(t.tv_nsec);
-}
-
-double median(std::vector<double> v) {
-  if (v.empty()) return kNaN;
-  std::sort(v.begin(), v.end());
-  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
-}
+using bench::median;
 
 }  // namespace
 
@@ -165,12 +152,12 @@ int main(int argc, char** argv) {
             std::vector<double> wall, cpu;
             Solution last;
             for (int k = 0; k < repeat; ++k) {
-              const double c0 = thread_cpu_us();
-              const auto t0 = std::chrono::steady_clock::now();
-              last = solve(*model, *ws, input,
-                           kind == ModelKind::VC || kind == ModelKind::VCref ? integrating : scene.solver);
-              wall.push_back(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
-              cpu.push_back(thread_cpu_us() - c0);
+              const bench::CallTime t = bench::time_call([&] {
+                last = solve(*model, *ws, input,
+                             kind == ModelKind::VC || kind == ModelKind::VCref ? integrating : scene.solver);
+              });
+              wall.push_back(t.wall_us);
+              cpu.push_back(t.cpu_us);
             }
             r.status = to_string(last.summary.termination);
             r.steps = last.summary.continuation_steps;

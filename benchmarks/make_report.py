@@ -289,6 +289,49 @@ if os.path.exists(os.path.join(res, "soft.csv")):
                     f"{f(r['ratio_to_fastest'])}x | {'-' if r['model'] == 'vcref' else metres(dist)} |")
     tables["soft_table"] = "\n".join(rows)
 
+# Side by side with the paper's code (bench_side_by_side, benchmarks/side_by_side.sh): its own
+# markdown summary, table and run line; the load before and after from side_by_side_load.txt.
+tables["side_by_side"] = "Not run for these results: see the command above."
+tables["side_by_side_note"] = ""
+if os.path.exists(os.path.join(res, "side_by_side_summary.md")):
+    with open(os.path.join(res, "side_by_side_summary.md")) as fh:
+        table, _, run = fh.read().strip().rpartition("\n\n")
+    tables["side_by_side"] = table + "\n\nRun: " + run
+    load = os.path.join(res, "side_by_side_load.txt")
+    notes = []
+    cpu = run.split(";")[0].replace("machine: ", "").strip()
+    if "EPYC" not in cpu:
+        notes.append("The paper code's stored times were recorded on a 2 vCPU AMD EPYC "
+                     "(`benchmarks/data/paper_code_cases_timing.csv`); this run's machine has another CPU "
+                     f"({cpu}), so \"paper's code / its stored times\" compares the machines as well as their load.")
+    if os.path.exists(load):
+        with open(load) as fh:
+            lines = [line.strip() for line in fh if "load average" in line and not line.startswith("top")]
+        sbs_rows = read("side_by_side.csv")
+
+        def ratio(code):  # wall over CPU time of a case's solves (medians of R), mean over the rows
+            v = [float(r[f"{code}_median_us"]) / float(r[f"{code}_cpu_median_us"]) for r in sbs_rows]
+            return sum(v) / len(v)
+
+        # 1-minute load averages before and after; the benchmark itself keeps one core busy.
+        ones = [float(x.split("load average:")[1].split(",")[0]) for x in lines]
+        busy = bool(ones) and (ones[0] > 0.5 or max(ones) > 1.5)
+        text = ("The machine (2 cores) is shared with other engineers' jobs. `uptime` before and after the run: "
+                + "; ".join(f"`{x}`" for x in lines) + ". The benchmark itself keeps one core busy; "
+                + ("other jobs ran beside it for some or all of the run (the busiest processes are in "
+                   "`side_by_side_load.txt`)." if busy else "the load shows no other job beside it."))
+        if sbs_rows:
+            paper, tdcr = ratio("paper"), ratio("tdcr")
+            text += (f" Wall time over CPU time of a case, mean over the cases and models: the paper's code "
+                     f"{f(paper)}, tdcr {f(tdcr)}"
+                     + (": the paper code's long solves lost more wall time to other jobs than tdcr's short ones, "
+                        "so the wall-time speed-ups lean above the CPU-time ones." if paper > 1.05 * tdcr else "."))
+        notes.append(text)
+    notes.append("Raw tables: `docs/benchmark-results/side_by_side.csv` (every case and model), "
+                 "`side_by_side_summary.csv`, `side_by_side_load.txt` (uptime and the busiest processes before "
+                 "and after).")
+    tables["side_by_side_note"] = "\n\n".join(notes)
+
 with open(os.path.join(res, "machine.txt")) as fh:
     tables["machine"] = "; ".join(line.lstrip("# ").rstrip() for line in fh if line.strip())
 
