@@ -286,7 +286,9 @@ TEST(SweepRun, ThreadsDoNotChangeTheRows) {
   EXPECT_EQ(tdcr::run_sweep(spec, one, o).samples_solved, 64u);
   o.threads = 2;
   tdcr::run_sweep(spec, two, o);
-  expect_same_rows(one, two);
+  // Two threads split the samples, so warm starts differ: each answer within the default tip
+  // tolerance (1e-8 m here), so within twice it of the other.
+  expect_same_rows(one, two, 2e-8);
   const auto rows = rows_of(one);
   ASSERT_EQ(rows.size(), 128u);  // 64 samples x 2 models, in sample order
   for (std::size_t r = 0; r < rows.size(); ++r) {
