@@ -91,6 +91,12 @@ class ModelProblem {
     (void)load_factor;
     return Stability{};
   }
+  /// Whether the automatic stability rule (SolverOptions::stability, StabilityCheck::Automatic)
+  /// tests this problem's answers for their external loads alone, without a loading path: where
+  /// the test costs a fraction of a cold solve (VC, VCref: shots on a coarse mesh). Default false:
+  /// CCsub's and PRB's dense eigen-solve costs 3 to 20 times their cold loaded solve, so their
+  /// answers are tested when a path reached them (or when asked); docs/models.md, "Stability".
+  virtual bool automatic_stability_under_loads() const { return false; }
   /// Called when loading from rest stopped short of full load, after extract() at x, the
   /// equilibrium at the load factor reached (the system's parameter): true and a one-line reason
   /// if the stop is a physical limit (a tendon with curvature x offset >= threshold, see

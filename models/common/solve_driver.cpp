@@ -30,6 +30,37 @@ void check_warm_start(const StaticModel& model, const Solution& warm) {
                      "a warm start must come from the same model of the same robot (StaticModel::fingerprint)");
 }
 
+// --- Which answers get their stability tested (SolverOptions::stability). ---
+
+// External loads: a tip force or moment, or gravity.
+bool externally_loaded(const Loads& loads) {
+  return !loads.tip_force.isZero(0.0) || !loads.tip_moment.isZero(0.0) || !loads.gravity.isZero(0.0);
+}
+
+// Whether an answer reached by a loading path or not (`by_path`) is tested: the automatic rule
+// tests the answers of loading paths (from rest, snaps, a warm start's input path) and, where
+// the model's test is cheap (`loads_count`: ModelProblem::automatic_stability_under_loads), of
+// loaded scenes; not plain unloaded direct or warm solves.
+bool wants_stability(StabilityCheck check, const ModelInput& input, bool by_path, bool loads_count) {
+  switch (check) {
+    case StabilityCheck::Always: return true;
+    case StabilityCheck::Never: return false;
+    default: return by_path || (loads_count && externally_loaded(input.loads));
+  }
+}
+
+// Whether a Solution's answer was reached along a path: continuation steps (the loading path
+// from rest, a warm start's input path) or path events (folds, snaps).
+bool reached_by_path(const Solution& sol) {
+  return sol.summary.continuation_steps > 0 || !sol.path_events.empty();
+}
+
+// The rule resolved for a solve whose answer another solve's path reached (`by_path`): Always or
+// Never, so that the solve from that answer (a direct warm solve) keeps the verdict's rule.
+StabilityCheck resolved_stability(StabilityCheck check, const ModelInput& input, bool by_path, bool loads_count) {
+  return wants_stability(check, input, by_path, loads_count) ? StabilityCheck::Always : StabilityCheck::Never;
+}
+
 // Direct Newton solve from x, with one retry from the problem's alternative cold guess. A cold
 // solve freezes the Jacobian near the solution where the problem allows it (and the options
 // allow Jacobian reuse at all). attempt_cap > 0 bounds the Newton iterations of each attempt
@@ -282,13 +313,20 @@ void add_work(const SolverSummary& from, SolverSummary& to) {
 // first refinement halves the steps; later ones jump by as many halvings as the last estimate
 // says are needed (its error / 16 per halving), so that a tight tolerance does not solve every
 // mesh on the way.
+// Its answer's stability is not tested here: `test` says whether the rule asks for it (decided by
+// the first solve's path: the refined answers are direct warm solves), `last` gives the options
+// of the solve that returned it.
 Solution solve_refined(const StaticModel& model, ModelWorkspace& workspace, const ModelInput& input,
-                       const SolverOptions& options, const Solution* warm_start) {
+                       const SolverOptions& options, const Solution* warm_start, SolverOptions& last, bool& test) {
   const auto t0 = std::chrono::steady_clock::now();
   const double tol = options.rk4_tip_tolerance;
   SolverOptions o = options;
   o.rk4_tip_tolerance = 0.0;
+  o.stability = StabilityCheck::Never;
+  last = o;
   Solution coarse = tdcr::solve(model, workspace, input, o, warm_start);
+  // (VC and VCref only: their tests count under loads alone.)
+  test = coarse.converged() && wants_stability(options.stability, input, reached_by_path(coarse), true);
   if (!coarse.converged() || coarse.summary.integrator != "rk4" || coarse.disk_frames.empty()) return coarse;
   SolverSummary work = coarse.summary;
   const std::vector<PathEvent> events = coarse.path_events;
@@ -301,6 +339,7 @@ Solution solve_refined(const StaticModel& model, ModelWorkspace& workspace, cons
     halvings += next;
     ++solves;
     Solution fine = tdcr::solve(model, workspace, input, o, &coarse);
+    last = o;
     add_work(fine.summary, work);
     SolverSummary& sum = fine.summary;
     sum.iterations = work.iterations;
@@ -358,7 +397,7 @@ Solution solve_with_coarse_path(const StaticModel& model, ModelWorkspace& worksp
   coarse_options.rk4_steps = std::min(options.rk4_steps, SolverOptions::kCoarsePathRk4Steps);
   coarse_options.rk4_max_step = std::max(options.rk4_max_step, SolverOptions::kCoarsePathRk4MaxStep);
   coarse_options.coarse_loading_path = false;
-  coarse_options.stability = false;
+  coarse_options.stability = StabilityCheck::Never;
   coarse_options.differential_kinematics = false;
   const Solution coarse = tdcr::solve(model, workspace, input, coarse_options, nullptr);
   if (!coarse.converged()) {
@@ -367,6 +406,9 @@ Solution solve_with_coarse_path(const StaticModel& model, ModelWorkspace& worksp
   }
   SolverOptions fine_options = options;
   fine_options.coarse_loading_path = false;
+  // The answer is the coarse path's: the warm solve from it tests it by the path's rule.
+  // (VC and VCref only: their tests count under loads alone.)
+  fine_options.stability = resolved_stability(options.stability, input, reached_by_path(coarse), true);
   Solution fine = tdcr::solve(model, workspace, input, fine_options, &coarse);
   if (!fine.converged()) {
     failure = "the solve on the requested mesh from the coarse path's answer failed: " + fine.summary.message;
@@ -388,8 +430,20 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
   const auto t0 = std::chrono::steady_clock::now();
   options.validate();
   if (options.rk4_tip_tolerance > 0.0 && options.integrator == IntegratorKind::FixedStepRK4 &&
-      (model.kind() == ModelKind::VC || model.kind() == ModelKind::VCref))
-    return solve_refined(model, workspace, input, options, warm_start);
+      (model.kind() == ModelKind::VC || model.kind() == ModelKind::VCref)) {
+    SolverOptions last;
+    bool test = false;
+    Solution sol = solve_refined(model, workspace, input, options, warm_start, last, test);
+    if (sol.converged() && test) {
+      // The last answer tested: its problem bound again (as that solve left it), at its unknowns.
+      detail::ModelProblem& P = detail::needs_displacement_solve(model, input)
+                                    ? detail::bind_displacement_problem(model, workspace, input, last, &sol, nullptr)
+                                    : model.bind(workspace, input, last);
+      if (P.system()) sol.stability = P.stability(sol.unknowns, 1.0);
+      sol.summary.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    }
+    return sol;
+  }
   input.validate(model.robot());
   model.check_input(input);
   if (!workspace.belongs_to(model))
@@ -412,10 +466,10 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
     else start_failure = "the tension solve at the linear guess's tensions failed: " + start.summary.message;
     start_work = start.summary;
   }
-  // One solve of the bound problem; `from`: the displacement solve's tension start, if any.
-  const auto solve_from = [&](const Solution* from) -> Solution {
+  // One solve of the bound problem; `from_tensions`: the displacement solve's tension start, if any.
+  const auto solve_from = [&](const Solution* from_tensions) -> Solution {
     const auto bind_problem = [&]() -> detail::ModelProblem& {
-      return displacement ? detail::bind_displacement_problem(model, workspace, input, options, warm_start, from)
+      return displacement ? detail::bind_displacement_problem(model, workspace, input, options, warm_start, from_tensions)
                           : model.bind(workspace, input, options);
     };
     detail::ModelProblem* bound = &bind_problem();
@@ -451,6 +505,7 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
       sum.unknowns = sys->size();
       sum.termination = TerminationType::Infeasible;
       sum.message = impossible + " (the robot at rest returned, nothing solved)";
+      sol.stability.method = kStabilityNotChecked;
       Eigen::VectorXd f(sys->size());
       sol.unknowns = x;
       P.extract(x, P.final_residual(x, f), sol);
@@ -517,7 +572,12 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
         history.guess.swap(unpredicted);
         history.unknowns = x;
       }
-      if (sum.converged() && options.stability) sol.stability = P.stability(x, 1.0);
+      // The answer reached along a path: this solve's (continuation steps, path events) or, for
+      // displacement input, its tension start's.
+      const bool by_path = reached_by_path(sol) || (from_tensions && reached_by_path(*from_tensions));
+      if (sum.converged() && wants_stability(options.stability, input, by_path, P.automatic_stability_under_loads()))
+        sol.stability = P.stability(x, 1.0);
+      else sol.stability.method = kStabilityNotChecked;  // short: no allocation
     }
     if (sol.converged() && options.differential_kinematics && !displacement)
       add_differential_kinematics(
