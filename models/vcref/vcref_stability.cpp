@@ -16,7 +16,8 @@
 //
 // Each rod's contribution comes from its transfer matrix: the variation of its end (pose, wrench)
 // with its start (pose, wrench), [A B; C D], by forward differences (12 shots per interval, 6
-// for the first, whose start pose is the clamp). Its start wrench follows from both end poses,
+// for the first, whose start pose is the clamp; by the integrator the caller gives: the test's
+// coarse RK4 mesh when the solve integrates with RK4, common/stability_mesh.hpp). Its start wrench follows from both end poses,
 // dw_j = B^-1 (dg_j+1 - A dg_j), and its end wrench dv_j+1 = C dg_j + D dw_j; disk i receives
 // +dv_i - dw_i. The tendon wrenches are differentiated by forward differences of
 // tendon::disk_wrench in the poses of the disks i-1, i, i+1 (no integration). Rows of moments are
