@@ -189,6 +189,9 @@ Stability conjugate_point_test(VcWorkspace::Impl& W, const Vec6& base, double lo
   // error control makes a shot restarted at a disk differ from it by its tolerance, so the
   // interval's own unperturbed shot is taken.
   const bool from_sweep = W.stability_integrator != nullptr;
+  // Without weights the rotation columns follow from the wrench columns (below): 6 shots per
+  // interval instead of 9.
+  const bool rotation_invariant = !W.loads.has_gravity();
   // The scaled coordinates (pose, cut wrench) of a state at the cut distal of disk j.
   auto coordinates = [&](int j, const double* state, const Frame& ref, const Vec6& ref_wrench) {
     const Mat3 R = cosserat::rotation(state);
@@ -240,7 +243,7 @@ Stability conjugate_point_test(VcWorkspace::Impl& W, const Vec6& base, double lo
     const Vec6 w_start = nominal[k];
     in.setIdentity();
     end.setIdentity();
-    for (int c = 3; c < 12; ++c) {
+    for (int c = rotation_invariant ? 6 : 3; c < 12; ++c) {
       // Natural scales of the interval: 1 (rotation), EI / h^2 (force), EI / h (moment).
       y = y0;
       double step = rel;
@@ -261,6 +264,22 @@ Stability conjugate_point_test(VcWorkspace::Impl& W, const Vec6& base, double lo
         return out;
       }
       end.col(c) = coordinates(k + 1, y.data(), stop, w_stop) / step;
+    }
+    if (rotation_invariant) {
+      // Without weights the interval is invariant under a rotation Q of its whole start state
+      // about the start point, (R, n, m) -> (Q R, Q n, Q m): its end state turns alike, the
+      // position about that point, and so do the cut wrenches. A rotation w of R alone is that
+      // rigid rotation less the wrench perturbation (w x n, w x m), whose response is the wrench
+      // columns'; so the rotation columns need no shots.
+      for (int j = 0; j < 3; ++j) {
+        const Vec3 e = Vec3::Unit(j);
+        Vec12 rigid_in, rigid_end;
+        rigid_in << Vec3::Zero(), e, e.cross(w_start.head<3>()) / Fs, e.cross(w_start.tail<3>()) / Ms;
+        rigid_end << e.cross(stop.p) / L, e, e.cross(w_stop.head<3>()) / Fs, e.cross(w_stop.tail<3>()) / Ms;
+        const Vec3 dn = e.cross(samples[k].n), dm = e.cross(samples[k].m);
+        in.col(3 + j) = rigid_in - in.middleCols<3>(6) * dn - in.middleCols<3>(9) * dm;
+        end.col(3 + j) = rigid_end - end.middleCols<3>(6) * dn - end.middleCols<3>(9) * dm;
+      }
     }
     // The transfer matrix of the interval in the scaled coordinates is T = end in^-1; `in` is
     // block lower triangular (a wrench perturbation leaves the start pose as it is), [P 0; Q R].
