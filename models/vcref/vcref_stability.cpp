@@ -244,7 +244,9 @@ Stability disk_pose_stability(const VcrefShooting& problem, bvp::Integrator& int
   BlockTridiagonal K(N);
   auto block = [&](int i, int k) -> Mat6& { return K.at(i - 1, k - 1); };
 
-  // The rods: transfer matrices, integrated from p = 0 (the free rod is translation invariant).
+  // The rods: transfer matrices, integrated from p = 0 (the free rod is translation invariant;
+  // without the backbone's weight rotation invariant too, so 6 shots per interval).
+  const bool rotation_invariant = !d.section.gravity;
   std::vector<Frame> frames(N + 1);
   State y0, nominal, y;
   Eigen::Matrix<double, 12, 12> T;
@@ -271,6 +273,7 @@ Stability disk_pose_stability(const VcrefShooting& problem, bvp::Integrator& int
         T(c, c) = 1.0;
         continue;
       }
+      if (c < 6 && rotation_invariant) continue;  // below
       const double value = c < 6 ? 0.0 : y0[12 + c - 6];
       const double step = rel * std::max(std::abs(value), scale[c / 3]);
       y = y0;
@@ -280,6 +283,23 @@ Stability disk_pose_stability(const VcrefShooting& problem, bvp::Integrator& int
         return out;
       }
       T.col(c) = difference(y, nominal) / step;
+    }
+    if (j > 0 && rotation_invariant) {
+      // Without weights the free rod is invariant under a rotation Q of its whole start state
+      // about its start point, (R, n, m) -> (Q R, Q n, Q m): its end turns alike. A body rotation
+      // w of R alone is that rigid rotation, spatial Q = exp(R_0 w), less the wrench perturbation
+      // (Q n - n, Q m - m), whose response is the wrench columns'; so the rotation columns need
+      // no shots.
+      const Mat3 R0 = cosserat::rotation(y0.data()), Re = cosserat::rotation(nominal.data());
+      const Vec3 pe = cosserat::position(nominal.data()), ne = cosserat::force(nominal.data()),
+                 me = cosserat::moment(nominal.data()), n0 = cosserat::force(y0.data()),
+                 m0 = cosserat::moment(y0.data());
+      for (int c = 3; c < 6; ++c) {
+        const Vec3 w = R0.col(c - 3);  // the spatial rotation of body rotation e_(c-3)
+        Eigen::Matrix<double, 12, 1> rigid;
+        rigid << w.cross(pe), Re.transpose() * w, w.cross(ne), w.cross(me);
+        T.col(c) = rigid - T.middleCols<3>(6) * w.cross(n0) - T.middleCols<3>(9) * w.cross(m0);
+      }
     }
     // A Kirchhoff rod's end pose does not see an axial force (B is singular when straight): the
     // compliance of shear and extension is added as a penalty on the constrained directions
