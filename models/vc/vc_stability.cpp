@@ -167,9 +167,9 @@ Stability conjugate_point_test(VcWorkspace::Impl& W, const Vec6& base, double lo
   set_load_factor(W, load_factor);
   // Every shot of the test on the stability mesh (coarse with RK4, the solve's CVODE otherwise).
   bvp::Integrator& integ = W.stability_pass_integrator();
-  std::vector<Frame> frames;
-  std::vector<BackboneSample> samples;
-  std::vector<Vec6> nominal;
+  std::vector<Frame>& frames = W.stability_frames;
+  std::vector<BackboneSample>& samples = W.stability_samples;
+  std::vector<Vec6>& nominal = W.stability_wrench;
   if (!sweep(W, integ, base, Frame{}, frames, samples, nominal)) {
     out.method += "; the shot from the base failed";
     return out;
@@ -184,14 +184,17 @@ Stability conjugate_point_test(VcWorkspace::Impl& W, const Vec6& base, double lo
   const double rel = std::sqrt(std::max(std::numeric_limits<double>::epsilon(), integ.relative_noise()));
   const double undecided = std::max(kUndecided, 10.0 * rel);
   TendonRod& rod = *W.shot_rod;
-  Eigen::VectorXd y0(rod.dimension()), y1(rod.dimension()), y(rod.dimension());
+  Eigen::VectorXd &y0 = W.stability_y0, &y1 = W.stability_y1, &y = W.stability_y;
+  y0.resize(rod.dimension());
+  y1.resize(rod.dimension());
+  y.resize(rod.dimension());
   // With RK4 the unperturbed shot across an interval is the sweep's (the same steps); CVODE's
   // error control makes a shot restarted at a disk differ from it by its tolerance, so the
   // interval's own unperturbed shot is taken.
   const bool from_sweep = W.stability_integrator != nullptr;
   // Without weights the rotation columns follow from the wrench columns (below): 6 shots per
-  // interval instead of 9.
-  const bool rotation_invariant = !W.loads.has_gravity();
+  // interval instead of 9 (with RK4; CVODE keeps every shot, the reference test).
+  const bool rotation_invariant = from_sweep && !W.loads.has_gravity();
   // The scaled coordinates (pose, cut wrench) of a state at the cut distal of disk j.
   auto coordinates = [&](int j, const double* state, const Frame& ref, const Vec6& ref_wrench) {
     const Mat3 R = cosserat::rotation(state);

@@ -16,9 +16,11 @@
 //
 // Each rod's contribution comes from its transfer matrix: the variation of its end (pose, wrench)
 // with its start (pose, wrench), [A B; C D], by forward differences (9 shots per interval: the
-// position columns are the identity, the free rod being translation invariant; 6 for the first,
-// whose start pose is the clamp; by the integrator the caller gives: the test's coarse RK4 mesh
-// when the solve integrates with RK4, common/stability_mesh.hpp). Its start wrench follows from both end poses,
+// position columns are the identity, the free rod being translation invariant; with RK4 and
+// without the backbone's weight 6, the rotation columns following from the rod's rotation
+// invariance; 6 for the first, whose start pose is the clamp; by the integrator the caller
+// gives: the test's coarse RK4 mesh when the solve integrates with RK4,
+// common/stability_mesh.hpp). Its start wrench follows from both end poses,
 // dw_j = B^-1 (dg_j+1 - A dg_j), and its end wrench dv_j+1 = C dg_j + D dw_j; disk i receives
 // +dv_i - dw_i. The tendon wrenches are differentiated by forward differences of
 // tendon::disk_wrench in the poses of the disks i-1, i, i+1 (no integration). Rows of moments are
@@ -29,7 +31,9 @@
 // A Kirchhoff rod (no shear or extension) has a singular B when straight: its shear and
 // extension compliance is added as a penalty (stiff directions, inertia of the rest unchanged).
 //   margin = the smallest eigenvalue of the symmetric part of Ks,
-// by bisection on whether the block Cholesky factorisation of Ks - sigma I exists (O(N)); stable if
+// to 1e-4 relative: where Ks is positive definite from Lanczos on Ks^-1, the bound checked by
+// one block Cholesky factorisation (O(N) each), else by bisection on whether the block Cholesky
+// factorisation of Ks - sigma I exists; stable if
 // > 1e-6, unstable if < -1e-6, else undetermined (forward-difference noise). With Eq. 58 (disk
 // normal forces removed) and a tensioned tendon the loads are not conservative and K is not
 // symmetric; a positive definite symmetric part still excludes divergence (x' K x > 0 for every
@@ -245,8 +249,9 @@ Stability disk_pose_stability(const VcrefShooting& problem, bvp::Integrator& int
   auto block = [&](int i, int k) -> Mat6& { return K.at(i - 1, k - 1); };
 
   // The rods: transfer matrices, integrated from p = 0 (the free rod is translation invariant;
-  // without the backbone's weight rotation invariant too, so 6 shots per interval).
-  const bool rotation_invariant = !d.section.gravity;
+  // without the backbone's weight rotation invariant too, so 6 shots per interval with RK4;
+  // CVODE keeps every rotation shot, the reference test).
+  const bool rotation_invariant = !d.section.gravity && dynamic_cast<const bvp::Rk4Integrator*>(&integrator);
   std::vector<Frame> frames(N + 1);
   State y0, nominal, y;
   Eigen::Matrix<double, 12, 12> T;
@@ -333,6 +338,9 @@ Stability disk_pose_stability(const VcrefShooting& problem, bvp::Integrator& int
   const TendonRouting& active = problem.active();
   const double* tensions = problem.tensions().data();
   std::vector<Frame> moved_frames = frames;
+  std::vector<tendon::DiskWrench> unmoved(N + 1);  // every disk's tendon wrench at the answer
+  for (int i = 1; i <= N && !active.tendons.empty(); ++i)
+    if (problem.tendon_at(i)) unmoved[i] = tendon::disk_wrench(i, frames.data(), active, tensions, d.remove_normal);
   for (int k = 1; k <= N && !active.tendons.empty(); ++k) {
     for (int c = 0; c < 6; ++c) {
       const double step = rel * (c < 3 ? d.l_min : 1.0);
@@ -340,7 +348,7 @@ Stability disk_pose_stability(const VcrefShooting& problem, bvp::Integrator& int
       for (int i = std::max(1, k - 1); i <= std::min(N, k + 1); ++i) {
         if (!problem.tendon_at(i)) continue;
         const tendon::DiskWrench a = tendon::disk_wrench(i, moved_frames.data(), active, tensions, d.remove_normal);
-        const tendon::DiskWrench b = tendon::disk_wrench(i, frames.data(), active, tensions, d.remove_normal);
+        const tendon::DiskWrench& b = unmoved[i];
         block(i, k).col(c).head<3>() -= (a.force - b.force) / step;
         block(i, k).col(c).tail<3>() -= (a.moment - b.moment) / step;
       }
