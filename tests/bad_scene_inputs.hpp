@@ -139,6 +139,9 @@ inline std::vector<BadInput> bad_inputs() {
       {"LinearSolverUnknown", with("/solver", {{"linear_solver", "lu"}}), "solver.linear_solver", "\"lu\""},
       {"MaxIterationsFloat", with("/solver", {{"max_iterations", 1.5}}), "solver.max_iterations", "1.5"},
       {"ContinuationNumber", with("/solver", {{"continuation", 1}}), "solver.continuation", "1"},
+      {"StabilityWord", with("/solver", {{"stability", "always"}}), "solver.stability", "\"always\""},
+      {"StabilityNumber", with("/solver", {{"stability", 1}}), "solver.stability", "1"},
+      {"StabilityNull", with("/solver", {{"stability", nullptr}}), "solver.stability", "null"},
       // Unknown keys at every level, with a suggestion
       {"UnknownTopLevelKey", with("/modle", "vc"), "modle", "did you mean \"model\""},
       {"UnknownSegmentKey", with("/robot/segments/0/lenght", 0.05), "robot.segments[0].lenght",

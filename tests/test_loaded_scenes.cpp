@@ -79,7 +79,7 @@ Solution solve_cold(ModelKind kind, const Scene& scene) {
   const auto model = make_model(kind, scene.robot, scene.effects);
   const auto ws = model->make_workspace();
   SolverOptions opt = scene.solver;
-  opt.stability = true;
+  opt.stability = StabilityCheck::Always;
   return solve(*model, *ws, scene.input(), opt);
 }
 

@@ -325,7 +325,7 @@ TEST(PrbModel, ColdGuessShortensDirectSolves) {
 TEST(PrbModel, StabilityDoesNotDependOnTheBendingPlaneChart) {
   const double TM = paper::max_tension(paper::robot(5));
   Scene s = paper_scene(5, {0.6 * TM, 0, 0.3 * TM, 0}, Vec3(0.2, -0.3, -0.1));
-  s.solver.stability = true;
+  s.solver.stability = StabilityCheck::Always;
   const PrbModel model(s.robot, s.effects);
   auto ws = model.make_workspace();
   const Solution cold = tdcr::solve(model, *ws, s.input(), s.solver);

@@ -112,7 +112,7 @@ TEST(PathFollowing, IssueExampleBAllStaticModelsOnOneStableBranch) {
   const Scene scene = scene_file("issue12_b.json");
   const double length = 0.1;
   SolverOptions options = scene.solver;
-  options.stability = true;
+  options.stability = StabilityCheck::Always;
   // The fold located on the requested mesh (a coarse path's fold is 1.6e-4 of the load off here,
   // which the margins 0.05 % below it resolve; CoarseLoadingPathKeepsTheAnswer covers the default).
   options.coarse_loading_path = false;

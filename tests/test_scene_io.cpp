@@ -239,6 +239,22 @@ TEST(SceneIo, MinimalSceneTakesDefaults) {
   EXPECT_FALSE(s.robot.backbone.shear_modulus.has_value());
 }
 
+// solver.stability is "auto" (the default), true (every answer) or false (none), and is written
+// back the same way.
+TEST(SceneIo, StabilityIsAutoTrueOrFalse) {
+  EXPECT_EQ(tdcr::parse_scene(base_scene().dump()).solver.stability, tdcr::StabilityCheck::Automatic);
+  const std::pair<json, tdcr::StabilityCheck> cases[] = {{"auto", tdcr::StabilityCheck::Automatic},
+                                                         {true, tdcr::StabilityCheck::Always},
+                                                         {false, tdcr::StabilityCheck::Never}};
+  for (const auto& [value, check] : cases) {
+    const tdcr::Scene s = tdcr::parse_scene(with("/solver", {{"stability", value}}));
+    EXPECT_EQ(s.solver.stability, check) << value.dump();
+    const json back = json::parse(tdcr::scene_to_json(s));
+    EXPECT_EQ(back.at("solver").at("stability"), value);
+    EXPECT_EQ(tdcr::parse_scene(tdcr::scene_to_json(s)).solver.stability, check);
+  }
+}
+
 TEST(SceneIo, ParsesFullKeySet) {
   const char* text = R"({
     "description": "every key",

@@ -20,7 +20,7 @@ Scene one_tendon(int n, int k, double c) {
   const double r = 0.008;
   s.actuation.values.assign(4, 0.0);
   s.actuation.values[k] = c * EI / (r * r);
-  s.solver.stability = true;
+  s.solver.stability = StabilityCheck::Always;
   return s;
 }
 

@@ -33,6 +33,25 @@ const Names<IntegratorKind> kIntegrators = {{"rk4", IntegratorKind::AccuracyDriv
 const Names<LinearSolverKind> kLinearSolvers = {
     {"auto", LinearSolverKind::Automatic}, {"dense", LinearSolverKind::Dense}, {"klu", LinearSolverKind::SparseKLU}};
 
+// `solver.stability`: "auto", true (always) or false (never).
+template <class T>
+Field<T> stability_field(const char* key, StabilityCheck T::*m, KeyDoc doc) {
+  return {{key, "string or boolean", doc},
+          [m](const json& j, const std::string& p, T& v) {
+            if (j.is_boolean()) {
+              v.*m = j.get<bool>() ? StabilityCheck::Always : StabilityCheck::Never;
+              return;
+            }
+            if (!j.is_string()) type_error(p, j, "\"auto\", true or false");
+            if (j.get<std::string>() != "auto") throw InputError(p, text_of(j), "must be \"auto\", true or false");
+            v.*m = StabilityCheck::Automatic;
+          },
+          [m](const T& v) {
+            return v.*m == StabilityCheck::Automatic ? ojson("auto") : ojson(v.*m == StabilityCheck::Always);
+          },
+          {}};
+}
+
 // Who honours a key (the reference's last column).
 constexpr const char* kAll = "all";
 constexpr const char* kStatic = "CCsub, PRB, VC, VCref";
@@ -458,13 +477,18 @@ const Schema<SolverOptions>& solver_schema() {
                      "(2 steps per disk interval, h <= 4 mm) and solves the answer on the requested mesh "
                      "from its end",
                      "VC, VCref (RK4)"}),
-      boolean_field("stability", &S::stability,
-                    {"", nullptr,
-                     "decide the stability of every converged answer (`stability` in the JSON output): VC by "
-                     "the conjugate-point test of the fixed-free rod, CCsub and PRB by the eigenvalues of "
-                     "their reduced stiffness, VCref by its reduced stiffness in the disk poses; CC: "
-                     "undetermined (docs/models.md, \"Stability\")",
-                     "VC, CCsub, PRB, VCref"}),
+      stability_field("stability", &S::stability,
+                      {"", nullptr,
+                       "`\"auto\"`, `true` or `false`: which converged answers get their stability decided "
+                       "(`stability` in the JSON output, its method `\"not checked\"` where not). `\"auto\"`: "
+                       "answers reached by a loading path (from rest, a snap, a warm start's input path) and, "
+                       "with external loads (tip force or moment, gravity), every VC and VCref answer; not plain "
+                       "unloaded direct or warm solves, nor CCsub's and PRB's loaded direct solves (their dense "
+                       "test costs several solves); `true`: every answer; `false`: none. VC by the "
+                       "conjugate-point test of the fixed-free rod, CCsub and PRB by the eigenvalues of their "
+                       "reduced stiffness, VCref by its reduced stiffness in the disk poses; CC: undetermined "
+                       "(docs/models.md, \"Stability\")",
+                       "VC, CCsub, PRB, VCref"}),
       boolean_field("reuse_jacobian", &S::reuse_jacobian,
                     {"", nullptr,
                      "a warm start may begin from the previous solve's Jacobian (modified Newton): faster "

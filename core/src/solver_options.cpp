@@ -87,4 +87,12 @@ std::string to_string(LinearSolverKind k) {
   }
 }
 
+std::string to_string(StabilityCheck k) {
+  switch (k) {
+    case StabilityCheck::Always: return "always";
+    case StabilityCheck::Never: return "never";
+    default: return "auto";
+  }
+}
+
 }  // namespace tdcr

@@ -691,7 +691,7 @@ bool tension_start(const StaticModel& model, ModelWorkspace& workspace, const Mo
   tensions.actuation.kinds.clear();
   tensions.actuation.values = D.linear_tensions(input.actuation.values);
   SolverOptions o = options;
-  o.stability = false;
+  o.stability = StabilityCheck::Never;
   o.differential_kinematics = false;
   start = tdcr::solve(model, workspace, tensions, o);
   return start.converged();

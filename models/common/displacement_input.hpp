@@ -97,6 +97,7 @@ class DisplacementProblem final : public ModelProblem, public bvp::Parameterized
   bool final_residual(const Eigen::VectorXd& y, Eigen::Ref<Eigen::VectorXd> f) override;
   void extract(const Eigen::VectorXd& y, bool evaluated, Solution& solution) override;
   Stability stability(const Eigen::VectorXd& y, double load_factor) override;
+  bool automatic_stability_under_loads() const override { return inner_->automatic_stability_under_loads(); }
   bool infeasibility(const Eigen::VectorXd& y, double threshold, std::string& why) override;
   bool differentiable(const Eigen::VectorXd& y) const override { return inner_->differentiable(y.head(n_)); }
   double max_curvature() const override { return inner_->max_curvature(); }

@@ -237,7 +237,7 @@ class Solver {
     warm_.function_tolerance = std::min(solver.function_tolerance, kInnerFunctionTolerance);
     warm_.reuse_jacobian = true;
     warm_.extrapolate_warm_starts = false;
-    warm_.stability = false;
+    warm_.stability = StabilityCheck::Never;
     warm_.differential_kinematics = false;
     // A trial point is warm-started next to an answer: if it fails directly, the step is too
     // long (rejected and shortened), not worth a load continuation.

@@ -46,7 +46,7 @@ class ModelProblem {
   virtual void adjust(bvp::NewtonOptions& options) const { (void)options; }
   /// Newton settings for a warm-started solve, after adjust() (e.g. Jacobian reuse).
   /// `same_input`: the warm start is an answer of this very input (a re-solve on a refined RK4
-  /// mesh, SolverOptions::rk4_tip_tolerance): the last Jacobian is then worth reusing however many
+  /// mesh, SolverOptions::tip_tolerance): the last Jacobian is then worth reusing however many
   /// iterations the last solve took.
   virtual void adjust_warm(bvp::NewtonOptions& options, bool same_input) const {
     (void)options;
@@ -91,6 +91,12 @@ class ModelProblem {
     (void)load_factor;
     return Stability{};
   }
+  /// Whether the automatic stability rule (SolverOptions::stability, StabilityCheck::Automatic)
+  /// tests this problem's answers for their external loads alone, without a loading path: where
+  /// the test costs a fraction of a cold solve (VC, VCref: shots on a coarse mesh). Default false:
+  /// CCsub's and PRB's dense eigen-solve costs 3 to 20 times their cold loaded solve, so their
+  /// answers are tested when a path reached them (or when asked); docs/models.md, "Stability".
+  virtual bool automatic_stability_under_loads() const { return false; }
   /// Called when loading from rest stopped short of full load, after extract() at x, the
   /// equilibrium at the load factor reached (the system's parameter): true and a one-line reason
   /// if the stop is a physical limit (a tendon with curvature x offset >= threshold, see

@@ -32,6 +32,37 @@ void check_warm_start(const StaticModel& model, const Solution& warm) {
                      "a warm start must come from the same model of the same robot (StaticModel::fingerprint)");
 }
 
+// --- Which answers get their stability tested (SolverOptions::stability). ---
+
+// External loads: a tip force or moment, or gravity.
+bool externally_loaded(const Loads& loads) {
+  return !loads.tip_force.isZero(0.0) || !loads.tip_moment.isZero(0.0) || !loads.gravity.isZero(0.0);
+}
+
+// Whether an answer reached by a loading path or not (`by_path`) is tested: the automatic rule
+// tests the answers of loading paths (from rest, snaps, a warm start's input path) and, where
+// the model's test is cheap (`loads_count`: ModelProblem::automatic_stability_under_loads), of
+// loaded scenes; not plain unloaded direct or warm solves.
+bool wants_stability(StabilityCheck check, const ModelInput& input, bool by_path, bool loads_count) {
+  switch (check) {
+    case StabilityCheck::Always: return true;
+    case StabilityCheck::Never: return false;
+    default: return by_path || (loads_count && externally_loaded(input.loads));
+  }
+}
+
+// Whether a Solution's answer was reached along a path: continuation steps (the loading path
+// from rest, a warm start's input path) or path events (folds, snaps).
+bool reached_by_path(const Solution& sol) {
+  return sol.summary.continuation_steps > 0 || !sol.path_events.empty();
+}
+
+// The rule resolved for a solve whose answer another solve's path reached (`by_path`): Always or
+// Never, so that the solve from that answer (a direct warm solve) keeps the verdict's rule.
+StabilityCheck resolved_stability(StabilityCheck check, const ModelInput& input, bool by_path, bool loads_count) {
+  return wants_stability(check, input, by_path, loads_count) ? StabilityCheck::Always : StabilityCheck::Never;
+}
+
 // Direct Newton solve from x, with one retry from the problem's alternative cold guess. A cold
 // solve freezes the Jacobian near the solution where the problem allows it (and the options
 // allow Jacobian reuse at all). attempt_cap > 0 bounds the Newton iterations of each attempt
@@ -295,17 +326,22 @@ static_assert((SolverOptions::kFirstMeshRk4Steps << kPathHalvings) == SolverOpti
 // mesh on the way. A warm-started solve starts one halving below the mesh its warm start ended
 // on: along a trajectory the mesh the last answer needed is the likely one, and the solve
 // before it is the coarse half of the estimate.
+// Its answer's stability is not tested here: `test` says whether the rule asks for it (decided by
+// the first solve's path: the refined answers are direct warm solves), `last` gives the options
+// of the solve that returned it.
 // Runs a solve and leaves the workspace's warm-start history as it was before it.
 using KeepHistory = std::function<Solution(const std::function<Solution()>&)>;
 
 // `path`: a cold tension solve whose cold rule follows the loading path from rest.
 Solution solve_refined(const StaticModel& model, ModelWorkspace& workspace, const ModelInput& input,
                        const SolverOptions& options, const Solution* warm_start, bool path,
-                       const KeepHistory& keep_history) {
+                       const KeepHistory& keep_history, SolverOptions& last_options, bool& test) {
   const auto t0 = std::chrono::steady_clock::now();
   const double tol = options.tip_tolerance;
   SolverOptions o = options;
   o.integrator = IntegratorKind::FixedStepRK4;
+  o.stability = StabilityCheck::Never;
+  test = false;
   const auto set_mesh = [&](SolverOptions& opt, int h) {
     opt.rk4_steps = SolverOptions::kFirstMeshRk4Steps << h;
     opt.rk4_max_step = SolverOptions::kFirstMeshRk4MaxStep / (1 << h);
@@ -323,11 +359,13 @@ Solution solve_refined(const StaticModel& model, ModelWorkspace& workspace, cons
     const int h = std::min(warm_start->summary.rk4_halvings, SolverOptions::kMaxRk4Halvings);
     set_mesh(o, h);
     Solution fine = tdcr::solve(model, workspace, input, o, warm_start);
+    test = fine.converged() && wants_stability(options.stability, input, reached_by_path(fine), true);
+    last_options = o;
     if (fine.converged() && fine.summary.integrator == "rk4" && !fine.disk_frames.empty()) {
       SolverOptions oc = o;
       set_mesh(oc, h - 1);
       oc.function_tolerance = std::min(10.0 * o.function_tolerance, SolverOptions::kMaxFunctionTolerance);
-      oc.stability = false;
+      oc.stability = StabilityCheck::Never;
       oc.differential_kinematics = false;
       // One Newton step from the fine answer: the meshes' answers differ by the discretisation
       // error, so the step lands on the coarse answer up to the square of it.
@@ -374,6 +412,7 @@ Solution solve_refined(const StaticModel& model, ModelWorkspace& workspace, cons
       halvings = std::min(warm_start->summary.rk4_halvings - 1, SolverOptions::kMaxRk4Halvings - 1);
     set_mesh(o, halvings);
     Solution first_answer = tdcr::solve(model, workspace, input, o, warm_start);
+    last_options = o;
     add_work(spent, first_answer.summary);
     if (path && !first_answer.converged()) {
       // As the fixed mesh's cold rule does: the whole path again on the fine mesh.
@@ -388,6 +427,9 @@ Solution solve_refined(const StaticModel& model, ModelWorkspace& workspace, cons
                                       " steps per disk interval at least, h <= " + format_value(o.rk4_max_step) +
                                       " m, because on the coarse one: " + first.message + ")";
     }
+    // (VC and VCref only: their tests count under loads alone.)
+    test = first_answer.converged() &&
+           wants_stability(options.stability, input, reached_by_path(first_answer), true);
     if (!first_answer.converged() || first_answer.summary.integrator != "rk4" || first_answer.disk_frames.empty())
       return first_answer;
     last = std::move(first_answer);
@@ -404,6 +446,7 @@ Solution solve_refined(const StaticModel& model, ModelWorkspace& workspace, cons
     halvings += next;
     ++solves;
     Solution fine = tdcr::solve(model, workspace, input, o, &coarse);
+    last_options = o;
     add_work(fine.summary, work);
     SolverSummary& sum = fine.summary;
     sum.iterations = work.iterations;
@@ -462,7 +505,7 @@ Solution solve_with_coarse_path(const StaticModel& model, ModelWorkspace& worksp
   coarse_options.rk4_steps = std::min(options.rk4_steps, SolverOptions::kCoarsePathRk4Steps);
   coarse_options.rk4_max_step = std::max(options.rk4_max_step, SolverOptions::kCoarsePathRk4MaxStep);
   coarse_options.coarse_loading_path = false;
-  coarse_options.stability = false;
+  coarse_options.stability = StabilityCheck::Never;
   coarse_options.differential_kinematics = false;
   const Solution coarse = tdcr::solve(model, workspace, input, coarse_options, nullptr);
   if (!coarse.converged()) {
@@ -471,6 +514,9 @@ Solution solve_with_coarse_path(const StaticModel& model, ModelWorkspace& worksp
   }
   SolverOptions fine_options = options;
   fine_options.coarse_loading_path = false;
+  // The answer is the coarse path's: the warm solve from it tests it by the path's rule.
+  // (VC and VCref only: their tests count under loads alone.)
+  fine_options.stability = resolved_stability(options.stability, input, reached_by_path(coarse), true);
   Solution fine = tdcr::solve(model, workspace, input, fine_options, &coarse);
   if (!fine.converged()) {
     failure = "the solve on the requested mesh from the coarse path's answer failed: " + fine.summary.message;
@@ -516,7 +562,18 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
       workspace.history_ = std::move(saved);
       return s;
     };
-    return solve_refined(model, workspace, input, options, warm_start, path, keep_history);
+    SolverOptions last;
+    bool test = false;
+    Solution sol = solve_refined(model, workspace, input, options, warm_start, path, keep_history, last, test);
+    if (sol.converged() && test) {
+      // The last answer tested: its problem bound again (as that solve left it), at its unknowns.
+      detail::ModelProblem& P = detail::needs_displacement_solve(model, input)
+                                    ? detail::bind_displacement_problem(model, workspace, input, last, &sol, nullptr)
+                                    : model.bind(workspace, input, last);
+      if (P.system()) sol.stability = P.stability(sol.unknowns, 1.0);
+      sol.summary.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    }
+    return sol;
   }
   // Displacement input: the driven tendons' tensions join the model's unknowns. A cold solve
   // starts from the tension solve at the tensions linear beam theory gives its pulls (that solve
@@ -534,10 +591,10 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
     else start_failure = "the tension solve at the linear guess's tensions failed: " + start.summary.message;
     start_work = start.summary;
   }
-  // One solve of the bound problem; `from`: the displacement solve's tension start, if any.
-  const auto solve_from = [&](const Solution* from) -> Solution {
+  // One solve of the bound problem; `from_tensions`: the displacement solve's tension start, if any.
+  const auto solve_from = [&](const Solution* from_tensions) -> Solution {
     const auto bind_problem = [&]() -> detail::ModelProblem& {
-      return displacement ? detail::bind_displacement_problem(model, workspace, input, options, warm_start, from)
+      return displacement ? detail::bind_displacement_problem(model, workspace, input, options, warm_start, from_tensions)
                           : model.bind(workspace, input, options);
     };
     detail::ModelProblem* bound = &bind_problem();
@@ -573,6 +630,7 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
       sum.unknowns = sys->size();
       sum.termination = TerminationType::Infeasible;
       sum.message = impossible + " (the robot at rest returned, nothing solved)";
+      sol.stability.method = kStabilityNotChecked;
       Eigen::VectorXd f(sys->size());
       sol.unknowns = x;
       P.extract(x, P.final_residual(x, f), sol);
@@ -639,7 +697,12 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
         history.guess.swap(unpredicted);
         history.unknowns = x;
       }
-      if (sum.converged() && options.stability) sol.stability = P.stability(x, 1.0);
+      // The answer reached along a path: this solve's (continuation steps, path events) or, for
+      // displacement input, its tension start's.
+      const bool by_path = reached_by_path(sol) || (from_tensions && reached_by_path(*from_tensions));
+      if (sum.converged() && wants_stability(options.stability, input, by_path, P.automatic_stability_under_loads()))
+        sol.stability = P.stability(x, 1.0);
+      else sol.stability.method = kStabilityNotChecked;  // short: no allocation
     }
     if (sol.converged() && options.differential_kinematics && !displacement)
       add_differential_kinematics(

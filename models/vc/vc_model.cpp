@@ -14,6 +14,7 @@ long VcWorkspace::rhs_evaluations() const {
   long n = impl_->retired_rhs;
   if (impl_->shot_integrator) n += impl_->shot_integrator->rhs_evaluations();
   if (impl_->final_integrator) n += impl_->final_integrator->rhs_evaluations();
+  if (impl_->stability_integrator) n += impl_->stability_integrator->rhs_evaluations();
   return n;
 }
 

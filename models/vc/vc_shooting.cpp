@@ -8,6 +8,7 @@
 
 #include <Eigen/LU>
 
+#include "common/stability_mesh.hpp"
 #include "physics/geometry_check.hpp"
 #include "physics/tendon_path.hpp"
 #include "vc/vc_friction.hpp"
@@ -129,6 +130,7 @@ void bind_input(VcWorkspace::Impl& W, const VcModel& model, const ModelInput& in
     s.terminating_at_s.resize(s.terminating.size());
   }
 
+  detail::update_stability_integrator(options, W.stability_integrator);
   if (W.shot_integrator && same_integration(W.integration, options)) return;
   if (W.shot_integrator && is_rk4(W.integration.integrator) && is_rk4(options.integrator)) {
     // Only the RK4 mesh changes (e.g. an accuracy-driven refinement, SolverOptions::

@@ -43,6 +43,14 @@ struct VcWorkspace::Impl {
   std::unique_ptr<bvp::Integrator> shot_integrator;
   std::unique_ptr<bvp::Integrator> final_integrator;  ///< Null with CVODE (lengths in every shot).
   long retired_rhs = 0;                               ///< Evaluations of replaced integrators.
+  /// The stability test's coarse RK4 mesh (common/stability_mesh.hpp); null with CVODE (the test
+  /// then takes shot_integrator).
+  std::unique_ptr<bvp::Rk4Integrator> stability_integrator;
+  // The stability test's buffers (vc_stability.cpp): kept, so that a test allocates none once warm.
+  std::vector<Frame> stability_frames;
+  std::vector<BackboneSample> stability_samples;
+  std::vector<Vec6> stability_wrench;
+  Eigen::VectorXd stability_y0, stability_y1, stability_y;
   std::unique_ptr<vc::TendonRod> shot_rod;            ///< Lengths only with CVODE.
   std::unique_ptr<vc::TendonRod> final_rod;           ///< With lengths; watches `degeneracy`.
   vc::Degeneracy degeneracy;                          ///< Of the last final pass.
@@ -59,6 +67,9 @@ struct VcWorkspace::Impl {
 
   bool lengths_in_shots() const { return !final_integrator; }
   bvp::Integrator& final_pass_integrator() { return final_integrator ? *final_integrator : *shot_integrator; }
+  bvp::Integrator& stability_pass_integrator() {
+    return stability_integrator ? *stability_integrator : *shot_integrator;
+  }
 };
 
 namespace vc {

@@ -53,7 +53,7 @@
 //
 // The linearization is taken per disk interval by forward differences: from the converged state
 // at disk j (after its point loads), shot across the interval to disk j+1 (with its point
-// loads), 9 shots with one component of the rotation, the backbone force or moment at s_j
+// loads; with RK4 the unperturbed shot is the sweep's from the base), 9 shots with one component of the rotation, the backbone force or moment at s_j
 // perturbed (steps sqrt(noise) times 1, EI / h^2, EI / h: the interval's natural scales), and
 // the position columns the identity (the rod is translation invariant). In the scaled
 // coordinates (positions by L, spatial rotation, w by the residual scales of the solve) its
@@ -69,6 +69,9 @@
 // the sign turned negative from the first disk (walking from the tip) with a conjugate point
 // between it and the tip on. Between -u and u, u = max(1e-6, 10 sqrt(integrator noise)), the
 // test does not decide.
+// Every shot of the test, the sweep from the base included, is taken on a coarse RK4 mesh when
+// the solve integrates with RK4 (common/stability_mesh.hpp: at least 1 step per disk interval,
+// steps of at most 8 mm, never finer than the solve's), with CVODE by the solve's integrator.
 // A dead tip moment (fixed in the base frame) is not conservative for finite 3-D rotations; it
 // is treated as if it were (delta w(L) = 0, the symmetric part of K), exact for a moment normal
 // to a planar deformation.
@@ -142,14 +145,14 @@ Vec6 cut_wrench(const VcWorkspace::Impl& W, int j, const BackboneSample& b) {
 }
 
 // The state (p, R, cut wrench) at the base and at every disk after its point loads, to the tip,
-// of a shot from base frame `frame` with base wrench `base`.
-bool sweep(VcWorkspace::Impl& W, const Vec6& base, const Frame& frame, std::vector<Frame>& frames,
-           std::vector<BackboneSample>& samples, std::vector<Vec6>& wrench) {
+// of a shot from base frame `frame` with base wrench `base`, by `integrator`.
+bool sweep(VcWorkspace::Impl& W, bvp::Integrator& integrator, const Vec6& base, const Frame& frame,
+           std::vector<Frame>& frames, std::vector<BackboneSample>& samples, std::vector<Vec6>& wrench) {
   frames.clear();
   samples.clear();
   const Record rec{&frames, &samples, nullptr};
   Vec6 res;
-  if (!shoot(W, *W.shot_integrator, *W.shot_rod, base, res, &rec, &frame)) return false;
+  if (!shoot(W, integrator, *W.shot_rod, base, res, &rec, &frame)) return false;
   wrench.resize(samples.size());
   for (std::size_t j = 0; j < samples.size(); ++j) wrench[j] = cut_wrench(W, static_cast<int>(j), samples[j]);
   return frames.size() == samples.size();
@@ -162,10 +165,12 @@ Stability conjugate_point_test(VcWorkspace::Impl& W, const Vec6& base, double lo
   out.method = "conjugate points (Till & Rucker 2017) of the fixed-free rod, counted with multiplicity: tip-anchored "
                "Jacobi fields at every disk";
   set_load_factor(W, load_factor);
-  std::vector<Frame> frames;
-  std::vector<BackboneSample> samples;
-  std::vector<Vec6> nominal;
-  if (!sweep(W, base, Frame{}, frames, samples, nominal)) {
+  // Every shot of the test on the stability mesh (coarse with RK4, the solve's CVODE otherwise).
+  bvp::Integrator& integ = W.stability_pass_integrator();
+  std::vector<Frame>& frames = W.stability_frames;
+  std::vector<BackboneSample>& samples = W.stability_samples;
+  std::vector<Vec6>& nominal = W.stability_wrench;
+  if (!sweep(W, integ, base, Frame{}, frames, samples, nominal)) {
     out.method += "; the shot from the base failed";
     return out;
   }
@@ -176,11 +181,20 @@ Stability conjugate_point_test(VcWorkspace::Impl& W, const Vec6& base, double lo
   const double Fs = W.loads.force_scale(), Ms = W.loads.moment_scale();
   Vec6 unit;
   unit << Fs, Fs, Fs, Ms, Ms, Ms;
-  const double rel = std::sqrt(std::max(std::numeric_limits<double>::epsilon(), W.shot_integrator->relative_noise()));
+  const double rel = std::sqrt(std::max(std::numeric_limits<double>::epsilon(), integ.relative_noise()));
   const double undecided = std::max(kUndecided, 10.0 * rel);
   TendonRod& rod = *W.shot_rod;
-  bvp::Integrator& integ = *W.shot_integrator;
-  Eigen::VectorXd y0(rod.dimension()), y1(rod.dimension()), y(rod.dimension());
+  Eigen::VectorXd &y0 = W.stability_y0, &y1 = W.stability_y1, &y = W.stability_y;
+  y0.resize(rod.dimension());
+  y1.resize(rod.dimension());
+  y.resize(rod.dimension());
+  // With RK4 the unperturbed shot across an interval is the sweep's (the same steps); CVODE's
+  // error control makes a shot restarted at a disk differ from it by its tolerance, so the
+  // interval's own unperturbed shot is taken.
+  const bool from_sweep = W.stability_integrator != nullptr;
+  // Without weights the rotation columns follow from the wrench columns (below): 6 shots per
+  // interval instead of 9 (with RK4; CVODE keeps every shot, the reference test).
+  const bool rotation_invariant = from_sweep && !W.loads.has_gravity();
   // The scaled coordinates (pose, cut wrench) of a state at the cut distal of disk j.
   auto coordinates = [&](int j, const double* state, const Frame& ref, const Vec6& ref_wrench) {
     const Mat3 R = cosserat::rotation(state);
@@ -199,7 +213,7 @@ Stability conjugate_point_test(VcWorkspace::Impl& W, const Vec6& base, double lo
   // The free end's Jacobi fields (delta w(L) = 0, tip pose variation e_i), carried to the base.
   Eigen::Matrix<double, 12, 6> free_next = Eigen::Matrix<double, 12, 6>::Zero(), free_here, clamped;
   free_next.topRows<6>().setIdentity();
-  Mat12 in, end, T;
+  Mat12 in, end;
   double margin = std::numeric_limits<double>::infinity();
   int index = 0;  // conjugate points between the tip and the current disk, with multiplicity
   for (int k = intervals - 1; k >= 0; --k) {
@@ -212,18 +226,27 @@ Stability conjugate_point_test(VcWorkspace::Impl& W, const Vec6& base, double lo
     cosserat::rotation(y0.data()) = frames[k].R;
     cosserat::force(y0.data()) = samples[k].n;
     cosserat::moment(y0.data()) = samples[k].m;
-    y1 = y0;
-    if (!integ.integrate(rod, rt.disk_s[k], rt.disk_s[k + 1], y1.data()) || !disk_point_loads(W, seg, k + 1, y1.data())) {
-      out.method += "; a shot across a disk interval failed";
-      return out;
+    // The unperturbed shot across the interval, from p = 0 (the sweep's moved there: the rod is
+    // translation invariant).
+    const Frame start{frames[k].R, Vec3::Zero()};
+    Frame stop{frames[k + 1].R, frames[k + 1].p - frames[k].p};
+    Vec6 w_stop = nominal[k + 1];
+    if (!from_sweep) {
+      y1 = y0;
+      if (!integ.integrate(rod, rt.disk_s[k], rt.disk_s[k + 1], y1.data()) ||
+          !disk_point_loads(W, seg, k + 1, y1.data())) {
+        out.method += "; a shot across a disk interval failed";
+        return out;
+      }
+      stop = cosserat::frame_of(y1.data());
+      const BackboneSample b1{rt.disk_s[k + 1], stop, Vec3(cosserat::force(y1.data())),
+                              Vec3(cosserat::moment(y1.data()))};
+      w_stop = cut_wrench(W, k + 1, b1);
     }
-    const Frame start{frames[k].R, Vec3::Zero()}, stop = cosserat::frame_of(y1.data());
     const Vec6 w_start = nominal[k];
-    BackboneSample b1{rt.disk_s[k + 1], stop, Vec3(cosserat::force(y1.data())), Vec3(cosserat::moment(y1.data()))};
-    const Vec6 w_stop = cut_wrench(W, k + 1, b1);
     in.setIdentity();
     end.setIdentity();
-    for (int c = 3; c < 12; ++c) {
+    for (int c = rotation_invariant ? 6 : 3; c < 12; ++c) {
       // Natural scales of the interval: 1 (rotation), EI / h^2 (force), EI / h (moment).
       y = y0;
       double step = rel;
@@ -245,10 +268,27 @@ Stability conjugate_point_test(VcWorkspace::Impl& W, const Vec6& base, double lo
       }
       end.col(c) = coordinates(k + 1, y.data(), stop, w_stop) / step;
     }
-    // The transfer matrix of the interval in the scaled coordinates, T = end in^-1.
-    T = end * in.partialPivLu().inverse();
-    // The interval clamped at disk k: its end pose and wrench for a cut wrench at disk k.
-    clamped = T * cut;
+    if (rotation_invariant) {
+      // Without weights the interval is invariant under a rotation Q of its whole start state
+      // about the start point, (R, n, m) -> (Q R, Q n, Q m): its end state turns alike, the
+      // position about that point, and so do the cut wrenches. A rotation w of R alone is that
+      // rigid rotation less the wrench perturbation (w x n, w x m), whose response is the wrench
+      // columns'; so the rotation columns need no shots.
+      for (int j = 0; j < 3; ++j) {
+        const Vec3 e = Vec3::Unit(j);
+        Vec12 rigid_in, rigid_end;
+        rigid_in << Vec3::Zero(), e, e.cross(w_start.head<3>()) / Fs, e.cross(w_start.tail<3>()) / Ms;
+        rigid_end << e.cross(stop.p) / L, e, e.cross(w_stop.head<3>()) / Fs, e.cross(w_stop.tail<3>()) / Ms;
+        const Vec3 dn = e.cross(samples[k].n), dm = e.cross(samples[k].m);
+        in.col(3 + j) = rigid_in - in.middleCols<3>(6) * dn - in.middleCols<3>(9) * dm;
+        end.col(3 + j) = rigid_end - end.middleCols<3>(6) * dn - end.middleCols<3>(9) * dm;
+      }
+    }
+    // The transfer matrix of the interval in the scaled coordinates is T = end in^-1; `in` is
+    // block lower triangular (a wrench perturbation leaves the start pose as it is), [P 0; Q R].
+    // The interval clamped at disk k, its end pose and wrench for a cut wrench at disk k:
+    // T [0; I] = end [0; R^-1].
+    clamped.noalias() = end.rightCols<6>() * in.bottomRightCorner<6, 6>().partialPivLu().inverse();
     Mat6 B = clamped.topRows<6>();
     // A Kirchhoff rod's end pose does not see an axial force when straight (B singular): the
     // compliance of shear and extension is added as a penalty on those stiff directions.
@@ -265,12 +305,15 @@ Stability conjugate_point_test(VcWorkspace::Impl& W, const Vec6& base, double lo
       return out;
     }
     index += negative;
-    free_here = T.partialPivLu().solve(free_next);
+    // The free end's fields at disk k: T^-1 = in end^-1.
+    free_here.noalias() = in * end.partialPivLu().solve(free_next);
     if (!free_here.allFinite()) {
       out.method += "; a transfer matrix across a disk interval is singular";
       return out;
     }
-    const double smin = Eigen::JacobiSVD<Mat6>(free_here.topRows<6>()).singularValues()[5];
+    // The smallest singular value of M(s_k), from the eigenvalues of M^T M (6 x 6, symmetric).
+    const Mat6 MtM = free_here.topRows<6>().transpose() * free_here.topRows<6>();
+    const double smin = std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Mat6>(MtM, Eigen::EigenvaluesOnly).eigenvalues()[0]));
     margin = std::min(margin, index > 0 ? -smin : smin);
     free_next = free_here;
   }

@@ -7,6 +7,7 @@
 #include <cstdio>
 
 #include "common/model_problem.hpp"
+#include "common/stability_mesh.hpp"
 #include "tdcr/bvp/integrator.hpp"
 #include "tdcr/core/error.hpp"
 #include "tdcr/core/lie.hpp"
@@ -92,6 +93,7 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
       integrator_options_ = options;
       shooting_.set_integrator(*integrator_);
     }
+    detail::update_stability_integrator(options, stability_integrator_);
     problem_.bind(input, options);
     select_structure();
     shooting_.invalidate();
@@ -141,6 +143,8 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
   }
   void rest_state(Eigen::VectorXd& x) override { shape_guess(x, false); }
   std::string integrator_name() const override { return integrator_->name(); }
+  // The test on a coarse mesh costs a fraction of a cold loaded solve (common/stability_mesh.hpp).
+  bool automatic_stability_under_loads() const override { return true; }
   // The reduced stiffness in the disk poses (vcref_stability.cpp).
   Stability stability(const Eigen::VectorXd& x, double load_factor) override {
     if (d_.friction)
@@ -148,7 +152,9 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
                        "tendon friction: the disk-pose stiffness test assumes tensions independent of the shape"};
     if (problem_.loads().load_factor() != load_factor) system_.set_parameter(load_factor);
     if (!shooting_.evaluate(x)) return Stability{StabilityStatus::Undetermined, NAN, "the shots at the answer failed"};
-    return disk_pose_stability(problem_, *integrator_, shooting_.nodes());
+    // The rods' transfer matrices on the stability test's coarse RK4 mesh (the solve's CVODE).
+    return disk_pose_stability(problem_, stability_integrator_ ? *stability_integrator_ : *integrator_,
+                               shooting_.nodes());
   }
 
   // The previous unknowns, its disk rotations as the chart references (w = 0).
@@ -324,6 +330,7 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
   VcrefShooting problem_;
   SolverOptions integrator_options_;
   std::unique_ptr<bvp::Integrator> integrator_;
+  std::unique_ptr<bvp::Rk4Integrator> stability_integrator_;  // common/stability_mesh.hpp; null with CVODE
   bvp::ShootingSystem shooting_;
   VcrefSystem system_;
   bvp::NewtonSolver newton_;

@@ -15,8 +15,12 @@
 // buckling loads ~ pi^2 EI / h^2 (h the disk spacing), far above VCref's loads.
 //
 // Each rod's contribution comes from its transfer matrix: the variation of its end (pose, wrench)
-// with its start (pose, wrench), [A B; C D], by forward differences (12 shots per interval, 6
-// for the first, whose start pose is the clamp). Its start wrench follows from both end poses,
+// with its start (pose, wrench), [A B; C D], by forward differences (9 shots per interval: the
+// position columns are the identity, the free rod being translation invariant; with RK4 and
+// without the backbone's weight 6, the rotation columns following from the rod's rotation
+// invariance; 6 for the first, whose start pose is the clamp; by the integrator the caller
+// gives: the test's coarse RK4 mesh when the solve integrates with RK4,
+// common/stability_mesh.hpp). Its start wrench follows from both end poses,
 // dw_j = B^-1 (dg_j+1 - A dg_j), and its end wrench dv_j+1 = C dg_j + D dw_j; disk i receives
 // +dv_i - dw_i. The tendon wrenches are differentiated by forward differences of
 // tendon::disk_wrench in the poses of the disks i-1, i, i+1 (no integration). Rows of moments are
@@ -27,7 +31,9 @@
 // A Kirchhoff rod (no shear or extension) has a singular B when straight: its shear and
 // extension compliance is added as a penalty (stiff directions, inertia of the rest unchanged).
 //   margin = the smallest eigenvalue of the symmetric part of Ks,
-// by bisection on whether the block Cholesky factorisation of Ks - sigma I exists (O(N)); stable if
+// to 1e-4 relative: where Ks is positive definite from Lanczos on Ks^-1, the bound checked by
+// one block Cholesky factorisation (O(N) each), else by bisection on whether the block Cholesky
+// factorisation of Ks - sigma I exists; stable if
 // > 1e-6, unstable if < -1e-6, else undetermined (forward-difference noise). With Eq. 58 (disk
 // normal forces removed) and a tensioned tendon the loads are not conservative and K is not
 // symmetric; a positive definite symmetric part still excludes divergence (x' K x > 0 for every
@@ -103,7 +109,8 @@ Frame moved(const Frame& f, int c, double h) {
 // A block tridiagonal matrix of 6 x 6 blocks (the reduced stiffness: disk i couples to i +- 1).
 class BlockTridiagonal {
  public:
-  explicit BlockTridiagonal(int n) : n_(n), diag_(n, Mat6::Zero()), upper_(n, Mat6::Zero()), lower_(n, Mat6::Zero()) {}
+  explicit BlockTridiagonal(int n)
+      : n_(n), diag_(n, Mat6::Zero()), upper_(n, Mat6::Zero()), lower_(n, Mat6::Zero()), llt_(n), pinv_u_(n), w_(n) {}
   // Block (i, k), |i - k| <= 1, zero-based.
   Mat6& at(int i, int k) { return k == i ? diag_[i] : k > i ? upper_[i] : lower_[k]; }
   void symmetrize() {
@@ -127,24 +134,85 @@ class BlockTridiagonal {
   // Symmetric: whether K - sigma I is positive definite, i.e. no eigenvalue lies below sigma
   // (Sylvester's law of inertia): the block Cholesky factorisation, pivots
   // P_i = K_ii - sigma I - K_i,i-1 P_i-1^-1 K_i-1,i, succeeds.
-  bool above(double sigma) const {
-    Mat6 P, Pinv_U;
+  // The factors (llt_, pinv_u_) of the last call are kept: those of K - sigma I if it returned
+  // true.
+  bool above(double sigma) {
+    Mat6 P;
     for (int i = 0; i < n_; ++i) {
       P = diag_[i] - sigma * Mat6::Identity();
-      if (i > 0) P -= lower_[i - 1] * Pinv_U;
-      const Eigen::LLT<Mat6> llt(P);
-      if (llt.info() != Eigen::Success) return false;
-      if (i + 1 < n_) Pinv_U = llt.solve(upper_[i]);
+      if (i > 0) P -= lower_[i - 1] * pinv_u_[i - 1];
+      llt_[i].compute(P);
+      if (llt_[i].info() != Eigen::Success) return false;
+      if (i + 1 < n_) pinv_u_[i] = llt_[i].solve(upper_[i]);
     }
     return true;
   }
-  // Symmetric: the smallest eigenvalue by bisection on above(), from [0, smallest diagonal
-  // entry] (or a negative bound found by doubling), to 1e-4 relative and 1e-9 absolute.
-  double smallest_eigenvalue() const {
+  // Symmetric and positive definite, its factors at sigma = 0 kept by above(0): an upper bound
+  // of the smallest eigenvalue, 1 / (the largest Ritz value of Lanczos on K^-1), the Lanczos
+  // vectors fully reorthogonalised, until it changes by less than 1e-7 relative (at most
+  // kLanczosSteps); infinity if it breaks down.
+  double lanczos_bound() {
+    constexpr int kLanczosSteps = 40;
+    const int m = std::min(kLanczosSteps, 6 * n_);
+    basis_.resize(static_cast<std::size_t>(m + 1) * n_);
+    auto q = [&](int k, int i) -> Vec6& { return basis_[static_cast<std::size_t>(k) * n_ + i]; };
+    for (int i = 0; i < n_; ++i) q(0, i).setConstant(1.0 / std::sqrt(6.0 * n_));  // every direction
+    Eigen::VectorXd alpha(m), beta(m);
+    double last = 0.0;
+    for (int k = 0; k < m; ++k) {
+      // w = K^-1 q_k: forward, diagonal and backward sweeps of the block factorisation.
+      for (int i = 0; i < n_; ++i) {
+        Vec6 y = q(k, i);
+        if (i > 0) y -= lower_[i - 1] * w_[i - 1];
+        w_[i] = llt_[i].solve(y);
+      }
+      for (int i = n_ - 2; i >= 0; --i) w_[i] -= pinv_u_[i] * w_[i + 1];
+      for (int pass = 0; pass < 2; ++pass)  // full reorthogonalisation, twice
+        for (int l = 0; l <= k; ++l) {
+          double c = 0.0;
+          for (int i = 0; i < n_; ++i) c += q(l, i).dot(w_[i]);
+          if (pass == 0 && l == k) alpha[k] = c;
+          for (int i = 0; i < n_; ++i) w_[i] -= c * q(l, i);
+        }
+      double b = 0.0;
+      for (int i = 0; i < n_; ++i) b += w_[i].squaredNorm();
+      b = std::sqrt(b);
+      const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> ritz(
+          [&] {
+            Eigen::MatrixXd Tk = Eigen::MatrixXd::Zero(k + 1, k + 1);
+            for (int l = 0; l <= k; ++l) {
+              Tk(l, l) = alpha[l];
+              if (l < k) Tk(l, l + 1) = Tk(l + 1, l) = beta[l];
+            }
+            return Tk;
+          }(),
+          Eigen::EigenvaluesOnly);
+      const double theta = ritz.eigenvalues()[k];
+      if (!(theta > 0.0) || !std::isfinite(theta)) return std::numeric_limits<double>::infinity();
+      if (k > 0 && std::abs(theta - last) <= 1e-7 * theta) return 1.0 / theta;
+      last = theta;
+      if (!(b > 1e-300) || k + 1 == m) return 1.0 / theta;  // an invariant subspace, or the last step
+      beta[k] = b;
+      for (int i = 0; i < n_; ++i) q(k + 1, i) = w_[i] / b;
+    }
+    return 1.0 / last;
+  }
+  // Symmetric: the smallest eigenvalue to 1e-4 relative and 1e-9 absolute. Where K is positive
+  // definite, the Lanczos bound q from above and above(q (1 - 5e-5)) from below (2
+  // factorisations and a few sweeps); otherwise (or if that lower bound fails) by bisection on
+  // above(), from [0, smallest diagonal entry] (or a negative bound found by doubling).
+  double smallest_eigenvalue() {
     double hi = std::numeric_limits<double>::infinity();
     for (const Mat6& D : diag_) hi = std::min(hi, D.diagonal().minCoeff());
     double lo = 0.0;
     if (hi > 0.0 && !above(0.0)) hi = 0.0;
+    if (hi > 0.0) {
+      const double q = std::min(hi, lanczos_bound());
+      if (q < hi) {
+        hi = q;
+        if (above(q * (1.0 - 5e-5))) lo = q * (1.0 - 5e-5);
+      }
+    }
     if (hi <= 0.0) {
       lo = std::min(hi, -1e-3);
       for (int it = 0; it < 60 && !above(lo); ++it) lo *= 4.0;
@@ -159,6 +227,11 @@ class BlockTridiagonal {
  private:
   int n_;
   std::vector<Mat6> diag_, upper_, lower_;  // upper_[i] = (i, i+1), lower_[i] = (i+1, i)
+  // above(): the Cholesky factors of the pivots P_i and P_i^-1 upper_[i]; lanczos_bound()'s
+  // vectors.
+  std::vector<Eigen::LLT<Mat6>> llt_;
+  std::vector<Mat6> pinv_u_;
+  std::vector<Vec6> w_, basis_;
 };
 
 }  // namespace
@@ -175,7 +248,10 @@ Stability disk_pose_stability(const VcrefShooting& problem, bvp::Integrator& int
   BlockTridiagonal K(N);
   auto block = [&](int i, int k) -> Mat6& { return K.at(i - 1, k - 1); };
 
-  // The rods: transfer matrices, integrated from p = 0 (the free rod is translation invariant).
+  // The rods: transfer matrices, integrated from p = 0 (the free rod is translation invariant;
+  // without the backbone's weight rotation invariant too, so 6 shots per interval with RK4;
+  // CVODE keeps every rotation shot, the reference test).
+  const bool rotation_invariant = !d.section.gravity && dynamic_cast<const bvp::Rk4Integrator*>(&integrator);
   std::vector<Frame> frames(N + 1);
   State y0, nominal, y;
   Eigen::Matrix<double, 12, 12> T;
@@ -197,6 +273,12 @@ Stability disk_pose_stability(const VcrefShooting& problem, bvp::Integrator& int
     const double h = s[j + 1] - s[j];
     const double scale[4] = {h, 1.0, EI / (h * h), EI / h};
     for (int c = j == 0 ? 6 : 0; c < 12; ++c) {
+      if (c < 3) {  // the free rod is translation invariant: a start position moves the end alike
+        T.col(c).setZero();
+        T(c, c) = 1.0;
+        continue;
+      }
+      if (c < 6 && rotation_invariant) continue;  // below
       const double value = c < 6 ? 0.0 : y0[12 + c - 6];
       const double step = rel * std::max(std::abs(value), scale[c / 3]);
       y = y0;
@@ -206,6 +288,23 @@ Stability disk_pose_stability(const VcrefShooting& problem, bvp::Integrator& int
         return out;
       }
       T.col(c) = difference(y, nominal) / step;
+    }
+    if (j > 0 && rotation_invariant) {
+      // Without weights the free rod is invariant under a rotation Q of its whole start state
+      // about its start point, (R, n, m) -> (Q R, Q n, Q m): its end turns alike. A body rotation
+      // w of R alone is that rigid rotation, spatial Q = exp(R_0 w), less the wrench perturbation
+      // (Q n - n, Q m - m), whose response is the wrench columns'; so the rotation columns need
+      // no shots.
+      const Mat3 R0 = cosserat::rotation(y0.data()), Re = cosserat::rotation(nominal.data());
+      const Vec3 pe = cosserat::position(nominal.data()), ne = cosserat::force(nominal.data()),
+                 me = cosserat::moment(nominal.data()), n0 = cosserat::force(y0.data()),
+                 m0 = cosserat::moment(y0.data());
+      for (int c = 3; c < 6; ++c) {
+        const Vec3 w = R0.col(c - 3);  // the spatial rotation of body rotation e_(c-3)
+        Eigen::Matrix<double, 12, 1> rigid;
+        rigid << w.cross(pe), Re.transpose() * w, w.cross(ne), w.cross(me);
+        T.col(c) = rigid - T.middleCols<3>(6) * w.cross(n0) - T.middleCols<3>(9) * w.cross(m0);
+      }
     }
     // A Kirchhoff rod's end pose does not see an axial force (B is singular when straight): the
     // compliance of shear and extension is added as a penalty on the constrained directions
@@ -239,6 +338,9 @@ Stability disk_pose_stability(const VcrefShooting& problem, bvp::Integrator& int
   const TendonRouting& active = problem.active();
   const double* tensions = problem.tensions().data();
   std::vector<Frame> moved_frames = frames;
+  std::vector<tendon::DiskWrench> unmoved(N + 1);  // every disk's tendon wrench at the answer
+  for (int i = 1; i <= N && !active.tendons.empty(); ++i)
+    if (problem.tendon_at(i)) unmoved[i] = tendon::disk_wrench(i, frames.data(), active, tensions, d.remove_normal);
   for (int k = 1; k <= N && !active.tendons.empty(); ++k) {
     for (int c = 0; c < 6; ++c) {
       const double step = rel * (c < 3 ? d.l_min : 1.0);
@@ -246,7 +348,7 @@ Stability disk_pose_stability(const VcrefShooting& problem, bvp::Integrator& int
       for (int i = std::max(1, k - 1); i <= std::min(N, k + 1); ++i) {
         if (!problem.tendon_at(i)) continue;
         const tendon::DiskWrench a = tendon::disk_wrench(i, moved_frames.data(), active, tensions, d.remove_normal);
-        const tendon::DiskWrench b = tendon::disk_wrench(i, frames.data(), active, tensions, d.remove_normal);
+        const tendon::DiskWrench& b = unmoved[i];
         block(i, k).col(c).head<3>() -= (a.force - b.force) / step;
         block(i, k).col(c).tail<3>() -= (a.moment - b.moment) / step;
       }

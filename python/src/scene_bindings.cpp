@@ -386,7 +386,23 @@ void bind_effects(py::module_& m) {
       .def_readwrite("continuation", &tdcr::SolverOptions::continuation)
       .def_readwrite("max_continuation_steps", &tdcr::SolverOptions::max_continuation_steps)
       .def_readwrite("coarse_loading_path", &tdcr::SolverOptions::coarse_loading_path)
-      .def_readwrite("stability", &tdcr::SolverOptions::stability)
+      .def_property(
+          "stability",
+          [](const tdcr::SolverOptions& o) -> py::object {
+            if (o.stability == tdcr::StabilityCheck::Automatic) return py::str("auto");
+            return py::bool_(o.stability == tdcr::StabilityCheck::Always);
+          },
+          [](tdcr::SolverOptions& o, const py::object& v) {
+            if (py::isinstance<py::bool_>(v))
+              o.stability = v.cast<bool>() ? tdcr::StabilityCheck::Always : tdcr::StabilityCheck::Never;
+            else if (py::isinstance<py::str>(v) && v.cast<std::string>() == "auto")
+              o.stability = tdcr::StabilityCheck::Automatic;
+            else
+              throw tdcr::InputError("solver.stability", py::str(py::repr(v)).cast<std::string>(),
+                                     "must be 'auto', True or False");
+          },
+          "'auto' (default: answers reached by a loading path and scenes with external loads), True (every "
+          "answer) or False (none)")
       .def_readwrite("differential_kinematics", &tdcr::SolverOptions::differential_kinematics)
       .def_readwrite("reuse_jacobian", &tdcr::SolverOptions::reuse_jacobian)
       .def_readwrite("extrapolate_warm_starts", &tdcr::SolverOptions::extrapolate_warm_starts)

@@ -39,7 +39,9 @@ def test_shapes_and_frames(paper_scene, kind):
     assert s.termination == sol.termination == "converged"
     assert s.iterations == sol.iterations >= 0 and s.residual_norm == sol.residual_norm
     assert s.solve_time_s == sol.solve_time_s > 0
+    # tendons only, a direct solve: the automatic stability rule does not test it
     assert isinstance(sol.message, str) and sol.stability.status == "undetermined"
+    assert sol.stability.method == ("kinematic model" if kind == "cc" else "not checked")
     assert sol.path_events == [] and sol.geometry_warnings == []
 
 
@@ -81,3 +83,19 @@ def test_effects_and_options_reach_the_solver(paper_scene):
     base = tdcr.solve(paper_scene, model="vc")
     assert np.linalg.norm(sol.tip_position - base.tip_position) < 1e-4  # same robot, small changes
     assert not np.array_equal(sol.tip_position, base.tip_position)
+
+
+def test_stability_rule_is_auto_true_or_false(paper_scene):
+    scene = paper_scene.copy()
+    assert scene.solver.stability == "auto"
+    scene.loads.tip_force = [0.05, 0.0, 0.0]
+    assert tdcr.solve(scene, model="vc").stability.status == "stable"  # loaded: tested by default
+    scene.solver.stability = False
+    assert tdcr.solve(scene, model="vc").stability.method == "not checked"
+    assert scene.to_dict()["solver"]["stability"] is False
+    scene.solver.stability = True
+    assert scene.solver.stability is True and scene.to_dict()["solver"]["stability"] is True
+    scene.solver.stability = "auto"
+    assert scene.to_dict()["solver"]["stability"] == "auto"
+    with pytest.raises(tdcr.InputError, match="solver.stability"):
+        scene.solver.stability = "always"

@@ -179,7 +179,8 @@ class ShootingSystem : public ResidualSystem {
   double relative_noise() const override;
 
   /// @brief Integrate every interval from the starts in x (e.g. after a solve) so that nodes()
-  /// describes the trajectory of x. Returns false if an integration failed.
+  /// describes the trajectory of x (nothing is integrated when the last residual() or evaluate()
+  /// was at x and nothing was invalidated since). Returns false if an integration failed.
   bool evaluate(const Eigen::Ref<const Eigen::VectorXd>& x);
   /// @brief Fold x into the problem's chart references (ShootingProblem::rebase for every node),
   /// e.g. after an accepted Newton step. Needs the non-const constructor (else std::logic_error).

@@ -84,8 +84,14 @@ struct Stability {
   /// Smallest eigenvalue of the scaled reduced stiffness (dimensionless; > 0 stable, < 0
   /// unstable); NaN when not computed.
   double margin = std::numeric_limits<double>::quiet_NaN();
-  std::string method;  ///< How it was decided (empty: not computed).
+  /// How it was decided; kStabilityNotChecked where SolverOptions::stability (or its automatic
+  /// rule) did not ask for the test; empty: not computed (e.g. a default-constructed Solution).
+  std::string method;
 };
+
+/// @brief Stability::method of an answer whose stability was not tested
+/// (SolverOptions::stability).
+inline constexpr const char* kStabilityNotChecked = "not checked";
 
 /// @brief An event on the loading path from the unloaded robot to the answer.
 struct PathEvent {
@@ -144,7 +150,7 @@ struct Solution {
   Eigen::VectorXd unknowns;               ///< The model's solved unknowns (for warm starts).
   /// Why this model was used when the scene asked for "auto" (model_selection.hpp); empty else.
   std::string model_selection;
-  Stability stability;                    ///< Stability of the answer (if computed).
+  Stability stability;                    ///< Stability of the answer (if tested: SolverOptions::stability).
   std::vector<PathEvent> path_events;     ///< Folds, bifurcations, snaps met on the way.
   std::vector<GeometryWarning> geometry_warnings;  ///< Shapes a real robot cannot take.
   /// d(tip pose) / d(Actuation::values), 6 x m (SolverOptions::differential_kinematics; empty

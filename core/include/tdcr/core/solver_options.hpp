@@ -26,6 +26,17 @@ enum class LinearSolverKind {
   SparseKLU   ///< SUNDIALS KLU on a compressed-sparse-column Jacobian.
 };
 
+/// @brief When a solve decides the stability of its answer (SolverOptions::stability; scene key
+/// `solver.stability`: `"auto"`, `true`, `false`).
+enum class StabilityCheck {
+  Automatic,  ///< Where it matters: an answer reached by a loading path (from rest, a snap, a warm
+              ///< start's input path, a displacement solve's path), and VC's and VCref's answers
+              ///< under external loads (tip force or moment nonzero, gravity nonzero). Not a plain
+              ///< unloaded direct or warm solve, nor a loaded direct solve of CCsub or PRB.
+  Always,     ///< Every converged answer.
+  Never       ///< No answer (Solution::stability says "not checked").
+};
+
 /// @brief Numerical settings of a static solve.
 struct SolverOptions {
   /// Accuracy of the answer's tip position (m): one option that moves both the integration mesh
@@ -109,12 +120,15 @@ struct SolverOptions {
   static constexpr int kCoarsePathRk4Steps = 2;
   /// Longest RK4 step of a coarse loading path (m; coarse_loading_path).
   static constexpr double kCoarsePathRk4MaxStep = 4e-3;
-  /// Decide the stability of every converged answer (Solution::stability): VC by the
-  /// conjugate-point test of the fixed-free rod (12 extra shots), CCsub and PRB by the eigenvalues
-  /// of the reduced stiffness (one extra Jacobian), VCref by its reduced stiffness in the disk
-  /// poses; CC reports "undetermined" (docs/models.md, "Stability"). Off by default: it costs more
-  /// than a warm solve (VC on the paper robot, n = 10: 52.5 us without, 726 us with).
-  bool stability = false;
+  /// Which converged answers get their stability decided (Solution::stability): VC by the
+  /// conjugate-point test of the fixed-free rod, CCsub and PRB by the eigenvalues of the reduced
+  /// stiffness, VCref by its reduced stiffness in the disk poses; CC reports "undetermined"
+  /// (docs/models.md, "Stability"). Automatic by default (StabilityCheck::Automatic): answers
+  /// reached by a loading path, and VC's and VCref's answers under external loads, are tested; a
+  /// plain unloaded direct or warm tension solve is not, nor a loaded direct solve of CCsub or PRB
+  /// (their dense eigen-solve costs several of their solves). An untested Solution's stability
+  /// says "not checked" (kStabilityNotChecked).
+  StabilityCheck stability = StabilityCheck::Automatic;
   /// Differential kinematics of every converged answer (Solution::tip_jacobian,
   /// Solution::tip_compliance) by the implicit function theorem on the converged system: no
   /// extra full solves (docs/models.md, "Differential kinematics").
@@ -215,5 +229,8 @@ std::string to_string(IntegratorKind k);
 std::string fixed_mesh_only(IntegratorKind integrator);
 /// @brief Name of a linear solver as used in scene files ("auto", "dense", "klu").
 std::string to_string(LinearSolverKind k);
+/// @brief Name of a stability rule ("auto", "always", "never"; scene files write `"auto"`, `true`,
+/// `false`).
+std::string to_string(StabilityCheck k);
 
 }  // namespace tdcr
