@@ -2,7 +2,7 @@
 // or better tip accuracy, per model (VC, CCsub, VCref, PRB).
 //
 //   bench_loaded [--quick] [--out DIR] [--cases N] [--repeat R] [--steps N] [--tip-tol M] [--traj-tol M]
-//                [--models LIST]
+//                [--models LIST] [--stability auto|always|never]
 //
 // Part 1, loaded cases: the 60 random cases of benchmarks/data/paper_code_cases_inputs.csv (paper
 // robot, n = 3, 5, 10, 20, tensions U[0, 1.5 T_M], tip force |F| <= 0.5 N in any direction, base
@@ -34,7 +34,9 @@
 // Writes DIR/loaded.csv (per case, model, options), loaded_summary.csv (per model and options),
 // loaded_options.csv (the candidates), trajectory.csv. Failures of tdcr or of the paper's code are
 // kept and counted, never dropped. --cases N takes the first N cases; --models a comma-separated
-// subset of vc, ccsub, vcref, prb (for focused runs; benchmarks/run_all.sh runs all four). --quick = --cases 2 --repeat 1 --steps 20 (the ctest smoke run).
+// subset of vc, ccsub, vcref, prb (for focused runs; benchmarks/run_all.sh runs all four). --stability sets
+// SolverOptions::stability of every solve timed (default: the options' default, automatic), e.g. to
+// measure what the stability test adds to the defaults. --quick = --cases 2 --repeat 1 --steps 20 (the ctest smoke run).
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
@@ -59,6 +61,8 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
 // The models benchmarked (--models narrows them; the report needs all four).
 std::vector<ModelKind> kModels = {ModelKind::VC, ModelKind::CCsub, ModelKind::VCref, ModelKind::PRB};
+// SolverOptions::stability of every candidate (--stability; the default when not given).
+StabilityCheck kStability = SolverOptions().stability;
 
 struct Settings {
   std::string out = "benchmark-results";
@@ -102,8 +106,8 @@ std::string fmt(double x) {
   return s.str();
 }
 
-// Solver settings that trade accuracy for time, the defaults first.
-std::vector<Candidate> candidates(ModelKind k) {
+// The candidates before --stability.
+std::vector<Candidate> candidate_options(ModelKind k) {
   std::vector<Candidate> c{{"default", SolverOptions()}};
   if (integrates(k)) {
     for (int steps : {1, 2, 4, 8})
@@ -144,6 +148,13 @@ std::vector<Candidate> candidates(ModelKind k) {
       c.push_back({"newton ftol " + fmt(ftol), o});
     }
   }
+  return c;
+}
+
+// Solver settings that trade accuracy for time, the defaults first (all with --stability's rule).
+std::vector<Candidate> candidates(ModelKind k) {
+  std::vector<Candidate> c = candidate_options(k);
+  for (Candidate& x : c) x.options.stability = kStability;
   return c;
 }
 
@@ -423,6 +434,10 @@ int main(int argc, char** argv) {
         cfg.tip_tol = number(i);
       } else if (a == "--traj-tol") {
         cfg.traj_tol = number(i);
+      } else if (a == "--stability" && i + 1 < argc) {
+        const std::string v = argv[++i];
+        if (v != "auto" && v != "always" && v != "never") throw std::invalid_argument(v);
+        kStability = v == "auto" ? StabilityCheck::Automatic : v == "always" ? StabilityCheck::Always : StabilityCheck::Never;
       } else if (a == "--models" && i + 1 < argc) {
         kModels = bench::parse_models(argv[++i]);
       } else {
@@ -432,7 +447,7 @@ int main(int argc, char** argv) {
     if (cfg.cases < 1 || cfg.repeat < 1 || cfg.steps < 4 || !(cfg.tip_tol > 0) || !(cfg.traj_tol > 0)) throw std::invalid_argument("range");
   } catch (const std::exception&) {
     std::cerr << "usage: bench_loaded [--quick] [--out DIR] [--cases N>=1] [--repeat R>=1] [--steps N>=4] "
-                 "[--tip-tol M>0] [--traj-tol M>0] [--models vc,ccsub,vcref,prb]\n";
+                 "[--tip-tol M>0] [--traj-tol M>0] [--models vc,ccsub,vcref,prb] [--stability auto|always|never]\n";
     return 2;
   }
   std::filesystem::create_directories(cfg.out);

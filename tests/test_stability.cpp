@@ -112,6 +112,32 @@ TEST(Stability, AutomaticRuleTestsAnswersOfALoadingPath) {
   }
 }
 
+// Accuracy-driven RK4 (solver.rk4_tip_tolerance) solves the answer on several meshes and tests
+// only the last one, by the rule of its first solve: under a tip force VC and VCref report the
+// verdict of the plain solve, unloaded nothing.
+TEST(Stability, AccuracyDrivenRk4TestsItsLastAnswer) {
+  Scene loaded = paper::scene(10, 2);
+  loaded.loads.tip_force = Vec3(0.1, -0.05, -0.1);
+  for (ModelKind kind : {ModelKind::VC, ModelKind::VCref}) {
+    const Solution plain = solve_checked(kind, loaded, StabilityCheck::Automatic);
+    for (const bool with_force : {true, false}) {
+      Scene refined = with_force ? loaded : paper::scene(10, 2);
+      refined.solver.rk4_steps = 1;
+      refined.solver.rk4_max_step = 8e-3;
+      refined.solver.rk4_tip_tolerance = 1e-9;
+      const Solution sol = solve_checked(kind, refined, StabilityCheck::Automatic);
+      ASSERT_TRUE(sol.converged()) << to_string(kind) << ": " << sol.summary.message;
+      EXPECT_GE(sol.summary.rk4_refinements, 1) << to_string(kind);
+      if (!with_force) {
+        EXPECT_TRUE(not_checked(sol)) << to_string(kind) << ": " << sol.stability.method;
+        continue;
+      }
+      EXPECT_EQ(sol.stability.status, StabilityStatus::Stable) << to_string(kind) << ": " << sol.stability.method;
+      EXPECT_NEAR(sol.stability.margin, plain.stability.margin, 1e-3 * plain.stability.margin) << to_string(kind);
+    }
+  }
+}
+
 // solver.stability true and false force the test on and off, whatever the loads.
 TEST(Stability, ForcedOnAndOffAreRespected) {
   Scene loaded = paper::scene(10, 2);
