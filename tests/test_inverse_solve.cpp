@@ -616,3 +616,38 @@ TEST(InverseTarget, RotationMatrixMustBeARotation) {
 }
 
 }  // namespace
+
+namespace {
+
+// With the default options (accuracy-driven RK4 to 1e-7 of the length, Newton's tolerance tied
+// to it) the inverse solve still reaches a target from the same model's forward solve to
+// 1e-9 m: its inner solves are made concrete for the robot and share one fixed mesh (an inner
+// tolerance of 0 or a mesh changing between differenced solves would not).
+TEST(InverseSolve, DefaultOptionsReachTheTarget) {
+  for (ModelKind kind : {ModelKind::VC, ModelKind::VCref, ModelKind::CCsub}) {
+    Scene s = paper::scene(5, 1, to_string(kind));
+    s.loads.tip_force = Vec3(0.05, 0.1, -0.05);
+    s.solver = SolverOptions();
+    const auto model = make_model(kind, s);
+    auto ws = model->make_workspace();
+    ModelInput in = s.input();
+    in.actuation.values = {2.0, 0.0, 1.0, 0.5};
+    SolverOptions fixed;
+    fixed.integrator = IntegratorKind::FixedStepRK4;
+    const Solution f = solve(*model, *ws, in, fixed);
+    ASSERT_TRUE(f.converged()) << f.summary.brief_report();
+    InverseTarget target;
+    target.position = f.tip().p;
+    ModelInput start = s.input();
+    start.actuation.values.assign(4, 0.0);
+    auto ws2 = model->make_workspace();
+    const InverseResult r = inverse_solve(*model, *ws2, start, target, SolverOptions());
+    EXPECT_TRUE(r.converged()) << to_string(kind) << ": " << r.brief_report();
+    EXPECT_LE(r.position_error, 1e-9) << to_string(kind);
+    // The inner solves' tolerance capped as documented (1e-12), on one fixed mesh.
+    EXPECT_LE(r.solution.summary.function_tolerance, 1e-12) << to_string(kind);
+    EXPECT_EQ(r.solution.summary.rk4_halvings, 0) << to_string(kind);
+  }
+}
+
+}  // namespace
