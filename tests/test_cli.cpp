@@ -170,6 +170,9 @@ INSTANTIATE_TEST_SUITE_P(
                       BadArgs{"ModelUnknown", "--model cosserat", "cosserat"},
                       BadArgs{"AccuracyOutOfRange", "--model auto --accuracy 1.5", "--accuracy"},
                       BadArgs{"IntegratorUnknown", "--integrator euler", "euler"},
+                      BadArgs{"TipToleranceText", "--tip-tolerance abc", "--tip-tolerance: expected a number"},
+                      BadArgs{"TipToleranceTooLoose", "--tip-tolerance 1", "solver.tip_tolerance"},
+                      BadArgs{"TipToleranceNegative", "--tip-tolerance -1e-9", "(got -1e-09)"},
                       BadArgs{"JsonWithValue", "--json=yes", "--json takes no argument"}),
     [](const ::testing::TestParamInfo<BadArgs>& info) { return info.param.name; });
 
