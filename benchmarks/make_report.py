@@ -364,11 +364,21 @@ def readme_speed():
                          f"{t[0]['options'].split(': ', 1)[1]}")
         if extra:
             faster.append(f"{LABEL[m]} " + ", ".join(extra))
+    side = ""
+    if os.path.exists(os.path.join(res, "side_by_side_summary.csv")):
+        sb = read("side_by_side_summary.csv")
+        cells = [f"{LABEL[x['model']]} {f(x['speedup_median'])}x median / {f(x['speedup_min'])}x min "
+                 f"(CPU time {f(x['cpu_speedup_median'])}x / {f(x['cpu_speedup_min'])}x)"
+                 for x in sb if x["options"] == "default"]
+        if cells:
+            side = (" Timed side by side with the paper's code in one run on the same 60 loaded cases "
+                    "(`benchmarks/side_by_side.sh`, wall time, default options): " + "; ".join(cells) + ".")
     text = ("Speed-ups against the paper's own code with tdcr's default options (tip tolerance 1e-7 of "
             "the robot's length, 1e-8 m here), generated from the tables of docs/benchmarks.md "
             "(unloaded: n = 10, configuration (T_M, 0, 0, 0); loaded: its 60 random cases with tip forces, "
             "n = 3-20, median and minimum over the cases, against the paper code's stored timings; "
             "trajectory: n = 10, 0.05 N tip force, 1000 warm-started steps): " + "; ".join(parts) + "."
+            + side
             + (" Options the benchmark found faster at the same accuracy: " + "; ".join(faster) + "." if faster else ""))
     return textwrap.fill(text, width=100, initial_indent="  ", subsequent_indent="  ", break_on_hyphens=False)
 
