@@ -359,7 +359,7 @@ Solution solve_refined(const StaticModel& model, ModelWorkspace& workspace, cons
     const int h = std::min(warm_start->summary.rk4_halvings, SolverOptions::kMaxRk4Halvings);
     set_mesh(o, h);
     Solution fine = tdcr::solve(model, workspace, input, o, warm_start);
-    test = fine.converged() && wants_stability(options.stability, input, reached_by_path(fine), true);
+    test = fine.converged() && wants_stability(options.stability, input, reached_by_path(fine), false);
     last_options = o;
     if (fine.converged() && fine.summary.integrator == "rk4" && !fine.disk_frames.empty()) {
       SolverOptions oc = o;
@@ -429,7 +429,7 @@ Solution solve_refined(const StaticModel& model, ModelWorkspace& workspace, cons
     }
     // (VC and VCref only: their tests count under loads alone.)
     test = first_answer.converged() &&
-           wants_stability(options.stability, input, reached_by_path(first_answer), true);
+           wants_stability(options.stability, input, reached_by_path(first_answer), false);
     if (!first_answer.converged() || first_answer.summary.integrator != "rk4" || first_answer.disk_frames.empty())
       return first_answer;
     last = std::move(first_answer);

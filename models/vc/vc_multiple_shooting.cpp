@@ -203,7 +203,7 @@ class MultipleShooting final : public detail::ModelProblem {
     tendon_displacements(W_, W_.segment_lengths, sol.tendon_displacements);
   }
   // The test on a coarse mesh costs a fraction of a cold loaded solve (common/stability_mesh.hpp).
-  bool automatic_stability_under_loads() const override { return true; }
+  bool automatic_stability_under_loads() const override { return false; }
   // Node 0 holds the base wrench (states 12..17).
   Stability stability(const Eigen::VectorXd& x, double load_factor) override {
     return conjugate_point_test(W_, Vec6(x.segment<6>(12)), load_factor);

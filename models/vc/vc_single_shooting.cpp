@@ -153,7 +153,7 @@ class SingleShooting final : public detail::ModelProblem {
     if (W_.friction) sol.tendon_end_tensions = system_.end_tensions();
   }
   // The test on a coarse mesh costs a fraction of a cold loaded solve (common/stability_mesh.hpp).
-  bool automatic_stability_under_loads() const override { return true; }
+  bool automatic_stability_under_loads() const override { return false; }
   Stability stability(const Eigen::VectorXd& x, double load_factor) override {
     if (W_.friction)
       return Stability{StabilityStatus::Undetermined, NAN,

@@ -144,7 +144,7 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
   void rest_state(Eigen::VectorXd& x) override { shape_guess(x, false); }
   std::string integrator_name() const override { return integrator_->name(); }
   // The test on a coarse mesh costs a fraction of a cold loaded solve (common/stability_mesh.hpp).
-  bool automatic_stability_under_loads() const override { return true; }
+  bool automatic_stability_under_loads() const override { return false; }
   // The reduced stiffness in the disk poses (vcref_stability.cpp).
   Stability stability(const Eigen::VectorXd& x, double load_factor) override {
     if (d_.friction)

@@ -30,9 +30,9 @@ enum class LinearSolverKind {
 /// `solver.stability`: `"auto"`, `true`, `false`).
 enum class StabilityCheck {
   Automatic,  ///< Where it matters: an answer reached by a loading path (from rest, a snap, a warm
-              ///< start's input path, a displacement solve's path), and VC's and VCref's answers
-              ///< under external loads (tip force or moment nonzero, gravity nonzero). Not a plain
-              ///< unloaded direct or warm solve, nor a loaded direct solve of CCsub or PRB.
+              ///< start's input path, a displacement solve's path), in every model. Not a direct
+              ///< or warm solve (under loads within the direct-solve bounds it lands on the branch
+              ///< connected to rest).
   Always,     ///< Every converged answer.
   Never       ///< No answer (Solution::stability says "not checked").
 };
@@ -124,15 +124,11 @@ struct SolverOptions {
   /// conjugate-point test of the fixed-free rod, CCsub and PRB by the eigenvalues of the reduced
   /// stiffness, VCref by its reduced stiffness in the disk poses; CC reports "undetermined"
   /// (docs/models.md, "Stability"). Automatic by default (StabilityCheck::Automatic): answers
-  /// reached by a loading path, and VC's and VCref's answers under external loads, are tested; a
-  /// plain unloaded direct or warm tension solve is not, nor a loaded direct solve of CCsub or PRB
-  /// (their dense eigen-solve costs several of their solves). An untested Solution's stability
-  /// says "not checked" (kStabilityNotChecked). Measured on the 60 loaded cases of bench_loaded
-  /// (`bench_loaded --models M --cases 60 --repeat 3`, default against `--stability never`, 4 runs
-  /// each way, 2-core Intel Xeon shared with other builds, 2026-11-27): median cold solve +19 %
-  /// (VC; runs +3 to +33 % in the machine's noise) and +6 % (VCref); CCsub and PRB untested there.
-  /// On the benchmark's loaded trajectory every warm step is tested: VC 232 -> 381 us per step,
-  /// VCref 175 -> 297 us.
+  /// reached by a loading path are tested; direct and warm solves are not (CCsub's and PRB's
+  /// dense eigen-solve costs several of their solves; VC's coarse-mesh test about as much as its
+  /// accuracy-driven solve: with it the loaded cases' median VC solve went from 280 to 610 us,
+  /// `bench_loaded`, 2026-11-27). An untested Solution's stability says "not checked"
+  /// (kStabilityNotChecked); true tests every answer.
   StabilityCheck stability = StabilityCheck::Automatic;
   /// Differential kinematics of every converged answer (Solution::tip_jacobian,
   /// Solution::tip_compliance) by the implicit function theorem on the converged system: no
