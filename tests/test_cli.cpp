@@ -397,8 +397,10 @@ TEST(CliInverse, ReachesTheExampleTipWithItsTensions) {
   EXPECT_LT(inv["position_error"].get<double>(), 1e-6);
   EXPECT_TRUE(inv["target"]["rotation"].is_null());
   ASSERT_EQ(inv["tensions"].size(), 4u);
-  EXPECT_NEAR(inv["tensions"][0].get<double>(), 5.5532974, 1e-6);
-  for (int k = 1; k < 4; ++k) EXPECT_LE(inv["tensions"][k].get<double>(), 1e-6);
+  // The target is the example's tip at the default tip tolerance (1e-8 m); the inverse solves on
+  // the fixed mesh, so the tensions come back to the tension that 1e-8 m moves (1.9e-6 N here).
+  EXPECT_NEAR(inv["tensions"][0].get<double>(), 5.5532974, 1e-5);
+  for (int k = 1; k < 4; ++k) EXPECT_LE(inv["tensions"][k].get<double>(), 1e-5);
   for (int i = 0; i < 3; ++i) EXPECT_NEAR(j["tip"]["position"][i].get<double>(), tip[i].get<double>(), 1e-6);
 
   const CliRun text = run_tdcr("inverse " + quote(slack_paper_robot(tmp)) + " --target " + target);
