@@ -154,23 +154,87 @@ TEST(Rk4ToleranceVc, OnByDefaultAndIgnoredByFixedMeshCvodeAndLumpedModels) {
   EXPECT_EQ(l.summary.rk4_refinements, 0);
 }
 
-// A warm-started solve starts one halving below its warm start's mesh, so along a trajectory it
-// solves two meshes, not every mesh from the first; its answer meets the tolerance all the same.
-TEST(Rk4ToleranceVc, WarmSolveStartsBelowTheWarmStartsMesh) {
+// A warm-started solve solves on the coarsest mesh its warm start's estimate predicts within half
+// the tolerance, and keeps that prediction as its estimate (age 1): its answer meets the
+// tolerance all the same, and the prediction is no smaller than the true error.
+TEST(Rk4ToleranceVc, WarmSolveSolvesOnThePredictedMesh) {
   Scene scene = loaded_case();
   auto vc = make_model(ModelKind::VC, scene);
   auto ws = vc->make_workspace();
   const Solution cold = solve(*vc, *ws, scene.input(), coarse(1e-10));
   ASSERT_TRUE(cold.converged()) << cold.summary.brief_report();
   ASSERT_GE(cold.summary.rk4_halvings, 2);
-  scene.actuation.values[0] *= 1.01;
+  EXPECT_EQ(cold.summary.tip_error_estimate_age, 0);
+  scene.actuation.values[0] *= 1.001;
   const Solution warm = solve(*vc, *ws, scene.input(), coarse(1e-10), &cold);
   ASSERT_TRUE(warm.converged()) << warm.summary.brief_report();
-  EXPECT_EQ(warm.summary.rk4_refinements, 1);
-  EXPECT_EQ(warm.summary.rk4_halvings, cold.summary.rk4_halvings);
-  EXPECT_LE(warm.summary.tip_error_estimate, 1e-10);
+  EXPECT_EQ(warm.summary.tip_error_estimate_age, 1);
+  EXPECT_EQ(warm.summary.rk4_refinements, 0);
+  EXPECT_LE(warm.summary.rk4_halvings, cold.summary.rk4_halvings);
+  EXPECT_LE(warm.summary.tip_error_estimate, 0.5e-10);
   const Solution ref = reference(*vc, *ws, scene.input());
-  EXPECT_LE((warm.tip().p - ref.tip().p).norm(), 1e-10);
+  const double error = (warm.tip().p - ref.tip().p).norm();
+  EXPECT_LE(error, 1e-10);
+  EXPECT_LE(error, 1.2 * warm.summary.tip_error_estimate);
+}
+
+// Along a trajectory (the bench_loaded trajectory's input, T1 from 0 to T_M and back with a
+// 0.05 N transverse tip force, 60 steps, n = 10), in VC and VCref: every step's tip is within
+// the default tolerance (1e-8 m) of CVODE at rtol 1e-12, whether its estimate was measured or
+// predicted; the estimate is measured again at least every kMaxEstimateAge + 1 steps.
+class Rk4TrajectoryEstimate : public ::testing::TestWithParam<ModelKind> {};
+
+TEST_P(Rk4TrajectoryEstimate, EveryStepWithinTheToleranceAndEstimatesRefreshed) {
+  const Robot robot = paper::robot(10);
+  const double t_max = paper::max_tension(robot);
+  constexpr int kSteps = 60;
+  auto model = make_model(GetParam(), robot);
+  auto ws = model->make_workspace();
+  auto ref_ws = model->make_workspace();
+  Solution prev;
+  int measured = 0, predicted = 0, max_age = 0;
+  for (int k = 0; k <= kSteps; ++k) {
+    ModelInput in;
+    in.actuation.values = {t_max * 0.5 * (1.0 - std::cos(2.0 * M_PI * k / kSteps)), 0.0, 0.0, 0.0};
+    in.loads.tip_force = Vec3(0.05, 0.0, 0.0);
+    const Solution s = solve(*model, *ws, in, SolverOptions(), k > 0 ? &prev : nullptr);
+    ASSERT_TRUE(s.converged()) << "step " << k << ": " << s.summary.brief_report();
+    ASSERT_TRUE(std::isfinite(s.summary.tip_error_estimate)) << "step " << k;
+    EXPECT_LE(s.summary.tip_error_estimate, s.summary.tip_tolerance) << "step " << k;
+    (s.summary.tip_error_estimate_age == 0 ? measured : predicted) += 1;
+    max_age = std::max(max_age, s.summary.tip_error_estimate_age);
+    if (k % 5 == 0) {
+      const Solution ref = reference(*model, *ref_ws, in);
+      EXPECT_LE((s.tip().p - ref.tip().p).norm(), s.summary.tip_tolerance)
+          << "step " << k << " (estimate " << s.summary.tip_error_estimate << " m, age "
+          << s.summary.tip_error_estimate_age << ")";
+    }
+    prev = s;
+  }
+  EXPECT_LE(max_age, SolverOptions::kMaxEstimateAge);
+  EXPECT_GE(measured, kSteps / (SolverOptions::kMaxEstimateAge + 1));
+  EXPECT_GT(predicted, 0);
+}
+
+INSTANTIATE_TEST_SUITE_P(Models, Rk4TrajectoryEstimate, ::testing::Values(ModelKind::VC, ModelKind::VCref),
+                         [](const auto& info) { return to_string(info.param); });
+
+// A warm start far from the new input (the tip moves more than 1 % of the length) measures its
+// estimate instead of predicting it.
+TEST(Rk4ToleranceVc, LargeMoveMeasuresTheEstimate) {
+  Scene scene = loaded_case();
+  auto vc = make_model(ModelKind::VC, scene);
+  auto ws = vc->make_workspace();
+  const Solution cold = solve(*vc, *ws, scene.input(), SolverOptions());
+  ASSERT_TRUE(cold.converged()) << cold.summary.brief_report();
+  scene.loads.tip_force *= 1.5;
+  const Solution warm = solve(*vc, *ws, scene.input(), SolverOptions(), &cold);
+  ASSERT_TRUE(warm.converged()) << warm.summary.brief_report();
+  ASSERT_GT((warm.tip().p - cold.tip().p).norm(), SolverOptions::kMaxPredictedTipMove * scene.robot.total_length());
+  EXPECT_EQ(warm.summary.tip_error_estimate_age, 0);
+  EXPECT_GE(warm.summary.rk4_refinements, 1);
+  const Solution ref = reference(*vc, *ws, scene.input());
+  EXPECT_LE((warm.tip().p - ref.tip().p).norm(), warm.summary.tip_tolerance);
 }
 
 // One option moves both: the tip tolerance (0: 1e-7 of the length) and Newton's tolerance tied
@@ -263,6 +327,7 @@ TEST(Rk4ToleranceVc, SceneKeyAndJsonOutput) {
   EXPECT_NE(json.find("\"tip_error_estimate\""), std::string::npos);
   EXPECT_NE(json.find("\"rk4_refinements\""), std::string::npos);
   EXPECT_NE(json.find("\"rk4_halvings\""), std::string::npos);
+  EXPECT_NE(json.find("\"tip_error_estimate_age\""), std::string::npos);
 }
 
 }  // namespace

@@ -61,8 +61,10 @@ std::vector<std::vector<std::string>> rows_of(const std::string& path) {
   return rows;
 }
 
-/// Same samples, inputs, models and statuses; tips within `tol` m and rad.
-void expect_same_rows(const std::string& a, const std::string& b, double tol = 1e-9) {
+/// Same samples, inputs, models and statuses; tip positions within `tol` m and tip rotations
+/// within `rot_tol` rad (`tol` if not given).
+void expect_same_rows(const std::string& a, const std::string& b, double tol = 1e-9, double rot_tol = 0.0) {
+  if (rot_tol == 0.0) rot_tol = tol;
   const auto ra = rows_of(a), rb = rows_of(b);
   ASSERT_EQ(ra.size(), rb.size());
   ASSERT_FALSE(ra.empty());
@@ -72,7 +74,7 @@ void expect_same_rows(const std::string& a, const std::string& b, double tol = 1
     // sample, 2 axes, model, status (columns 0..4) exactly; tip and rotation (n-8 .. n-3) close.
     for (std::size_t c = 0; c < 5; ++c) EXPECT_EQ(ra[r][c], rb[r][c]) << "row " << r << " column " << c;
     for (std::size_t c = n - 8; c < n - 2; ++c)
-      EXPECT_NEAR(std::stod(ra[r][c]), std::stod(rb[r][c]), tol) << "row " << r << " column " << c;
+      EXPECT_NEAR(std::stod(ra[r][c]), std::stod(rb[r][c]), c < n - 5 ? tol : rot_tol) << "row " << r << " column " << c;
   }
 }
 
@@ -310,7 +312,10 @@ TEST(SweepRun, NeighbourOrderWritesTheRowsOfSampleOrder) {
   // Random samples solved along the Hilbert curve give the rows of a run in sample order: same
   // samples, inputs, models and statuses, in sample order. The tips agree to twice the default tip
   // tolerance (1e-7 of the length: 1e-8 m here): other warm starts stop on another mesh or at
-  // another point within the tolerances, up to 1.1e-8 apart here, so 3e-8 m and rad.
+  // another point within the tolerances, up to 1.1e-8 m apart here, so 3e-8 m. The tip tolerance
+  // bounds positions, not rotations: warm steps that keep a predicted estimate stop on the
+  // coarsest mesh within it, and the rotations of the two orders' answers then differ by up to
+  // 5.2e-8 rad here (8.3e-9 m in position), so 1e-7 rad.
   const std::string head = R"({"scene": ")" + kTipForceScene + R"(", "models": ["vc", "ccsub"], "sampling": "random",
     "samples": 80, "seed": 5, )";
   const std::string axes = R"("axes": [{"field": "actuation.tensions[0]", "from": 0, "to": 5},
@@ -324,7 +329,7 @@ TEST(SweepRun, NeighbourOrderWritesTheRowsOfSampleOrder) {
   o.threads = 1;
   tdcr::run_sweep(spec, warm, o);
   tdcr::run_sweep(tdcr::parse_sweep(head + R"("order": "sample", )" + axes), plain, o);
-  expect_same_rows(warm, plain, 3e-8);
+  expect_same_rows(warm, plain, 3e-8, 1e-7);
   const auto rows = rows_of(warm);
   ASSERT_EQ(rows.size(), 160u);
   for (std::size_t r = 0; r < rows.size(); ++r) {
@@ -334,7 +339,7 @@ TEST(SweepRun, NeighbourOrderWritesTheRowsOfSampleOrder) {
   // Threads and shards do not change the rows (the order is computed per block).
   o.threads = 2;
   tdcr::run_sweep(spec, warm2, o);
-  expect_same_rows(warm, warm2, 3e-8);
+  expect_same_rows(warm, warm2, 3e-8, 1e-7);
 }
 
 TEST(SweepRun, MergedShardsEqualOneRun) {

@@ -41,6 +41,7 @@ ojson summary_json(const SolverSummary& s) {
                {"tip_error_estimate", number(s.tip_error_estimate)},
                {"rk4_refinements", s.rk4_refinements},
                {"rk4_halvings", s.rk4_halvings},
+               {"tip_error_estimate_age", s.tip_error_estimate_age},
                {"function_tolerance", s.function_tolerance},
                {"tip_tolerance", s.tip_tolerance},
                {"solve_time_s", number(s.solve_time_s)}};

@@ -31,8 +31,10 @@ def main(path, steps=11):
         if not (sol.converged and cold.converged):
             print("not converged at T1 = %g N: %s" % (t, sol.message))
             return 1
-        gap = np.abs(sol.tip_position - cold.tip_position).max()
-        assert gap < 1e-9, gap  # a warm start changes the work, not the answer
+        # A warm start changes the work, not the accuracy: both tips are within the tip
+        # tolerance of the exact one (a warm step may stop on a coarser RK4 mesh within it).
+        gap = np.linalg.norm(sol.tip_position - cold.tip_position)
+        assert gap <= 2.0 * sol.summary.tip_tolerance, gap
         tip = sol.tip_position * 1e3
         print("%8.3f  [%8.3f, %8.3f, %8.3f]  %5d %5d" % (t, *tip, sol.iterations, cold.iterations))
         warm_total += sol.iterations

@@ -302,6 +302,22 @@ double refinement_ratio(const Robot& robot, int steps, double max_step, int fact
   return r;
 }
 
+// The largest ratio of steps per disk interval between the meshes of `fine` and `coarse`
+// halvings of the first mesh (coarse <= fine): RK4's tip error on the coarse mesh is at most its
+// fourth power times the fine mesh's, interval by interval.
+double coarsening_ratio(const Robot& robot, int coarse, int fine) {
+  double r = 1.0;
+  for (const Segment& seg : robot.segments) {
+    const double len = seg.length / seg.disks;
+    const int sc = rk4_steps_over(len, SolverOptions::kFirstMeshRk4Steps << coarse,
+                                  SolverOptions::kFirstMeshRk4MaxStep / (1 << coarse));
+    const int sf = rk4_steps_over(len, SolverOptions::kFirstMeshRk4Steps << fine,
+                                  SolverOptions::kFirstMeshRk4MaxStep / (1 << fine));
+    r = std::max(r, static_cast<double>(sf) / sc);
+  }
+  return r;
+}
+
 void add_work(const SolverSummary& from, SolverSummary& to) {
   to.iterations += from.iterations;
   to.residual_evaluations += from.residual_evaluations;
@@ -323,9 +339,8 @@ static_assert((SolverOptions::kFirstMeshRk4Steps << kPathHalvings) == SolverOpti
 // the finer answer's error is about |tip_fine - tip_coarse| / (r^4 - 1) for a step ratio r. The
 // first refinement halves the steps; later ones jump by as many halvings as the last estimate
 // says are needed (its error / 16 per halving), so that a tight tolerance does not solve every
-// mesh on the way. A warm-started solve starts one halving below the mesh its warm start ended
-// on: along a trajectory the mesh the last answer needed is the likely one, and the solve
-// before it is the coarse half of the estimate.
+// mesh on the way. A warm-started solve solves on the mesh its warm start's estimate predicts
+// (below), and falls back to this refinement from one halving below the warm start's mesh.
 // Its answer's stability is not tested here: `test` says whether the rule asks for it (decided by
 // the first solve's path: the refined answers are direct warm solves), `last` gives the options
 // of the solve that returned it.
@@ -350,58 +365,84 @@ Solution solve_refined(const StaticModel& model, ModelWorkspace& workspace, cons
   // The refinement's last converged answer and the number of halvings of its mesh.
   std::optional<Solution> last;
   int halvings = 0, next = 1;
-  // A warm start that ended on a refined mesh: along a trajectory that mesh is the likely one.
-  // Solve there first (its Jacobian and the secant predictor fit it), then once on the mesh one
-  // halving coarser from that answer, for the estimate only: Newton's tolerance ten times looser
-  // there, and the workspace's warm-start history left as the fine solve made it. If the
-  // estimate is above the tolerance, the refinement goes on from the fine answer.
-  if (warm_start && warm_start->summary.rk4_halvings > 0) {
-    const int h = std::min(warm_start->summary.rk4_halvings, SolverOptions::kMaxRk4Halvings);
+  // A warm start with a measured or predicted estimate (a trajectory's last step): solve on the
+  // coarsest mesh its estimate predicts within a share of the tolerance (RK4's error scales with
+  // the fourth power of the step), from the warm start (its Jacobian and the secant predictor fit
+  // a neighbouring mesh as well). The prediction is the answer's estimate while it is fresh
+  // enough (SolverOptions::kMaxEstimateAge solves, a tip move below kMaxPredictedTipMove of the
+  // length per solve); otherwise the estimate is measured: one Newton step from the answer on the
+  // neighbouring mesh (the coarser one; from the first mesh the finer one), Newton's tolerance
+  // ten times looser there and the workspace's warm-start history left as the solve on the
+  // answer's mesh made it. Above the tolerance, the refinement goes on from the answer.
+  const SolverSummary* from = warm_start ? &warm_start->summary : nullptr;
+  if (from && from->integrator == "rk4" && std::isfinite(from->tip_error_estimate) &&
+      !warm_start->disk_frames.empty()) {
+    const int hw = std::clamp(from->rk4_halvings, 0, SolverOptions::kMaxRk4Halvings);
+    const double share = SolverOptions::kPredictedToleranceShare * tol;
+    const auto predicted = [&](int h) {
+      return from->tip_error_estimate * std::pow(coarsening_ratio(model.robot(), h, hw), 4);
+    };
+    int h = hw;
+    while (h > 0 && predicted(h - 1) <= share) --h;
     set_mesh(o, h);
-    Solution fine = tdcr::solve(model, workspace, input, o, warm_start);
-    test = fine.converged() && wants_stability(options.stability, input, reached_by_path(fine), false);
+    Solution answer = tdcr::solve(model, workspace, input, o, warm_start);
+    test = answer.converged() && wants_stability(options.stability, input, reached_by_path(answer), false);
     last_options = o;
-    if (fine.converged() && fine.summary.integrator == "rk4" && !fine.disk_frames.empty()) {
+    if (answer.converged() && answer.summary.integrator == "rk4" && !answer.disk_frames.empty()) {
+      SolverSummary& sum = answer.summary;
+      sum.rk4_halvings = h;
+      const auto finish = [&]() {
+        sum.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        return answer;
+      };
+      const int age = from->tip_error_estimate_age + 1;
+      const double moved = (answer.tip().p - warm_start->tip().p).norm();
+      if (predicted(h) <= share && age <= SolverOptions::kMaxEstimateAge &&
+          moved <= SolverOptions::kMaxPredictedTipMove * model.robot().total_length()) {
+        sum.tip_error_estimate = predicted(h);
+        sum.tip_error_estimate_age = age;
+        return finish();
+      }
+      const bool finer = h == 0;
       SolverOptions oc = o;
-      set_mesh(oc, h - 1);
+      set_mesh(oc, finer ? 1 : h - 1);
       oc.function_tolerance = std::min(10.0 * o.function_tolerance, SolverOptions::kMaxFunctionTolerance);
       oc.stability = StabilityCheck::Never;
       oc.differential_kinematics = false;
-      // One Newton step from the fine answer: the meshes' answers differ by the discretisation
-      // error, so the step lands on the coarse answer up to the square of it.
+      // One Newton step from the answer: the meshes' answers differ by the discretisation
+      // error, so the step lands on the other mesh's answer up to the square of it.
       oc.max_iterations = 1;
       oc.continuation = false;
-      const double r = refinement_ratio(model.robot(), oc.rk4_steps, oc.rk4_max_step, 2);
-      const Solution c = keep_history([&]() { return tdcr::solve(model, workspace, input, oc, &fine); });
+      const double r = finer ? refinement_ratio(model.robot(), o.rk4_steps, o.rk4_max_step, 2)
+                             : refinement_ratio(model.robot(), oc.rk4_steps, oc.rk4_max_step, 2);
+      const Solution c = keep_history([&]() { return tdcr::solve(model, workspace, input, oc, &answer); });
       const bool stepped = c.converged() || (c.summary.termination == TerminationType::MaxIterations &&
                                              !c.disk_frames.empty() && c.tip().p.allFinite());
       if (stepped) {
-        SolverSummary& sum = fine.summary;
         add_work(c.summary, sum);
-        add_work(spent, sum);
-        spent = SolverSummary();
-        sum.tip_error_estimate = (fine.tip().p - c.tip().p).norm() / (std::pow(r, 4) - 1.0);
+        // Richardson: the finer answer's error is d / (r^4 - 1), the coarser one's r^4 times that.
+        const double r4 = std::pow(r, 4);
+        const double d = (answer.tip().p - c.tip().p).norm();
+        sum.tip_error_estimate = finer ? d * r4 / (r4 - 1.0) : d / (r4 - 1.0);
+        sum.tip_error_estimate_age = 0;
         sum.rk4_refinements = 1;
-        sum.rk4_halvings = h;
-        if (sum.tip_error_estimate <= tol || h >= SolverOptions::kMaxRk4Halvings) {
-          if (sum.tip_error_estimate > tol) {
-            sum.termination = TerminationType::NoConvergence;
-            sum.message = "accuracy-driven RK4: tip error estimate " + format_value(sum.tip_error_estimate) +
-                          " m above solver.tip_tolerance " + format_value(tol) + " m on the finest mesh allowed";
-          }
-          sum.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-          return fine;
+        if (sum.tip_error_estimate <= tol) return finish();
+        if (h >= SolverOptions::kMaxRk4Halvings) {
+          sum.termination = TerminationType::NoConvergence;
+          sum.message = "accuracy-driven RK4: tip error estimate " + format_value(sum.tip_error_estimate) +
+                        " m above solver.tip_tolerance " + format_value(tol) + " m on the finest mesh allowed";
+          return finish();
         }
         halvings = h;
         next = static_cast<int>(std::ceil(std::log(sum.tip_error_estimate / tol) / std::log(16.0)));
         next = std::clamp(next, 1, SolverOptions::kMaxRk4Halvings - halvings);
-        last = std::move(fine);
+        last = std::move(answer);
       } else {
-        add_work(fine.summary, spent);
+        add_work(answer.summary, spent);
         add_work(c.summary, spent);
       }
     } else {
-      add_work(fine.summary, spent);
+      add_work(answer.summary, spent);
     }
     // Otherwise the refinement from one halving below the warm start's mesh, as from a cold start.
   }

@@ -85,6 +85,7 @@ void bind_solution_parts(py::module_& m) {
       .def_readonly("tip_error_estimate", &tdcr::SolverSummary::tip_error_estimate)
       .def_readonly("rk4_refinements", &tdcr::SolverSummary::rk4_refinements)
       .def_readonly("rk4_halvings", &tdcr::SolverSummary::rk4_halvings)
+      .def_readonly("tip_error_estimate_age", &tdcr::SolverSummary::tip_error_estimate_age)
       .def_readonly("function_tolerance", &tdcr::SolverSummary::function_tolerance)
       .def_readonly("tip_tolerance", &tdcr::SolverSummary::tip_tolerance)
       .def_readonly("solve_time_s", &tdcr::SolverSummary::solve_time_s)

@@ -57,8 +57,14 @@ struct SolverSummary {
   double tip_error_estimate = std::numeric_limits<double>::quiet_NaN();
   int rk4_refinements = 0;       ///< Accuracy-driven RK4: solves on refined meshes (0 otherwise).
   /// Accuracy-driven RK4: halvings of the first mesh's steps in the answer's mesh (it has 2^this
-  /// times the first mesh's steps; 0 otherwise). A warm start from this answer starts one below.
+  /// times the first mesh's steps; 0 otherwise). A warm start from this answer starts on the
+  /// coarsest mesh its estimate predicts to meet half the tolerance.
   int rk4_halvings = 0;
+  /// Accuracy-driven RK4: 0 if this solve measured tip_error_estimate (Richardson, two meshes);
+  /// k > 0 if it is predicted from the estimate measured k warm-started solves earlier, scaled to
+  /// this mesh by RK4's fourth-order law (SolverOptions::integrator says when a warm solve
+  /// predicts instead of measuring).
+  int tip_error_estimate_age = 0;
   double solve_time_s = 0.0;     ///< Wall time of the solve (s).
 
   /// @brief True only if termination is Converged: the returned shape is an equilibrium within

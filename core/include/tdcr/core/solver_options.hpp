@@ -72,7 +72,12 @@ struct SolverOptions {
   /// and the longest step halved, once or as often as the last estimate asks for) until the
   /// Richardson estimate of its tip position error, from the last two meshes, is at most
   /// tip_tolerance; each finer solve is warm-started from the coarser answer and its Jacobian. A
-  /// warm-started solve starts one halving below the mesh its warm start ended on.
+  /// warm-started solve (a trajectory's step) solves on the coarsest mesh that its warm start's
+  /// estimate, scaled by RK4's fourth-order law, predicts within kPredictedToleranceShare of the
+  /// tolerance, and keeps that prediction as its estimate (SolverSummary::tip_error_estimate_age)
+  /// for at most kMaxEstimateAge consecutive warm solves while the tip moves less than
+  /// kMaxPredictedTipMove of the robot's length per solve; otherwise it measures the estimate
+  /// again (one Newton step on the neighbouring mesh) and refines if it is above the tolerance.
   /// SolverSummary::tip_error_estimate, rk4_refinements and the mesh report it; a solve that
   /// cannot meet the tolerance within kMaxRk4Halvings halvings of the first mesh is reported as
   /// not converged. The estimate is an estimate, not a bound: on the 60 loaded cases of
@@ -85,6 +90,15 @@ struct SolverOptions {
   /// Most halvings of the first mesh's steps in an accuracy-driven RK4 solve: the finest mesh has
   /// 64 times its steps.
   static constexpr int kMaxRk4Halvings = 6;
+  /// Accuracy-driven RK4, warm-started solves: a predicted tip error is used only up to this
+  /// share of tip_tolerance (a factor 2 for the prediction's own error).
+  static constexpr double kPredictedToleranceShare = 0.5;
+  /// Accuracy-driven RK4, warm-started solves: most consecutive solves that predict their tip
+  /// error from an earlier measured estimate; the next one measures it.
+  static constexpr int kMaxEstimateAge = 8;
+  /// Accuracy-driven RK4, warm-started solves: a solve whose tip moved more than this share of
+  /// the robot's length from its warm start's measures its estimate.
+  static constexpr double kMaxPredictedTipMove = 0.01;
   /// Fixed-mesh RK4 (integrator "rk4_fixed"): minimum RK4 steps per disk interval (one
   /// subsegment, length L_i / n_i), for VC and VCref alike; rk4_max_step may ask for more.
   int rk4_steps = 8;
