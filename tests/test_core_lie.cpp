@@ -2,6 +2,7 @@
 // sample, plus analytic-vs-numerical derivative checks.
 #include <random>
 
+#include <Eigen/SVD>
 #include <gtest/gtest.h>
 
 #include "tdcr/core/lie.hpp"
@@ -105,6 +106,30 @@ TEST(Lie, NearestRotationIsIdempotentAndFixesDrift) {
   D(0, 1) += 1e-4;
   EXPECT_LT(lie::orthonormality_error(lie::nearest_rotation(D)), 1e-14);
   EXPECT_LT((lie::nearest_rotation(D) - R).norm(), 2e-4);
+}
+
+// The nearest rotation is the polar factor U V^T of the SVD M = U S V^T (det > 0): for matrices
+// near a rotation (drift 1e-15 to 5e-4, inside and at the edge of the Newton-Schulz fast path)
+// and far from one (1e-2, 0.3: the SVD path), random rotations and perturbations, the answer is
+// that polar factor to round-off, and a rotation.
+TEST(Lie, NearestRotationIsTheSvdPolarFactor) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (double drift : {1e-15, 1e-10, 1e-6, 5e-4, 1e-2, 0.3}) {
+    for (int trial = 0; trial < 50; ++trial) {
+      const Mat3 R = lie::exp_so3(3.0 * Vec3(u(rng), u(rng), u(rng)));
+      Mat3 P;
+      for (int i = 0; i < 9; ++i) P(i / 3, i % 3) = u(rng);
+      const Mat3 M = R + drift * P;
+      Eigen::JacobiSVD<Mat3> svd(M, Eigen::ComputeFullU | Eigen::ComputeFullV);
+      const Mat3 polar = svd.matrixU() * svd.matrixV().transpose();
+      ASSERT_GT(polar.determinant(), 0.0);
+      const Mat3 N = lie::nearest_rotation(M);
+      EXPECT_LT((N - polar).cwiseAbs().maxCoeff(), 1e-13) << "drift " << drift;
+      EXPECT_LT(lie::orthonormality_error(N), 1e-14) << "drift " << drift;
+      EXPECT_NEAR(N.determinant(), 1.0, 1e-14);
+    }
+  }
 }
 
 TEST(Frame, ComposeAndInverse) {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <Eigen/SVD>
 
@@ -90,6 +91,20 @@ double rotation_angle(const Mat3& A, const Mat3& B) {
 }
 
 Mat3 nearest_rotation(const Mat3& M) {
+  // Nearly a rotation (disk frames of an integrated or rebuilt shape, orthonormal to round-off):
+  // Newton-Schulz, X <- X (3 I - X^T X) / 2, keeps the singular vectors and takes every singular
+  // value to 1 quadratically, so it converges to the polar factor U V^T, the SVD's answer, in one
+  // or two steps at a tenth of the SVD's cost (VCref's warm guess takes one per disk per solve).
+  constexpr double kNearlyOrthonormal = 1e-3;
+  if (orthonormality_error(M) < kNearlyOrthonormal && M.determinant() > 0.0) {
+    Mat3 X = M;
+    for (int k = 0; k < 4; ++k) {
+      const Mat3 E = X.transpose() * X - Mat3::Identity();
+      if (E.cwiseAbs().maxCoeff() <= 4.0 * std::numeric_limits<double>::epsilon()) break;
+      X = X * (Mat3::Identity() - 0.5 * E);
+    }
+    return X;
+  }
   Eigen::JacobiSVD<Mat3> svd(M, Eigen::ComputeFullU | Eigen::ComputeFullV);
   Mat3 U = svd.matrixU();
   const Mat3 V = svd.matrixV();
