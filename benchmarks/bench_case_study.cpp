@@ -325,7 +325,7 @@ void tradeoff(const Settings& cfg) {
   }
 }
 
-// Displacement input (issue 14) and elastic tendons (issue 15): the pulled tendons of the
+// Displacement input and elastic tendons: the pulled tendons of the
 // baseline given by the displacements of its answer, the others by their tension (0), so the
 // inextensible answer is the baseline's; elastic: the same with EA = 1e4 N per tendon (it
 // stretches about 0.1 mm). Each solve is a sequence of warm-started tension solves.

@@ -1,4 +1,4 @@
-// Loaded cases and a loaded trajectory (issue 13): speed-up against the paper's own code at equal
+// Loaded cases and a loaded trajectory: speed-up against the paper's own code at equal
 // or better tip accuracy, per model (VC, CCsub, VCref, PRB).
 //
 //   bench_loaded [--quick] [--out DIR] [--cases N] [--repeat R] [--steps N] [--tip-tol M] [--traj-tol M]
@@ -30,7 +30,7 @@
 //   cases' matched options, and the
 //   trajectory's own calibration: every candidate except CVODE run over the whole trajectory, the
 //   fastest without failures whose largest tip error at those steps is at most --traj-tol (default
-//   1e-9 m, the issue-13 trajectory target), labelled "fastest within ... m: <candidate>".
+//   1e-9 m, the trajectory's accuracy target), labelled "fastest within ... m: <candidate>".
 // Writes DIR/loaded.csv (per case, model, options), loaded_summary.csv (per model and options),
 // loaded_options.csv (the candidates), trajectory.csv. Failures of tdcr or of the paper's code are
 // kept and counted, never dropped. --cases N takes the first N cases; --models a comma-separated
@@ -70,7 +70,7 @@ struct Settings {
   int repeat = 5;
   int steps = 1000;
   double tip_tol = 1e-8;
-  double traj_tol = 1e-9;  // the trajectory target of issue 13: 1e-9 m tip accuracy
+  double traj_tol = 1e-9;  // the trajectory's accuracy target: 1e-9 m tip accuracy
 };
 
 // ---- data ------------------------------------------------------------------------------------

@@ -1,4 +1,4 @@
-// Soft robots under tip forces (issue 13, third target): every static model within 10x of the
+// Soft robots under tip forces (the soft-robot target): every static model within 10x of the
 // fastest model on the same scene, VC under 20 ms.
 //
 // Usage: bench_soft [--quick] [--out DIR] [--repeat R] [--seed S] [--rk4-tip-tol M]
@@ -7,7 +7,7 @@
 // 20 disks per segment, each under three loaded cases drawn once from a seeded generator (default
 // seed 13, SplitMix64, the same draws for every E and n): the four tensions uniform in
 // [0, 1.5 T_M] with T_M of the softened robot (Eq. 55: the same bending as the loaded cases of
-// the issue, whose tensions are U[0, 1.5 T_M] on the stiff robot), and a tip force of magnitude
+// bench_loaded, whose tensions are U[0, 1.5 T_M] on the stiff robot), and a tip force of magnitude
 // uniform in [0.3, 1] N along +y (in the bending plane, with tendons 1 and 3), -y (in the
 // plane, against them) and +x (transverse to it). Models: CCsub, PRB, VC, VCref, each solved cold
 // (no warm start: the model's own cold rule, direct solve or loading path from rest) R times on
@@ -219,7 +219,7 @@ int main(int argc, char** argv) {
                 ratio(largest(control_ratios[kind])).c_str(), 1e-3 * median(t), 1e-3 * largest(t));
     ok = ok && converged[kind] > 0;
   }
-  std::printf("targets (issue 13): every model within 10x of the fastest on each scene; VC under 20 ms\n");
+  std::printf("targets: every model within 10x of the fastest on each scene; VC under 20 ms\n");
   std::printf("results in %s/%s\n", out_dir.c_str(), tip_tol > 0.0 ? "soft_tol.csv" : "soft.csv");
   return ok ? 0 : 1;
 }

@@ -1,4 +1,4 @@
-// VC on loaded scenes (issue 13): the paper robot (n = 10) with tensions (0.3, 0, 0.5, 0.1) T_M
+// VC on loaded scenes: the paper robot (n = 10) with tensions (0.3, 0, 0.5, 0.1) T_M
 // and a tip force (0.2, -0.3, 0.1) N, cold solves; and a warm-started trajectory (n = 10, tip
 // force 0.05 N along x, tendon 1 at 0.5 T_M (1 - cos(2 pi k / 1000)), one model and one
 // workspace, each step warm-started from the last). Tip errors against CVODE at rtol 1e-12.

@@ -1,4 +1,4 @@
-// Seeded loaded scenes on the paper robot (issue 12, item 5): the generator of
+// Seeded loaded scenes on the paper robot (the loaded-scene suite): the generator of
 // tests/test_loaded_scenes.cpp. Every draw comes from a seeded std::mt19937_64 turned into
 // doubles here (the std:: distributions differ between standard libraries), so a seed names the
 // same scene everywhere.
@@ -22,8 +22,8 @@ constexpr double kPitch = 0.008;   // paper tendon offset r (m)
 constexpr double kLength = 0.1;    // paper robot length L (m)
 
 struct LoadedScene {
-  std::string name;         // "s<seed>" or the issue example's name
-  std::uint64_t seed = 0;   // 0 for the issue examples
+  std::string name;         // "s<seed>" or the reported example's name
+  std::uint64_t seed = 0;   // 0 for the reported examples
   double stiffness_factor;  // f: E = 2.11e11 Pa x f
   int disks = 10;           // n per segment
   double load = 0.0;        // L^2 |F_tip| / EI
@@ -110,7 +110,7 @@ inline LoadedScene random_scene(int index) {
   return ls;
 }
 
-// A scene file of tests/data (issue 12's examples a and b).
+// A scene file of tests/data (the reported examples two_branches and fold_on_path).
 inline LoadedScene file_scene(const std::string& name, const std::string& file) {
   LoadedScene ls;
   ls.name = name;
@@ -122,10 +122,10 @@ inline LoadedScene file_scene(const std::string& name, const std::string& file) 
   return ls;
 }
 
-// Issue 12's text example: E x 0.1, n = 5, tensions (0.04, 0.15, 0.02, 0.71) T_M (T_M of the
+// The "VC fails on feasible scenes" report's example: E x 0.1, n = 5, tensions (0.04, 0.15, 0.02, 0.71) T_M (T_M of the
 // Table 3 robot), tip force (0.01, 0.01, 0.005) N ("VC fails on feasible scenes"); and its
 // infeasible example: E x 0.1, n = 10, 1.5 T_M on tendon 1.
-inline LoadedScene issue_text_scene(bool infeasible) {
+inline LoadedScene soft_scene(bool infeasible) {
   LoadedScene ls;
   const double tm = paper::max_tension(paper::robot(10));
   ls.stiffness_factor = 0.1;
@@ -133,11 +133,11 @@ inline LoadedScene issue_text_scene(bool infeasible) {
   ls.scene.robot = paper::robot(ls.disks, 0.1);
   ls.scene.actuation.kind = Actuation::Kind::Tensions;
   if (infeasible) {
-    ls.name = "issue12_infeasible";
+    ls.name = "soft_beyond_limit";
     ls.scene.actuation.values = {1.5 * tm, 0.0, 0.0, 0.0};
     ls.beyond_limit = true;
   } else {
-    ls.name = "issue12_vc_fail";
+    ls.name = "soft_n5_tip_force";
     ls.scene.actuation.values = {0.04 * tm, 0.15 * tm, 0.02 * tm, 0.71 * tm};
     ls.scene.loads.tip_force = Vec3(0.01, 0.01, 0.005);
   }
@@ -146,10 +146,10 @@ inline LoadedScene issue_text_scene(bool infeasible) {
   return ls;
 }
 
-// The suite: the issue's four examples, then `count` seeded scenes.
+// The suite: the four reported examples, then `count` seeded scenes.
 inline std::vector<LoadedScene> suite(int count) {
-  std::vector<LoadedScene> v = {file_scene("issue12_a", "issue12_a.json"), file_scene("issue12_b", "issue12_b.json"),
-                                issue_text_scene(false), issue_text_scene(true)};
+  std::vector<LoadedScene> v = {file_scene("two_branches", "two_branches.json"), file_scene("fold_on_path", "fold_on_path.json"),
+                                soft_scene(false), soft_scene(true)};
   for (int i = 0; i < count; ++i) v.push_back(random_scene(i));
   return v;
 }

@@ -1,4 +1,4 @@
-// The hard-case suite (DESIGN "Stability", issue 7): every static model on cases that defeat a
+// The hard-case suite (DESIGN "Stability"): every static model on cases that defeat a
 // plain Newton solve from the straight robot. Each (case, model) either converges (directly or by
 // load continuation) with an independently verified equilibrium and a physical property that
 // theory fixes, or fails with a clear status; never a crash, never a NaN marked converged.

@@ -1,4 +1,4 @@
-// Infeasible actuation (issue 12, item 4): a tension that asks for curvature x tendon offset
+// Infeasible actuation: a tension that asks for curvature x tendon offset
 // beyond 1 (the tendon would have to cross the backbone) is named as such by every static model:
 // Infeasible, the tendon, where, and the value of curvature x offset at the load fraction
 // reached. A feasible bend (0.9 of the limit) converges without geometry warnings.
@@ -21,7 +21,7 @@ constexpr double kR = 0.008;  // paper pitch radius (m)
 
 // The paper robot with E x 0.1 (EI = 4.242e-4 N m^2), n = 10, a pull on tendon 1 (ends at
 // segment 1, offset (0, r)): curvature T r / EI on segment 1, so the limit kappa r = 1 is at
-// T* = EI / r^2 = 6.63 N. Issue 12's case is T = 8.32995 N (1.5 T_M of the stiff robot): the
+// T* = EI / r^2 = 6.63 N. The reported case is T = 8.32995 N (1.5 T_M of the stiff robot): the
 // limit is met at T* / T = 79.6 % of the load.
 Scene soft_robot(double tension, Vec3 tip_force = Vec3::Zero()) {
   Scene s;

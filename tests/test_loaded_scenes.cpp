@@ -1,6 +1,6 @@
-// The loaded-scene suite (issue 12, item 5): seeded random scenes on the paper robot
-// (tests/loaded_scenes.hpp) plus the issue's examples, solved cold by every static model with
-// solver.stability on. docs/hard-cases.md, "Loaded-scene suite (issue 12)", has the table and
+// The loaded-scene suite: seeded random scenes on the paper robot
+// (tests/loaded_scenes.hpp) plus the four reported examples, solved cold by every static model with
+// solver.stability on. docs/hard-cases.md, "Loaded-scene suite", has the table and
 // the criterion.
 //
 // Feasible or infeasible is decided by VCref's answers (the reference model) at the scene's n and
@@ -62,8 +62,8 @@ struct KnownFailure {
   const char* reason;
 };
 
-// Pairs that fail today, each with its diagnosis (docs/hard-cases.md, "Loaded-scene suite
-// (issue 12)"): none since the tolerance measures the discretisation error (the five pairs listed
+// Pairs that fail today, each with its diagnosis (docs/hard-cases.md, "Loaded-scene suite"):
+// none since the tolerance measures the discretisation error (the five pairs listed
 // until then, s1000 CCsub, s1001 VC and CCsub, s1006 VC and CCsub, pass: "Known failures and
 // their causes" there).
 const std::vector<KnownFailure> kKnownFailures = {};

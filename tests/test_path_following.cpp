@@ -46,10 +46,10 @@ Solution natural_path(const StaticModel& m, ModelWorkspace& ws, const Scene& sce
 
 }  // namespace
 
-// Issue 12, example a: VC, CCsub and PRB used to land near (-29, 46, 58) mm, VCref at (56, -40,
+// The scene two_branches: VC, CCsub and PRB used to land near (-29, 46, 58) mm, VCref at (56, -40,
 // -23) mm. The loading path (fine natural steps agree: docs/models.md) reaches VCref's.
 TEST(PathFollowing, IssueExampleAllStaticModelsOnOneBranch) {
-  const Scene scene = scene_file("issue12_a.json");
+  const Scene scene = scene_file("two_branches.json");
   const double length = 0.1;
   Vec3 ref = Vec3::Zero();
   for (ModelKind kind : {ModelKind::VCref, ModelKind::VC, ModelKind::CCsub, ModelKind::PRB}) {
@@ -63,12 +63,12 @@ TEST(PathFollowing, IssueExampleAllStaticModelsOnOneBranch) {
   }
 }
 
-// Issue 12, example b with CCsub: the loading path meets a fold near 60 % of the load and the
+// The scene fold_on_path with CCsub: the loading path meets a fold near 60 % of the load and the
 // robot snaps. A fine natural path confirms the events: warm-started solves reach just below
 // the fold and fail (or jump) just past it; walking back from the answer at full load reaches
 // just past the fold on the landing branch, and the two tips differ by the reported jump.
 TEST(PathFollowing, SnapThroughMatchesAFineNaturalPath) {
-  const Scene scene = scene_file("issue12_b.json");
+  const Scene scene = scene_file("fold_on_path.json");
   auto m = make_model(ModelKind::CCsub, scene.robot, scene.effects);
   auto ws = m->make_workspace();
   const Solution s = solve(*m, *ws, scene.input(), scene.solver);
@@ -104,12 +104,12 @@ TEST(PathFollowing, SnapThroughMatchesAFineNaturalPath) {
   EXPECT_NEAR((after.tip().p - before.tip().p).norm(), jump, 0.15 * jump);
 }
 
-// Issue 12, example b: every static model's loading path lands on one stable branch near
+// The scene fold_on_path: every static model's loading path lands on one stable branch near
 // (-11, 27, -10) mm. VCref meets a fold near 57 % and snaps (its first landing 1e-4 past the
 // fold does not converge: the snap lands further past it); it used to stop at the fold. Its
 // stability margin falls towards zero at the fold.
 TEST(PathFollowing, IssueExampleBAllStaticModelsOnOneStableBranch) {
-  const Scene scene = scene_file("issue12_b.json");
+  const Scene scene = scene_file("fold_on_path.json");
   const double length = 0.1;
   SolverOptions options = scene.solver;
   options.stability = StabilityCheck::Always;
@@ -147,14 +147,14 @@ TEST(PathFollowing, IssueExampleBAllStaticModelsOnOneStableBranch) {
 }
 
 // SolverOptions::coarse_loading_path (the default): VC and VCref follow the loading path on a
-// coarse RK4 mesh and solve the answer on the requested one from its end. On issue 12's example b
+// coarse RK4 mesh and solve the answer on the requested one from its end. On the scene fold_on_path
 // (a fold and a snap on the way) the answer is the one of the whole path on the requested mesh
 // (within the Newton tolerance), the path events are the coarse path's (the fold within 5e-4 of
 // the load of the fine path's), and the integrations on the requested mesh are those of one short
 // Newton solve. A mesh no finer than the coarse one, or the option off, follows the path as
 // before.
 TEST(PathFollowing, CoarseLoadingPathKeepsTheAnswer) {
-  Scene scene = scene_file("issue12_b.json");
+  Scene scene = scene_file("fold_on_path.json");
   scene.solver.integrator = IntegratorKind::FixedStepRK4;  // the coarse path serves the fixed mesh
   for (ModelKind kind : {ModelKind::VCref, ModelKind::VC}) {
     auto m = make_model(kind, scene.robot, scene.effects);
@@ -205,7 +205,7 @@ TEST(PathFollowing, CoarseLoadingPathKeepsTheAnswer) {
 // Below the direct-solve load parameters (tendons only) the fast path stays: no path events,
 // no continuation.
 TEST(PathFollowing, TendonOnlySceneSolvesDirectly) {
-  Scene scene = scene_file("issue12_a.json");
+  Scene scene = scene_file("two_branches.json");
   scene.loads.tip_force.setZero();
   auto m = make_model(ModelKind::CCsub, scene.robot, scene.effects);
   auto ws = m->make_workspace();

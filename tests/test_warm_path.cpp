@@ -21,11 +21,11 @@ constexpr ModelKind kStatic[] = {ModelKind::VC, ModelKind::VCref, ModelKind::CCs
 
 }  // namespace
 
-// Issue 12, example a (L^2 |F| / EI = 8.6): warm-started from the tendon-only answer, every
+// The scene two_branches (L^2 |F| / EI = 8.6): warm-started from the tendon-only answer, every
 // static model walks the tip force in and lands where its cold solve (the loading path from
 // rest) does: both paths load the same robot from the same tendon-bent shape.
 TEST(WarmPath, LargeLoadChangeFollowsTheInputPathToTheColdAnswer) {
-  const Scene scene = scene_file("issue12_a.json");
+  const Scene scene = scene_file("two_branches.json");
   Scene unloaded = scene;
   unloaded.loads.tip_force.setZero();
   for (ModelKind kind : kStatic) {
@@ -50,7 +50,7 @@ TEST(WarmPath, LargeLoadChangeFollowsTheInputPathToTheColdAnswer) {
 
 // A small change stays a direct warm solve: no input path, few iterations and Jacobians.
 TEST(WarmPath, SmallChangeStaysADirectSolve) {
-  const Scene scene = scene_file("issue12_a.json");
+  const Scene scene = scene_file("two_branches.json");
   Scene nearby = scene;
   nearby.loads.tip_force *= 0.98;
   for (ModelKind kind : kStatic) {
@@ -74,7 +74,7 @@ TEST(WarmPath, SmallChangeStaysADirectSolve) {
 // snapped; walking the load back down by warm starts stays on the landing branch, while a cold
 // solve at the lower load (the path from rest, which stops short of the fold) is on the other.
 TEST(WarmPath, WarmStartsKeepTheBranchOfThePreviousAnswer) {
-  const Scene scene = scene_file("issue12_b.json");
+  const Scene scene = scene_file("fold_on_path.json");
   auto m = make_model(ModelKind::CCsub, scene.robot, scene.effects);
   auto ws = m->make_workspace();
   const Solution full = solve(*m, *ws, scene.input(), test::fixed_mesh_settings(scene.solver));

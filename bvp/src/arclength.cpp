@@ -317,7 +317,7 @@ bool Run::finish(const Point& a, const Point& b, bool b_is_fold) {
 
 // Jump from a fold to another branch at lambda slightly past it (see FoldAction::Snap). Close
 // to the fold the vanished equilibrium leaves a local minimum of |F| that can hold every attempt
-// (VCref on issue 12's example b); the landing then moves 10 times further past the fold, up to
+// (VCref on the scene fold_on_path); the landing then moves 10 times further past the fold, up to
 // a tenth of the span (or the target).
 bool Run::snap(const Point& fold) {
   phi_ = fold.t.head(n_);
