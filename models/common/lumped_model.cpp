@@ -88,6 +88,7 @@ LumpedProblem::LumpedProblem(const LumpedBody& body) : body_(body) {
 }
 
 void LumpedProblem::bind(const ModelInput& input) {
+  residual_changed();
   body_.statics.bind(input, loads_);
   convention_ = input.actuation.convention;
   banded_ = body_.banded();
@@ -122,11 +123,13 @@ void LumpedProblem::unknown_scale(Eigen::Ref<Eigen::VectorXd> s) const {
 }
 
 void LumpedProblem::cold_guess(Eigen::VectorXd& y) {
+  residual_changed();
   guess_x(x_, false);
   lift(x_, y);
 }
 
 void LumpedProblem::rest_state(Eigen::VectorXd& y) {
+  residual_changed();
   guess_x(x_, true);
   lift(x_, y);
 }
@@ -169,25 +172,42 @@ void LumpedProblem::fixed_point_passes(Eigen::VectorXd& x, int passes) {
 bool LumpedProblem::warm_guess(const Solution& previous, Eigen::VectorXd& y) {
   if (previous.unknowns.size() != body_.per_subsegment * body_.N || !previous.unknowns.allFinite()) return false;
   x_ = previous.unknowns.head(body_.per_subsegment * active());
+  residual_changed();
   on_warm(x_);
   lift(x_, y);
   return true;
 }
 
 void LumpedProblem::evaluate(const double* x) {
+  last_valid_ = false;
   body_.compute_frames(x, active(), frames_.data(), poses_.data(), backbone_weight_on() ? centroids_.data() : nullptr);
   if (body_.statics.friction()) body_.statics.update_friction(loads_, frames_.data());
   body_.statics.distal_wrenches(loads_, frames_.data(), centroids_.data(), F_.data(), M_.data());
 }
 
 bool LumpedProblem::residual(const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> f) {
+  last_valid_ = false;
   const bool ok = banded_ ? banded_residual(y.data(), f.data()) : recursive_residual(y.data(), f.data());
   if (ok && damping_ > 0.0) f += damping_ * damping_scale_.cwiseProduct(y - damping_ref_);
-  return ok && f.allFinite();
+  if (!(ok && f.allFinite())) return false;
+  last_y_ = y;  // allocates only when the size changes
+  last_f_ = f;
+  last_lambda_ = loads_.loads.load_factor();
+  last_valid_ = true;
+  return true;
+}
+
+bool LumpedProblem::final_residual(const Eigen::VectorXd& y, Eigen::Ref<Eigen::VectorXd> f) {
+  if (last_valid_ && last_lambda_ == loads_.loads.load_factor() && y.size() == last_y_.size() && y == last_y_) {
+    f = last_f_;
+    return true;
+  }
+  return residual(y, f);
 }
 
 bool LumpedProblem::set_damping(const Eigen::Ref<const Eigen::VectorXd>& x_ref, double rate) {
   if (!has_jacobian()) return false;
+  residual_changed();
   damping_ = rate;
   if (rate > 0.0) {
     damping_ref_ = x_ref;  // allocates at a snap only
@@ -204,6 +224,7 @@ bool LumpedProblem::recursive_residual(const double* x, double* f) {
 }
 
 void LumpedProblem::evaluate_from(const double* x, int k) {
+  last_valid_ = false;
   body_.compute_frames(x, active(), frames_.data(), poses_.data(), backbone_weight_on() ? centroids_.data() : nullptr, k);
   body_.statics.disk_loads(loads_, frames_.data(), disk_f_.data(), disk_m_.data(), k - 1);
   body_.statics.distal_wrenches(loads_, frames_.data(), centroids_.data(), disk_f_.data(), disk_m_.data(), F_.data(),
@@ -377,7 +398,9 @@ bool LumpedProblem::structured_jacobian(const Eigen::Ref<const Eigen::VectorXd>&
         frames_[k + 1].R = Q * base_k1.R;
         frames_[k + 1].p = Q * base_k1.p + t;
       }
-      body_.statics.disk_loads(loads_, frames_.data(), jac_df_.data(), jac_dm_.data(), k - 1, k);
+      // Frames below k are not perturbed: after the first column of subsegment k their holes
+      // and chords are the ones in the scratch.
+      body_.statics.disk_loads(loads_, frames_.data(), jac_df_.data(), jac_dm_.data(), k - 1, k, i == 0 ? -1 : k);
       // Distal wrench at disk k (about O_k', base frame).
       Vec3 Fk = jac_df_[k], Mk = jac_dm_[k];
       if (k < J) {
@@ -433,17 +456,17 @@ bool LumpedProblem::undamped_structured_jacobian(const Eigen::Ref<const Eigen::V
 bool LumpedProblem::jacobian(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& f,
                              Eigen::Ref<Eigen::MatrixXd> Jm) {
   if (!undamped_structured_jacobian(x, f)) return false;
-  const int m = body_.per_subsegment, n = size(), J = active();
-  // Off-diagonal blocks: two small products (n x 6 by 6 x n, n x 3 by 3 x n), then the diagonal
-  // blocks from the differences of structured_jacobian().
-  jac_prod_.resize(n, n);
-  jac_prod_.noalias() = jac_E_ * jac_dW_;
-  for (int k = 2; k <= J; ++k) Jm.block(0, m * (k - 1), m * (k - 1), m) = jac_prod_.block(0, m * (k - 1), m * (k - 1), m);
-  if (jac_external_) jac_prod_.noalias() = jac_D_ * jac_Om_;
+  const int m = body_.per_subsegment, J = active();
+  // Off-diagonal blocks: the block upper part of E dW (n x 6 by 6 x n) and the block lower part
+  // of D Om (n x 3 by 3 x n), block column by block column (coefficient-wise products: the inner
+  // dimensions are 6 and 3), then the diagonal blocks from the differences of structured_jacobian().
+  for (int k = 2; k <= J; ++k)
+    Jm.block(0, m * (k - 1), m * (k - 1), m).noalias() =
+        jac_E_.topRows(m * (k - 1)).lazyProduct(jac_dW_.middleCols(m * (k - 1), m));
   for (int k = 1; k < J; ++k) {
     auto lower = Jm.block(m * k, m * (k - 1), m * (J - k), m);
     if (jac_external_)
-      lower = jac_prod_.block(m * k, m * (k - 1), m * (J - k), m);
+      lower.noalias() = jac_D_.bottomRows(m * (J - k)).lazyProduct(jac_Om_.middleCols(m * (k - 1), m));
     else
       lower.setZero();
   }
@@ -483,6 +506,7 @@ void LumpedProblem::extract(const Eigen::VectorXd& y, bool evaluated, Solution& 
 }
 
 bool LumpedProblem::set_driven_tensions(const std::vector<int>& index, const Eigen::VectorXd& T) {
+  residual_changed();
   for (std::size_t i = 0; i < index.size(); ++i)
     loads_.loads.set_fixed_tension(index[i], T[static_cast<Eigen::Index>(i)]);
   loads_.set_load_factor(loads_.loads.load_factor());
