@@ -291,6 +291,16 @@ void LumpedProblem::split_external_loads() {
 }
 
 void LumpedProblem::load_sensitivities() {
+  // Fixed-size blocks for the models' subsegment sizes (CCsub 3, PRB 5).
+  switch (body_.per_subsegment) {
+    case 3: load_sensitivities_m<3>(); break;
+    case 5: load_sensitivities_m<5>(); break;
+    default: load_sensitivities_m<Eigen::Dynamic>(); break;
+  }
+}
+
+template <int Rows>
+void LumpedProblem::load_sensitivities_m() {
   // L_j = d r_j / d(F, M, W) in the frame of disk j-1 (m x 9): the model's closed form
   // (load_jacobian: CCsub, PRB), else forward differences of the constitutive law, mapped to
   //  - E_j: the response to a change (dF, dM0) of the distal wrench, base frame, moment about the
@@ -304,7 +314,8 @@ void LumpedProblem::load_sensitivities() {
   jac_E_.resize(m * J, 6);
   if (jac_external_) jac_D_.resize(m * J, 3);
   double r0[8], r1[8];  // m <= 8 (CCsub 3, PRB 5), as L's row bound
-  Eigen::Matrix<double, Eigen::Dynamic, 9, 0, 8, 9> L(m, 9);
+  constexpr int MaxRows = Rows == Eigen::Dynamic ? 8 : Rows;
+  Eigen::Matrix<double, Rows, 9, 0, MaxRows, 9> L(m, 9);
   for (int j = 1; j <= J; ++j) {
     const double* xj = jac_x_.data() + m * (j - 1);
     const Mat3 Rt = frames_[j - 1].R.transpose();
@@ -324,15 +335,15 @@ void LumpedProblem::load_sensitivities() {
       target[q % 3] = keep;
       for (int r = 0; r < m; ++r) L(r, q) = (r1[r] - r0[r]) / h;
     }
-    const auto LF = L.leftCols(3), LM = L.middleCols(3, 3), LW = L.rightCols(3);
-    auto E = jac_E_.middleRows(m * (j - 1), m);
-    E.leftCols(3).noalias() = LF * Rt - LM * (Rt * lie::hat(frames_[j].p));
-    E.rightCols(3).noalias() = LM * Rt;
+    const auto LF = L.template leftCols<3>(), LM = L.template middleCols<3>(3), LW = L.template rightCols<3>();
+    auto E = jac_E_.template middleRows<Rows>(m * (j - 1), m);
+    E.template leftCols<3>().noalias() = LF * Rt - LM * (Rt * lie::hat(frames_[j].p));
+    E.template rightCols<3>().noalias() = LM * Rt;
     if (jac_external_) {
       // eps : (G [w]x) as a matrix in w.
       Mat3 C;
       for (int i = 0; i < 3; ++i) C.col(i) = axial_contraction(jac_G_[j], lie::hat(Vec3::Unit(i)));
-      auto D = jac_D_.middleRows(m * (j - 1), m);
+      auto D = jac_D_.template middleRows<Rows>(m * (j - 1), m);
       D.noalias() = LF * (Rt * lie::hat(jac_FE_[j])) + LM * (Rt * (C + lie::hat(jac_pure_[j])));
       if (bb) D.noalias() += LW * (Rt * lie::hat(W));
     }
@@ -453,22 +464,36 @@ bool LumpedProblem::undamped_structured_jacobian(const Eigen::Ref<const Eigen::V
   return structured_jacobian(x, damping_f_);
 }
 
+template <int Rows>
+void LumpedProblem::offdiagonal_blocks(Eigen::Ref<Eigen::MatrixXd> Jm) const {
+  // The block upper part of E dW (n x 6 by 6 x n) and the block lower part of D Om (n x 3 by
+  // 3 x n), block by block (m x 6 by 6 x m, m x 3 by 3 x m: fixed sizes for CCsub and PRB); the
+  // diagonal blocks are the differences of structured_jacobian().
+  const int m = body_.per_subsegment, J = active();
+  for (int k = 1; k <= J; ++k) {
+    const auto dW = jac_dW_.template middleCols<Rows>(m * (k - 1), m);
+    for (int j = 1; j < k; ++j)
+      Jm.template block<Rows, Rows>(m * (j - 1), m * (k - 1), m, m).noalias() =
+          jac_E_.template middleRows<Rows>(m * (j - 1), m) * dW;
+    if (!jac_external_) {
+      Jm.block(m * k, m * (k - 1), m * (J - k), m).setZero();
+      continue;
+    }
+    const auto Om = jac_Om_.template middleCols<Rows>(m * (k - 1), m);
+    for (int j = k + 1; j <= J; ++j)
+      Jm.template block<Rows, Rows>(m * (j - 1), m * (k - 1), m, m).noalias() =
+          jac_D_.template middleRows<Rows>(m * (j - 1), m) * Om;
+  }
+}
+
 bool LumpedProblem::jacobian(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& f,
                              Eigen::Ref<Eigen::MatrixXd> Jm) {
   if (!undamped_structured_jacobian(x, f)) return false;
   const int m = body_.per_subsegment, J = active();
-  // Off-diagonal blocks: the block upper part of E dW (n x 6 by 6 x n) and the block lower part
-  // of D Om (n x 3 by 3 x n), block column by block column (coefficient-wise products: the inner
-  // dimensions are 6 and 3), then the diagonal blocks from the differences of structured_jacobian().
-  for (int k = 2; k <= J; ++k)
-    Jm.block(0, m * (k - 1), m * (k - 1), m).noalias() =
-        jac_E_.topRows(m * (k - 1)).lazyProduct(jac_dW_.middleCols(m * (k - 1), m));
-  for (int k = 1; k < J; ++k) {
-    auto lower = Jm.block(m * k, m * (k - 1), m * (J - k), m);
-    if (jac_external_)
-      lower.noalias() = jac_D_.bottomRows(m * (J - k)).lazyProduct(jac_Om_.middleCols(m * (k - 1), m));
-    else
-      lower.setZero();
+  switch (m) {
+    case 3: offdiagonal_blocks<3>(Jm); break;
+    case 5: offdiagonal_blocks<5>(Jm); break;
+    default: offdiagonal_blocks<Eigen::Dynamic>(Jm); break;
   }
   for (int k = 1; k <= J; ++k) Jm.block(m * (k - 1), m * (k - 1), m, m) = jac_diag_.middleCols(m * (k - 1), m);
   if (damping_ > 0.0) Jm.diagonal() += damping_ * damping_scale_;

@@ -282,6 +282,11 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
                                     const Eigen::Ref<const Eigen::VectorXd>& f);
   // jacobian(): the residuals' response to distal wrench changes and to distal rotations.
   void load_sensitivities();
+  template <int Rows>
+  void load_sensitivities_m();
+  // jacobian(): the off-diagonal blocks from the factors.
+  template <int Rows>
+  void offdiagonal_blocks(Eigen::Ref<Eigen::MatrixXd> Jm) const;
   Eigen::MatrixXd jac_E_, jac_D_, jac_dW_, jac_Om_, jac_diag_;
   bool jac_external_ = false;
   std::vector<Vec3> jac_FT_, jac_MT_, jac_FE_, jac_pure_, jac_df_, jac_dm_;
