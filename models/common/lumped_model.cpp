@@ -201,8 +201,12 @@ bool LumpedProblem::residual(const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::
   return true;
 }
 
+bool LumpedProblem::evaluated_at(const Eigen::Ref<const Eigen::VectorXd>& y) const {
+  return last_valid_ && last_lambda_ == loads_.loads.load_factor() && y.size() == last_y_.size() && y == last_y_;
+}
+
 bool LumpedProblem::final_residual(const Eigen::VectorXd& y, Eigen::Ref<Eigen::VectorXd> f) {
-  if (last_valid_ && last_lambda_ == loads_.loads.load_factor() && y.size() == last_y_.size() && y == last_y_) {
+  if (evaluated_at(y)) {
     f = last_f_;
     return true;
   }
@@ -374,7 +378,10 @@ bool LumpedProblem::structured_jacobian(const Eigen::Ref<const Eigen::VectorXd>&
   jac_uscale_.resize(n);
   unknown_scale(jac_uscale_);
   const double noise = relative_noise();
-  evaluate_from(x.data(), 1);  // frames_, poses_, centroids_, disk loads, F_, M_ at x
+  // frames_, poses_, centroids_, F_, M_ at x: KINSOL asks for the Jacobian where it has just
+  // evaluated the residual, and then they are that evaluation's (the perturbations below restore
+  // the frames they move).
+  if (banded_ || !evaluated_at(x)) evaluate_from(x.data(), 1);
   if (static_cast<int>(jac_FT_.size()) < J + 2) {
     const std::size_t sz = static_cast<std::size_t>(body_.N) + 2;
     jac_FT_.resize(sz);

@@ -121,6 +121,9 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   /// same load factor and nothing has changed the equations or the evaluated state since (the
   /// usual end of a solve: KINSOL's last call is at the point it returns), that call's values.
   bool final_residual(const Eigen::VectorXd& y, Eigen::Ref<Eigen::VectorXd> f) final;
+  /// True if the last residual() call was at y at the current load factor and the evaluated state
+  /// (frames_, poses_, centroids_, F_, M_) is still that call's.
+  bool evaluated_at(const Eigen::Ref<const Eigen::VectorXd>& y) const;
   /// Viscous damping of the x_j (snap landings): r + rate s (x - x_ref), s the unknowns' scales.
   /// The joint laws (bending about a joint axis, twist) are components of the potential's
   /// gradient, so this is an implicit Euler step of an overdamped motion in them; PRB's
