@@ -530,8 +530,13 @@ void LumpedProblem::extract(const Eigen::VectorXd& y, bool evaluated, Solution& 
   gather_x(y, x_);
   Eigen::VectorXd full = Eigen::VectorXd::Zero(body_.per_subsegment * body_.N);
   full.head(x_.size()) = x_;
-  solution.disk_frames.resize(body_.N + 1);
-  body_.compute_frames(full.data(), active(), solution.disk_frames.data());
+  // Right after the driver's final check the recursive form's evaluated frames are those of y.
+  if (!banded_ && evaluated_at(y))
+    solution.disk_frames.assign(frames_.begin(), frames_.end());
+  else {
+    solution.disk_frames.resize(body_.N + 1);
+    body_.compute_frames(full.data(), active(), solution.disk_frames.data());
+  }
   solution.tendon_displacements = tendon::chord_displacements(solution.disk_frames, body_.statics.routing(), convention_);
   if (body_.statics.friction()) {
     const TendonRouting& routing = body_.statics.routing();
