@@ -93,7 +93,12 @@ struct NewtonSolver::Impl {
   FiniteDifferenceWorkspace fd;
   bool fd_groups = false;       // fd holds the column groups of pattern (computed on first use)
   std::vector<double> values;  // sparse Jacobian values when the linear solver is dense
-  Eigen::VectorXd f_final;
+  // The residual of KINSOL's last residual call and its point (x_last): where no Jacobian or
+  // Newton-step call came after it (f_last_valid) and the returned point is x_last, that is the
+  // residual at the returned point, and the system's state is the one a new evaluation there
+  // would leave: the judgement after KINSOL takes it instead of evaluating it again.
+  Eigen::VectorXd f_final, x_last;
+  bool f_last_valid = false;
   int nfe = 0, nje = 0;
   // The system whose Jacobian the linear solver holds factored (NewtonOptions::reuse_jacobian).
   const ResidualSystem* factored = nullptr;
@@ -193,6 +198,7 @@ struct NewtonSolver::Impl {
       Eigen::Map<const Eigen::VectorXd> x(N_VGetArrayPointer(uu), self->n);
       Eigen::Map<Eigen::VectorXd> f(N_VGetArrayPointer(fval), self->n);
       ++self->nfe;
+      self->f_last_valid = false;
       if (!self->system->residual(x, f)) {
         self->last_failure = EvalFailure::NotEvaluated;
         return 1;  // recoverable: KINSOL shortens the step
@@ -201,6 +207,9 @@ struct NewtonSolver::Impl {
         self->last_failure = EvalFailure::NonFinite;
         return 1;
       }
+      self->x_last = x;  // sized at solve(): no allocation
+      self->f_final = f;
+      self->f_last_valid = true;
       return 0;
     } catch (...) {
       self->exception = std::current_exception();
@@ -213,6 +222,7 @@ struct NewtonSolver::Impl {
     auto* self = static_cast<Impl*>(user);
     try {
       ++self->nje;
+      self->f_last_valid = false;  // finite differences or a setup may leave another state
       const EvalFailure r = self->fill_jacobian(uu, fu, Jm);
       if (r != EvalFailure::None) {
         self->jac_failure = r;
@@ -227,6 +237,7 @@ struct NewtonSolver::Impl {
 
   static int step_fn(double* b, double* x, void* user) {
     auto* self = static_cast<Impl*>(user);
+    self->f_last_valid = false;
     try {
       Eigen::Map<Eigen::VectorXd> d(x, self->n);
       d = Eigen::Map<const Eigen::VectorXd>(b, self->n);
@@ -410,6 +421,8 @@ NewtonResult NewtonSolver::solve(ResidualSystem& system, Eigen::VectorXd& x,
   s.fd.prepare(n);
   if (s.has_pattern && !use_klu) s.values.resize(static_cast<size_t>(s.pattern.nnz()));
   if (s.f_final.size() != n) s.f_final.resize(n);
+  if (s.x_last.size() != n) s.x_last.resize(n);
+  s.f_last_valid = false;
 
   // Scaling.
   Eigen::Map<Eigen::VectorXd> us(N_VGetArrayPointer(s.uscale), n);
@@ -470,8 +483,11 @@ NewtonResult NewtonSolver::solve(ResidualSystem& system, Eigen::VectorXd& x,
   // Judge the returned point ourselves: KINSOL's flag alone is not a proof of convergence
   // (KIN_STEP_LT_STPTOL means "stuck" as often as "converged").
   EvalFailure final_failure = EvalFailure::None;
-  ++s.nfe;
-  const bool eval_ok = system.residual(x, s.f_final);
+  // KINSOL's last residual call at the returned point is that evaluation (see f_last_valid).
+  const bool known = s.f_last_valid && x == s.x_last;
+  s.f_last_valid = false;
+  if (!known) ++s.nfe;
+  const bool eval_ok = known || system.residual(x, s.f_final);
   if (!eval_ok)
     final_failure = EvalFailure::NotEvaluated;
   else if (!s.f_final.allFinite())

@@ -13,13 +13,15 @@ namespace {
 /// "from 1e-15 to 0.01"
 std::string range_text(double lo, double hi) { return "from " + format_value(lo) + " to " + format_value(hi); }
 
+// Called on every solve: valid options build no string (`what` is only read to throw).
+
 /// A number in [lo, hi]; InputError naming `solver.<name>`, the value and the range otherwise.
-void check_range(const char* name, double v, double lo, double hi, const std::string& what) {
+void check_range(const char* name, double v, double lo, double hi, const char* what) {
   if (!(v >= lo && v <= hi))  // false for NaN too
     throw InputError(std::string("solver.") + name, format_value(v), "must be " + range_text(lo, hi) + " (" + what + ")");
 }
 
-void check_count(const char* name, int v, int lo, int hi, const std::string& what) {
+void check_count(const char* name, int v, int lo, int hi, const char* what) {
   if (v < lo || v > hi)
     throw InputError(std::string("solver.") + name, std::to_string(v),
                      "must be from " + std::to_string(lo) + " to " + std::to_string(hi) + " (" + what + ")");
@@ -36,10 +38,11 @@ void SolverOptions::validate() const {
   if (function_tolerance != 0.0)
     check_range("function_tolerance", function_tolerance, kMinFunctionTolerance, kMaxFunctionTolerance,
                 "Newton's scaled residual tolerance; 0: tied to tip_tolerance");
-  if (tip_tolerance != 0.0)
+  if (tip_tolerance != 0.0 && !(tip_tolerance >= kMinTipTolerance && tip_tolerance <= kMaxTipTolerance))
     check_range("tip_tolerance", tip_tolerance, kMinTipTolerance, kMaxTipTolerance,
-                "accuracy of the tip position in m; 0: " + format_value(kTipToleranceOverLength) +
-                    " times the robot's length");
+                ("accuracy of the tip position in m; 0: " + format_value(kTipToleranceOverLength) +
+                 " times the robot's length")
+                    .c_str());
   check_range("step_tolerance", step_tolerance, kMinStepTolerance, kMaxStepTolerance, "Newton's scaled step tolerance");
   check_range("cvode_rtol", cvode_rtol, kMinCvodeRtol, kMaxCvodeRtol, "CVODE's relative tolerance");
   check_range("cvode_atol", cvode_atol, kMinCvodeAtol, kMaxCvodeAtol, "CVODE's absolute tolerance");

@@ -88,6 +88,7 @@ LumpedProblem::LumpedProblem(const LumpedBody& body) : body_(body) {
 }
 
 void LumpedProblem::bind(const ModelInput& input) {
+  residual_changed();
   body_.statics.bind(input, loads_);
   convention_ = input.actuation.convention;
   banded_ = body_.banded();
@@ -102,9 +103,13 @@ void LumpedProblem::adjust(bvp::NewtonOptions& options) const {
 
 void LumpedProblem::adjust_warm(bvp::NewtonOptions& options, bool same_input) const {
   // Iterations one Jacobian serves (modified Newton), and the iterations of the previous solve
-  // above which its Jacobian is too stale to start from.
+  // above which its Jacobian is too stale to start from. bench_loaded's trajectory (n = 10,
+  // 1000 steps): with 3, PRB kept the first step's Jacobian for most of the trajectory (42
+  // Jacobians, 2.35 iterations per step); with 2, 101 Jacobians and 1.82 iterations per step,
+  // 5 % less time; with 1, 317 Jacobians, 1.31 iterations, 35 % more time. CCsub: 0.99
+  // iterations per step with each.
   constexpr int kReuseSetupCalls = 10;
-  constexpr int kStaleAfterIterations = 3;
+  constexpr int kStaleAfterIterations = 2;
   options.reuse_jacobian = same_input || last_iterations_ <= kStaleAfterIterations;
   options.max_setup_calls = kReuseSetupCalls;
 }
@@ -122,11 +127,13 @@ void LumpedProblem::unknown_scale(Eigen::Ref<Eigen::VectorXd> s) const {
 }
 
 void LumpedProblem::cold_guess(Eigen::VectorXd& y) {
+  residual_changed();
   guess_x(x_, false);
   lift(x_, y);
 }
 
 void LumpedProblem::rest_state(Eigen::VectorXd& y) {
+  residual_changed();
   guess_x(x_, true);
   lift(x_, y);
 }
@@ -169,25 +176,46 @@ void LumpedProblem::fixed_point_passes(Eigen::VectorXd& x, int passes) {
 bool LumpedProblem::warm_guess(const Solution& previous, Eigen::VectorXd& y) {
   if (previous.unknowns.size() != body_.per_subsegment * body_.N || !previous.unknowns.allFinite()) return false;
   x_ = previous.unknowns.head(body_.per_subsegment * active());
+  residual_changed();
   on_warm(x_);
   lift(x_, y);
   return true;
 }
 
 void LumpedProblem::evaluate(const double* x) {
+  last_valid_ = false;
   body_.compute_frames(x, active(), frames_.data(), poses_.data(), backbone_weight_on() ? centroids_.data() : nullptr);
   if (body_.statics.friction()) body_.statics.update_friction(loads_, frames_.data());
   body_.statics.distal_wrenches(loads_, frames_.data(), centroids_.data(), F_.data(), M_.data());
 }
 
 bool LumpedProblem::residual(const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> f) {
+  last_valid_ = false;
   const bool ok = banded_ ? banded_residual(y.data(), f.data()) : recursive_residual(y.data(), f.data());
   if (ok && damping_ > 0.0) f += damping_ * damping_scale_.cwiseProduct(y - damping_ref_);
-  return ok && f.allFinite();
+  if (!(ok && f.allFinite())) return false;
+  last_y_ = y;  // allocates only when the size changes
+  last_f_ = f;
+  last_lambda_ = loads_.loads.load_factor();
+  last_valid_ = true;
+  return true;
+}
+
+bool LumpedProblem::evaluated_at(const Eigen::Ref<const Eigen::VectorXd>& y) const {
+  return last_valid_ && last_lambda_ == loads_.loads.load_factor() && y.size() == last_y_.size() && y == last_y_;
+}
+
+bool LumpedProblem::final_residual(const Eigen::VectorXd& y, Eigen::Ref<Eigen::VectorXd> f) {
+  if (evaluated_at(y)) {
+    f = last_f_;
+    return true;
+  }
+  return residual(y, f);
 }
 
 bool LumpedProblem::set_damping(const Eigen::Ref<const Eigen::VectorXd>& x_ref, double rate) {
   if (!has_jacobian()) return false;
+  residual_changed();
   damping_ = rate;
   if (rate > 0.0) {
     damping_ref_ = x_ref;  // allocates at a snap only
@@ -204,6 +232,7 @@ bool LumpedProblem::recursive_residual(const double* x, double* f) {
 }
 
 void LumpedProblem::evaluate_from(const double* x, int k) {
+  last_valid_ = false;
   body_.compute_frames(x, active(), frames_.data(), poses_.data(), backbone_weight_on() ? centroids_.data() : nullptr, k);
   body_.statics.disk_loads(loads_, frames_.data(), disk_f_.data(), disk_m_.data(), k - 1);
   body_.statics.distal_wrenches(loads_, frames_.data(), centroids_.data(), disk_f_.data(), disk_m_.data(), F_.data(),
@@ -270,6 +299,16 @@ void LumpedProblem::split_external_loads() {
 }
 
 void LumpedProblem::load_sensitivities() {
+  // Fixed-size blocks for the models' subsegment sizes (CCsub 3, PRB 5).
+  switch (body_.per_subsegment) {
+    case 3: load_sensitivities_m<3>(); break;
+    case 5: load_sensitivities_m<5>(); break;
+    default: load_sensitivities_m<Eigen::Dynamic>(); break;
+  }
+}
+
+template <int Rows>
+void LumpedProblem::load_sensitivities_m() {
   // L_j = d r_j / d(F, M, W) in the frame of disk j-1 (m x 9): the model's closed form
   // (load_jacobian: CCsub, PRB), else forward differences of the constitutive law, mapped to
   //  - E_j: the response to a change (dF, dM0) of the distal wrench, base frame, moment about the
@@ -283,7 +322,8 @@ void LumpedProblem::load_sensitivities() {
   jac_E_.resize(m * J, 6);
   if (jac_external_) jac_D_.resize(m * J, 3);
   double r0[8], r1[8];  // m <= 8 (CCsub 3, PRB 5), as L's row bound
-  Eigen::Matrix<double, Eigen::Dynamic, 9, 0, 8, 9> L(m, 9);
+  constexpr int MaxRows = Rows == Eigen::Dynamic ? 8 : Rows;
+  Eigen::Matrix<double, Rows, 9, 0, MaxRows, 9> L(m, 9);
   for (int j = 1; j <= J; ++j) {
     const double* xj = jac_x_.data() + m * (j - 1);
     const Mat3 Rt = frames_[j - 1].R.transpose();
@@ -303,15 +343,15 @@ void LumpedProblem::load_sensitivities() {
       target[q % 3] = keep;
       for (int r = 0; r < m; ++r) L(r, q) = (r1[r] - r0[r]) / h;
     }
-    const auto LF = L.leftCols(3), LM = L.middleCols(3, 3), LW = L.rightCols(3);
-    auto E = jac_E_.middleRows(m * (j - 1), m);
-    E.leftCols(3).noalias() = LF * Rt - LM * (Rt * lie::hat(frames_[j].p));
-    E.rightCols(3).noalias() = LM * Rt;
+    const auto LF = L.template leftCols<3>(), LM = L.template middleCols<3>(3), LW = L.template rightCols<3>();
+    auto E = jac_E_.template middleRows<Rows>(m * (j - 1), m);
+    E.template leftCols<3>().noalias() = LF * Rt - LM * (Rt * lie::hat(frames_[j].p));
+    E.template rightCols<3>().noalias() = LM * Rt;
     if (jac_external_) {
       // eps : (G [w]x) as a matrix in w.
       Mat3 C;
       for (int i = 0; i < 3; ++i) C.col(i) = axial_contraction(jac_G_[j], lie::hat(Vec3::Unit(i)));
-      auto D = jac_D_.middleRows(m * (j - 1), m);
+      auto D = jac_D_.template middleRows<Rows>(m * (j - 1), m);
       D.noalias() = LF * (Rt * lie::hat(jac_FE_[j])) + LM * (Rt * (C + lie::hat(jac_pure_[j])));
       if (bb) D.noalias() += LW * (Rt * lie::hat(W));
     }
@@ -338,7 +378,10 @@ bool LumpedProblem::structured_jacobian(const Eigen::Ref<const Eigen::VectorXd>&
   jac_uscale_.resize(n);
   unknown_scale(jac_uscale_);
   const double noise = relative_noise();
-  evaluate_from(x.data(), 1);  // frames_, poses_, centroids_, disk loads, F_, M_ at x
+  // frames_, poses_, centroids_, F_, M_ at x: KINSOL asks for the Jacobian where it has just
+  // evaluated the residual, and then they are that evaluation's (the perturbations below restore
+  // the frames they move).
+  if (banded_ || !evaluated_at(x)) evaluate_from(x.data(), 1);
   if (static_cast<int>(jac_FT_.size()) < J + 2) {
     const std::size_t sz = static_cast<std::size_t>(body_.N) + 2;
     jac_FT_.resize(sz);
@@ -377,7 +420,9 @@ bool LumpedProblem::structured_jacobian(const Eigen::Ref<const Eigen::VectorXd>&
         frames_[k + 1].R = Q * base_k1.R;
         frames_[k + 1].p = Q * base_k1.p + t;
       }
-      body_.statics.disk_loads(loads_, frames_.data(), jac_df_.data(), jac_dm_.data(), k - 1, k);
+      // Frames below k are not perturbed: after the first column of subsegment k their holes
+      // and chords are the ones in the scratch.
+      body_.statics.disk_loads(loads_, frames_.data(), jac_df_.data(), jac_dm_.data(), k - 1, k, i == 0 ? -1 : k);
       // Distal wrench at disk k (about O_k', base frame).
       Vec3 Fk = jac_df_[k], Mk = jac_dm_[k];
       if (k < J) {
@@ -430,22 +475,36 @@ bool LumpedProblem::undamped_structured_jacobian(const Eigen::Ref<const Eigen::V
   return structured_jacobian(x, damping_f_);
 }
 
+template <int Rows>
+void LumpedProblem::offdiagonal_blocks(Eigen::Ref<Eigen::MatrixXd> Jm) const {
+  // The block upper part of E dW (n x 6 by 6 x n) and the block lower part of D Om (n x 3 by
+  // 3 x n), block by block (m x 6 by 6 x m, m x 3 by 3 x m: fixed sizes for CCsub and PRB); the
+  // diagonal blocks are the differences of structured_jacobian().
+  const int m = body_.per_subsegment, J = active();
+  for (int k = 1; k <= J; ++k) {
+    const auto dW = jac_dW_.template middleCols<Rows>(m * (k - 1), m);
+    for (int j = 1; j < k; ++j)
+      Jm.template block<Rows, Rows>(m * (j - 1), m * (k - 1), m, m).noalias() =
+          jac_E_.template middleRows<Rows>(m * (j - 1), m) * dW;
+    if (!jac_external_) {
+      Jm.block(m * k, m * (k - 1), m * (J - k), m).setZero();
+      continue;
+    }
+    const auto Om = jac_Om_.template middleCols<Rows>(m * (k - 1), m);
+    for (int j = k + 1; j <= J; ++j)
+      Jm.template block<Rows, Rows>(m * (j - 1), m * (k - 1), m, m).noalias() =
+          jac_D_.template middleRows<Rows>(m * (j - 1), m) * Om;
+  }
+}
+
 bool LumpedProblem::jacobian(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& f,
                              Eigen::Ref<Eigen::MatrixXd> Jm) {
   if (!undamped_structured_jacobian(x, f)) return false;
-  const int m = body_.per_subsegment, n = size(), J = active();
-  // Off-diagonal blocks: two small products (n x 6 by 6 x n, n x 3 by 3 x n), then the diagonal
-  // blocks from the differences of structured_jacobian().
-  jac_prod_.resize(n, n);
-  jac_prod_.noalias() = jac_E_ * jac_dW_;
-  for (int k = 2; k <= J; ++k) Jm.block(0, m * (k - 1), m * (k - 1), m) = jac_prod_.block(0, m * (k - 1), m * (k - 1), m);
-  if (jac_external_) jac_prod_.noalias() = jac_D_ * jac_Om_;
-  for (int k = 1; k < J; ++k) {
-    auto lower = Jm.block(m * k, m * (k - 1), m * (J - k), m);
-    if (jac_external_)
-      lower = jac_prod_.block(m * k, m * (k - 1), m * (J - k), m);
-    else
-      lower.setZero();
+  const int m = body_.per_subsegment, J = active();
+  switch (m) {
+    case 3: offdiagonal_blocks<3>(Jm); break;
+    case 5: offdiagonal_blocks<5>(Jm); break;
+    default: offdiagonal_blocks<Eigen::Dynamic>(Jm); break;
   }
   for (int k = 1; k <= J; ++k) Jm.block(m * (k - 1), m * (k - 1), m, m) = jac_diag_.middleCols(m * (k - 1), m);
   if (damping_ > 0.0) Jm.diagonal() += damping_ * damping_scale_;
@@ -471,8 +530,13 @@ void LumpedProblem::extract(const Eigen::VectorXd& y, bool evaluated, Solution& 
   gather_x(y, x_);
   Eigen::VectorXd full = Eigen::VectorXd::Zero(body_.per_subsegment * body_.N);
   full.head(x_.size()) = x_;
-  solution.disk_frames.resize(body_.N + 1);
-  body_.compute_frames(full.data(), active(), solution.disk_frames.data());
+  // Right after the driver's final check the recursive form's evaluated frames are those of y.
+  if (!banded_ && evaluated_at(y))
+    solution.disk_frames.assign(frames_.begin(), frames_.end());
+  else {
+    solution.disk_frames.resize(body_.N + 1);
+    body_.compute_frames(full.data(), active(), solution.disk_frames.data());
+  }
   solution.tendon_displacements = tendon::chord_displacements(solution.disk_frames, body_.statics.routing(), convention_);
   if (body_.statics.friction()) {
     const TendonRouting& routing = body_.statics.routing();
@@ -483,6 +547,7 @@ void LumpedProblem::extract(const Eigen::VectorXd& y, bool evaluated, Solution& 
 }
 
 bool LumpedProblem::set_driven_tensions(const std::vector<int>& index, const Eigen::VectorXd& T) {
+  residual_changed();
   for (std::size_t i = 0; i < index.size(); ++i)
     loads_.loads.set_fixed_tension(index[i], T[static_cast<Eigen::Index>(i)]);
   loads_.set_load_factor(loads_.loads.load_factor());

@@ -37,6 +37,7 @@ struct SubsegmentPose {
   Vec3 p;       ///< Centre O_j.
   Vec3 c;       ///< Centre of mass of the backbone of the subsegment.
   Vec3 aux[7];  ///< Model-specific points (PRB: joint centres 0..2, link midpoints 3..6).
+  double cphi = 1.0, sphi = 0.0;  ///< PRB: cos and sin of the bending-plane angle of the unknowns.
 };
 
 /// The subsegments of one lumped model, their stiffness and kinematics.
@@ -116,6 +117,13 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   int size() const final { return stride() * loads_.active; }
   void set_parameter(double lambda) final { loads_.set_load_factor(lambda); }
   bool residual(const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> f) final;
+  /// The driver's final check right after Newton: where the last residual() call was at y at the
+  /// same load factor and nothing has changed the equations or the evaluated state since (the
+  /// usual end of a solve: KINSOL's last call is at the point it returns), that call's values.
+  bool final_residual(const Eigen::VectorXd& y, Eigen::Ref<Eigen::VectorXd> f) final;
+  /// True if the last residual() call was at y at the current load factor and the evaluated state
+  /// (frames_, poses_, centroids_, F_, M_) is still that call's.
+  bool evaluated_at(const Eigen::Ref<const Eigen::VectorXd>& y) const;
   /// Viscous damping of the x_j (snap landings): r + rate s (x - x_ref), s the unknowns' scales.
   /// The joint laws (bending about a joint axis, twist) are components of the potential's
   /// gradient, so this is an implicit Euler step of an overdamped motion in them; PRB's
@@ -191,6 +199,9 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   /// Scale of x_j (per_subsegment values; default ones).
   virtual void x_scale(double* s) const;
 
+  /// The equations changed (gauge references, damping, loads other than by set_parameter): the
+  /// last residual() is no longer final_residual()'s.
+  void residual_changed() { last_valid_ = false; }
   /// Frames, poses, centroids (if the backbone weight acts) and distal wrenches at x_j.
   void evaluate(const double* x);
   /// Moment about O_{j-1} (base frame) of everything distal of disk j-1 at the last evaluate().
@@ -256,6 +267,11 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   std::vector<Frame> pull_frames_;  // and their disk frames
   std::vector<Vec3> disk_f_, disk_m_;  // disk loads of the banded residual
   int last_iterations_ = 0;  // Newton iterations of the last solve (adjust_warm)
+  // The last residual() call (final_residual): its point, values and load factor; valid while
+  // the evaluated state (frames_, F_, M_, ...) is still that call's.
+  Eigen::VectorXd last_y_, last_f_;
+  double last_lambda_ = 0.0;
+  bool last_valid_ = false;
   Eigen::VectorXd jac_x_, jac_f_, jac_uscale_;  // jacobian(): perturbed x, its residual, scales
   // jacobian(): the distal wrenches split into the part moving with the frames (tendons) and the
   // external part (see split_external_loads), the perturbed loads of two disks.
@@ -269,7 +285,12 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
                                     const Eigen::Ref<const Eigen::VectorXd>& f);
   // jacobian(): the residuals' response to distal wrench changes and to distal rotations.
   void load_sensitivities();
-  Eigen::MatrixXd jac_E_, jac_D_, jac_dW_, jac_Om_, jac_diag_, jac_prod_;
+  template <int Rows>
+  void load_sensitivities_m();
+  // jacobian(): the off-diagonal blocks from the factors.
+  template <int Rows>
+  void offdiagonal_blocks(Eigen::Ref<Eigen::MatrixXd> Jm) const;
+  Eigen::MatrixXd jac_E_, jac_D_, jac_dW_, jac_Om_, jac_diag_;
   bool jac_external_ = false;
   std::vector<Vec3> jac_FT_, jac_MT_, jac_FE_, jac_pure_, jac_df_, jac_dm_;
   Eigen::VectorXd next_x_;  // fixed_point_passes()

@@ -44,7 +44,7 @@ void SubsegmentStatics::update_friction(SubsegmentLoads& b, const Frame* frames)
 }
 
 void SubsegmentStatics::disk_loads(SubsegmentLoads& b, const Frame* frames, Vec3* f, Vec3* m, int first,
-                                   int last_disk) const {
+                                   int last_disk, int fresh_from) const {
   const int J = b.active;
   const int D = routing_->disk_count();
   const double* s = routing_->disk_s.data();
@@ -63,8 +63,9 @@ void SubsegmentStatics::disk_loads(SubsegmentLoads& b, const Frame* frames, Vec3
     const int last = std::min(t.end_disk, L + 1);
     // Disks j >= first read the chords c >= first, i.e. the holes c >= first - 1.
     const int c0 = first - 1;
-    H[c0] = physics::hole_position(frames[c0], t, s[c0]);
+    if (c0 >= fresh_from) H[c0] = physics::hole_position(frames[c0], t, s[c0]);
     for (int c = c0 + 1; c <= last; ++c) {
+      if (c < fresh_from) continue;
       H[c] = physics::hole_position(frames[c], t, s[c]);
       C[c] = (H[c - 1] - H[c]).normalized();
     }

@@ -74,8 +74,12 @@ class SubsegmentStatics {
   /// numbers as a full evaluation (the structured finite differences of LumpedProblem).
   /// With last_disk >= 0 only disks first..min(last_disk, J) are computed (their holes up to disk
   /// last_disk + 1), the tip wrench only if that range ends at J.
-  void disk_loads(SubsegmentLoads& b, const Frame* frames, Vec3* f, Vec3* m, int first = 1,
-                  int last_disk = -1) const;
+  /// With fresh_from >= 0 the holes of disks below fresh_from (and the chords between them) are
+  /// taken from b's scratch as the last call left them: a caller that changed only frames >=
+  /// fresh_from since a call with the same first saves their recomputation (the columns of one
+  /// subsegment in LumpedProblem's structured differences).
+  void disk_loads(SubsegmentLoads& b, const Frame* frames, Vec3* f, Vec3* m, int first = 1, int last_disk = -1,
+                  int fresh_from = -1) const;
   /// @brief The recursive balance (Eq. 44-47) for subsegments 1..J at the current load factor.
   ///
   /// @param frames Disk frames 0..N (base disk first).

@@ -57,8 +57,10 @@ class PrbBody final : public detail::LumpedBody {
   void local(int j, const double* xj, detail::SubsegmentPose& g) const override {
     const double l = statics.length(j);
     const double cp = std::cos(xj[3]), sp = std::sin(xj[3]);
+    g.cphi = cp;
+    g.sphi = sp;
     // In-plane coordinates (x', z') of the chain, then x' mapped along (cos phi, sin phi).
-    double x = 0.0, z = gamma[0] * l, a = 0.0;
+    double x = 0.0, z = gamma[0] * l, a = 0.0, sa = 0.0, ca = 1.0;
     auto to3 = [&](double px, double pz) { return Vec3(px * cp, px * sp, pz); };
     Vec3* joint = g.aux + kJoint;
     Vec3* mid = g.aux + kMid;
@@ -66,7 +68,9 @@ class PrbBody final : public detail::LumpedBody {
     for (int q = 0; q < 3; ++q) {
       joint[q] = to3(x, z);
       a += xj[q];
-      const double L = gamma[q + 1] * l, sa = std::sin(a), ca = std::cos(a);
+      const double L = gamma[q + 1] * l;
+      sa = std::sin(a);
+      ca = std::cos(a);
       mid[q + 1] = to3(x + 0.5 * L * sa, z + 0.5 * L * ca);
       x += L * sa;
       z += L * ca;
@@ -75,8 +79,7 @@ class PrbBody final : public detail::LumpedBody {
     Vec3 c = Vec3::Zero();
     for (int i = 0; i < 4; ++i) c += gamma[i] * mid[i];
     g.c = c / gamma_sum;
-    // Rz(phi) Ry(a) Rz(eps - phi).
-    const double sa = std::sin(a), ca = std::cos(a);
+    // Rz(phi) Ry(a) Rz(eps - phi), with sin a, cos a of the last joint's total angle.
     const double e = xj[4] - xj[3], ce = std::cos(e), se = std::sin(e);
     Mat3 A;  // Rz(phi) Ry(a)
     A << cp * ca, -sp, cp * sa,
@@ -140,7 +143,7 @@ class PrbProblem final : public detail::LumpedProblem {
     const bool bb = backbone_weight_on();
     const double gj_ei = body_.GJ / body_.EI;
     const double s = body_.statics.length(j) / body_.EI;
-    const double cp = std::cos(xj[3]), sp = std::sin(xj[3]);
+    const double cp = g.cphi, sp = g.sphi;  // local() of these xj
     const Vec3* joint = g.aux + kJoint;
     const Vec3* mid = g.aux + kMid;
     const Vec3 W = Wj / body_.gamma_sum;
@@ -170,7 +173,7 @@ class PrbProblem final : public detail::LumpedProblem {
                      const Vec3& Wj, double* Lp) const override {
     const bool bb = backbone_weight_on();
     const double s = body_.statics.length(j) / body_.EI;
-    const double cp = std::cos(xj[3]), sp = std::sin(xj[3]);
+    const double cp = g.cphi, sp = g.sphi;  // local() of these xj
     const Vec3* joint = g.aux + kJoint;
     const Vec3* mid = g.aux + kMid;
     const Eigen::RowVector3d y(-sp, cp, 0.0);
@@ -215,6 +218,7 @@ class PrbProblem final : public detail::LumpedProblem {
   }
 
   void set_phi_ref(const Eigen::VectorXd& x) {
+    residual_changed();
     for (int j = 1; j <= active(); ++j) phi_ref_[j] = x[kU * (j - 1) + 3];
   }
   // Rest state: the straight robot (all joint angles and twists zero), each bending plane put
@@ -267,6 +271,7 @@ class PrbProblem final : public detail::LumpedProblem {
   // coordinate x' to -x' and Rz(pi) Ry(-a) Rz(-pi) = Ry(a), so the twist eps is unchanged. Its
   // gauge reference turns with it, so the gauge term keeps its sign.
   void enter_stability_chart(Eigen::VectorXd& x) override {
+    residual_changed();
     saved_phi_ref_ = phi_ref_;
     for (int j = 1; j <= active(); ++j) {
       double* q = x.data() + kU * (j - 1);
@@ -276,7 +281,10 @@ class PrbProblem final : public detail::LumpedProblem {
       phi_ref_[j] += M_PI;
     }
   }
-  void leave_stability_chart() override { phi_ref_.swap(saved_phi_ref_); }
+  void leave_stability_chart() override {
+    residual_changed();
+    phi_ref_.swap(saved_phi_ref_);
+  }
 
   const PrbBody& body_;
   std::vector<double> phi_ref_, saved_phi_ref_;
