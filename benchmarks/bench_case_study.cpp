@@ -63,7 +63,8 @@ std::map<std::pair<std::string, int>, double> paper_code_times() {
 // (InputError, e.g. CC with a tip force).
 class Runner {
  public:
-  Runner(ModelKind kind, const Robot& robot, const Effects& effects = Effects()) {
+  // The paper's effects by default (its Eq. 58 at the disks): scenarios 1-2 reproduce its case study.
+  Runner(ModelKind kind, const Robot& robot, const Effects& effects = paper::effects()) {
     try {
       model_ = make_model(kind, robot, effects);
       ws_ = model_->make_workspace();
