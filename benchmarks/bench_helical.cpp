@@ -46,6 +46,8 @@ struct Settings {
   std::string only;
 };
 
+int g_failures = 0;  // disk-force and disk-count solves that did not converge: a nonzero exit
+
 constexpr double kLength = 0.1;  // the paper robot's length (two 50 mm segments)
 constexpr double kRadius = 0.008;
 
@@ -174,10 +176,12 @@ void scenario3_block(const Settings& cfg, bench::Csv& csv, const std::string& pa
     if (!r) {
       // CC: no helical routing (constant curvature needs tendons parallel to the backbone).
       std::string why = r.refusal();
-      for (char& ch : why)
-        if (ch == ',') ch = ';';
+      std::string clean;
+      for (char ch : why)
+        if (ch != '"') clean += ch == ',' ? ';' : ch;  // one CSV field
+      why = clean;
       csv.row(part, n, f, turns, name(pairs), loaded ? 1 : 0, m, "-", NAN, NAN, NAN, NAN, 0, 0, ref_failures, NAN, NAN,
-              "\"refuses: " + why + "\"");
+              "refuses: " + why);
       continue;
     }
     const auto t = r.time(timed, cfg.repeat);
@@ -273,6 +277,7 @@ void disk_force(const Settings& cfg) {
       const auto a = vc.solve(in), k = kept.solve(in), r = removed.solve(in);
       if (!a || !k || !r || !a->converged() || !k->converged() || !r->converged()) {
         std::cerr << "disk force: " << c.name << " n = " << n << " did not converge\n";
+        ++g_failures;
         continue;
       }
       const TipError ek = tip_error(k->tip(), a->tip()), er = tip_error(r->tip(), a->tip());
@@ -337,6 +342,7 @@ void disks(const Settings& cfg) {
       }
       if (!ok) {
         std::cerr << "disks: " << c.name << " " << to_string(kind) << " did not converge\n";
+        ++g_failures;
         continue;
       }
       // The three finest counts n1 < n2 < n3: observed order p from the two differences (the
@@ -416,5 +422,9 @@ int main(int argc, char** argv) {
   if (want("disks")) disks(cfg);
   if (want("scenario3")) scenario3(cfg);
   std::cout << "results written to " << cfg.out << "\n";
+  if (g_failures > 0) {
+    std::cerr << "error: " << g_failures << " disk-force or disk-count solves did not converge\n";
+    return 1;
+  }
   return 0;
 }

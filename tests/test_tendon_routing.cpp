@@ -351,7 +351,7 @@ TEST(TendonRouting, HelixTwistsAgainstItsTurns) {
 
 // Mirror symmetry: the scene reflected in the x-z plane (tendon holes (x, -y), turns -t, tip force
 // (Fx, -Fy, Fz)) has the reflected shape, p -> M p and R -> M R M with M = diag(1, -1, 1), at every
-// disk and in every model that takes routing (measured: 2.6e-13 or less).
+// disk and in every model that takes routing.
 TEST(TendonRouting, OppositeTurnsMirrorTheShape) {
   const Scene a = adjacent_pair(20, 0.5, Vec3(0.1, 0.2, 0.0));
   Scene b = a;
@@ -368,8 +368,9 @@ TEST(TendonRouting, OppositeTurnsMirrorTheShape) {
     EXPECT_GT(std::abs(sa.tip().p.y()), 0.01) << to_string(k) << ": the shape leaves the x-z plane";
     ASSERT_EQ(sa.disk_frames.size(), sb.disk_frames.size());
     for (std::size_t j = 0; j < sa.disk_frames.size(); ++j) {
-      EXPECT_LT((M * sa.disk_frames[j].p - sb.disk_frames[j].p).norm(), 1e-10) << to_string(k) << " disk " << j;
-      EXPECT_LT((M * sa.disk_frames[j].R * M - sb.disk_frames[j].R).norm(), 1e-9) << to_string(k) << " disk " << j;
+      // To the solvers' tolerance (PRB: 4e-10 m, 1.2e-8 in R); a wrong sense of the turns is ~1e-2 off.
+      EXPECT_LT((M * sa.disk_frames[j].p - sb.disk_frames[j].p).norm(), 1e-8) << to_string(k) << " disk " << j;
+      EXPECT_LT((M * sa.disk_frames[j].R * M - sb.disk_frames[j].R).norm(), 1e-7) << to_string(k) << " disk " << j;
     }
   }
 }
@@ -411,16 +412,33 @@ TEST(TendonRouting, VcrefDefaultDiskForceConvergesToVcOnHelicalRobots) {
   EXPECT_GT(dropped[2], 1e-3) << "N: a finite force as the disks grow";
 }
 
-// Straight routing without external loads: the chords at a disk make equal angles with it, the
-// normal component vanishes and the two disk forces give the same shape (measured within 7e-12 m).
-TEST(TendonRouting, DiskForceSettingsAgreeOnStraightUnloadedRobots) {
-  Scene s = paper::scene(10, 6);
-  s.effects.disk_normal_force = DiskNormalForce::Kept;
-  Scene r = s;
-  r.effects.disk_normal_force = DiskNormalForce::Removed;
-  for (ModelKind k : {ModelKind::CCsub, ModelKind::PRB, ModelKind::VCref}) {
-    const Solution a = solve_kind(k, s), b = solve_kind(k, r);
-    ASSERT_TRUE(a.converged() && b.converged()) << to_string(k);
-    EXPECT_LT(max_frame_error(a, b), 1e-9) << to_string(k);
-  }
+// Straight routing without external loads: where a tendon passes a disk between subsegments of equal
+// bending the chords make equal angles with it, the normal component vanishes and the two disk forces
+// give the same shape (configurations 2 and 5 of the paper robot: T1 alone, T3 alone). Where the
+// curvature changes, at the disk between the segments under T1 and T3 (configuration 6), Eq. 58 drops
+// a force of second order in the disk spacing: the tips differ by 8.0e-6, 1.9e-6 m at n = 10, 20, and
+// both tend to VC.
+TEST(TendonRouting, DiskForceSettingsOnStraightUnloadedRobots) {
+  std::vector<double> differ;
+  for (int n : {10, 20})
+    for (int c : {2, 5, 6}) {
+      Scene s = paper::scene(n, c);
+      s.effects.disk_normal_force = DiskNormalForce::Kept;
+      Scene r = s;
+      r.effects.disk_normal_force = DiskNormalForce::Removed;
+      for (ModelKind k : {ModelKind::CCsub, ModelKind::PRB, ModelKind::VCref}) {
+        const Solution a = solve_kind(k, s), b = solve_kind(k, r);
+        ASSERT_TRUE(a.converged() && b.converged()) << to_string(k);
+        const double e = max_frame_error(a, b);
+        // PRB's subsegment (joints at Table 1's gamma, not symmetric about its middle) leaves its
+        // chords unequal at a disk even under equal bending: 2.5e-7 to 6.6e-7 m here.
+        if (c != 6) {
+          EXPECT_LT(e, k == ModelKind::PRB ? 1e-6 : 1e-9) << to_string(k) << " configuration " << c;
+        }
+        if (c == 6 && k == ModelKind::VCref) differ.push_back((a.tip().p - b.tip().p).norm());
+      }
+    }
+  ASSERT_EQ(differ.size(), 2u);
+  EXPECT_GT(differ[0], 1e-6);
+  EXPECT_LT(differ[1], 0.3 * differ[0]) << differ[0] << " " << differ[1] << ": second order";
 }
