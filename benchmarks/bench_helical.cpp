@@ -39,12 +39,7 @@ using namespace tdcr;
 
 namespace {
 
-struct Settings {
-  bool quick = false;
-  std::string out = "benchmark-results";
-  int repeat = 20;
-  std::string only;
-};
+using Settings = bench::CaseStudyArgs;  // --repeat: 20 (--quick: 2)
 
 int g_failures = 0;  // disk-force and disk-count solves that did not converge: a nonzero exit
 
@@ -392,32 +387,9 @@ void disks(const Settings& cfg) {
 
 int main(int argc, char** argv) {
   Settings cfg;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--quick") {
-      cfg.quick = true;
-      cfg.repeat = 2;
-    } else if (a == "--out" && i + 1 < argc) {
-      cfg.out = argv[++i];
-    } else if (a == "--repeat" && i + 1 < argc) {
-      cfg.repeat = std::atoi(argv[++i]);
-      if (cfg.repeat < 1) {
-        std::cerr << "error: --repeat must be a positive integer (got " << argv[i] << ")\n";
-        return 2;
-      }
-    } else if (a == "--only" && i + 1 < argc) {
-      cfg.only = argv[++i];
-      if (cfg.only != "scenario3" && cfg.only != "disk_force" && cfg.only != "disks") {
-        std::cerr << "error: --only must be scenario3, disk_force or disks (got " << cfg.only << ")\n";
-        return 2;
-      }
-    } else {
-      std::cerr << "usage: bench_helical [--quick] [--out DIR] [--repeat N] [--only scenario3|disk_force|disks]\n";
-      return 2;
-    }
-  }
+  if (!bench::parse_case_study_args(argc, argv, "bench_helical", "scenario3|disk_force|disks", 20, 2, cfg)) return 2;
   std::filesystem::create_directories(cfg.out);
-  const auto want = [&](const char* part) { return cfg.only.empty() || cfg.only == part; };
+  const auto want = [&](const char* part) { return cfg.want(part); };
   if (want("disk_force")) disk_force(cfg);
   if (want("disks")) disks(cfg);
   if (want("scenario3")) scenario3(cfg);
