@@ -249,8 +249,9 @@ def scenario3(res, out):
                                   color=colors.get(model), label=f"{labels.get(model, model)}" + (" + F" if loaded == "1" else ""))
             ax[i][j].set_ylabel(f"{t} turn/segment: e_p vs {LABELS[ref]} (%)")
             ax[i][j].set_yscale("log")
-        sel = [r for r in rows if r["turns"] == t and r["reference"] == "vc" and r["tip_force"] == "0"
-               and r["pairs"] == "antagonistic"]
+        # One row per model for its time: VC's rows are those against VCref, the others' against VC.
+        sel = [r for r in rows if r["turns"] == t and r["reference"] == ("vcref" if r["model"] == "vc" else "vc")
+               and r["tip_force"] == "0" and r["pairs"] == "antagonistic"]
         for model, rs in sorted(by_model(sel).items()):
             ax[i][2].plot([num(r["n"]) for r in rs], [num(r["median_cpu_us"]) / 1e3 for r in rs], "o-",
                           color=colors.get(model), label=labels.get(model, model))
