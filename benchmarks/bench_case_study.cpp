@@ -31,12 +31,7 @@ using namespace tdcr;
 
 namespace {
 
-struct Settings {
-  bool quick = false;
-  std::string out = "benchmark-results";
-  int repeat = 100;
-  std::string only;
-};
+using Settings = bench::CaseStudyArgs;  // --repeat: 100 (--quick: 3)
 
 const std::vector<ModelKind> kCompared = {ModelKind::CC, ModelKind::CCsub, ModelKind::PRB, ModelKind::VC};
 
@@ -63,7 +58,8 @@ std::map<std::pair<std::string, int>, double> paper_code_times() {
 // (InputError, e.g. CC with a tip force).
 class Runner {
  public:
-  Runner(ModelKind kind, const Robot& robot, const Effects& effects = Effects()) {
+  // The paper's effects by default (its Eq. 58 at the disks): scenarios 1-2 reproduce its case study.
+  Runner(ModelKind kind, const Robot& robot, const Effects& effects = paper::effects()) {
     try {
       model_ = make_model(kind, robot, effects);
       ws_ = model_->make_workspace();
@@ -429,29 +425,11 @@ void warmstart(const Settings& cfg) {
 
 int main(int argc, char** argv) {
   Settings cfg;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--quick") {
-      cfg.quick = true;
-      cfg.repeat = 3;
-    } else if (a == "--out" && i + 1 < argc) {
-      cfg.out = argv[++i];
-    } else if (a == "--repeat" && i + 1 < argc) {
-      cfg.repeat = std::atoi(argv[++i]);
-      if (cfg.repeat < 1) {
-        std::cerr << "error: --repeat must be a positive integer\n";
-        return 2;
-      }
-    } else if (a == "--only" && i + 1 < argc) {
-      cfg.only = argv[++i];
-    } else {
-      std::cerr << "usage: bench_case_study [--quick] [--out DIR] [--repeat N] "
-                   "[--only scenario1|scenario2|tradeoff|effects|warmstart]\n";
-      return 2;
-    }
-  }
+  if (!bench::parse_case_study_args(argc, argv, "bench_case_study", "scenario1|scenario2|tradeoff|effects|warmstart",
+                                    100, 3, cfg))
+    return 2;
   std::filesystem::create_directories(cfg.out);
-  auto want = [&](const char* part) { return cfg.only.empty() || cfg.only == part; };
+  const auto want = [&](const char* part) { return cfg.want(part); };
   if (want("scenario1")) scenario1(cfg);
   if (want("scenario2")) scenario2(cfg);
   if (want("tradeoff")) tradeoff(cfg);

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <ctime>
 #include <fstream>
 #include <limits>
@@ -117,6 +118,50 @@ inline void progress(const std::string& what, int done, int total) {
   std::fprintf(stderr, "\r%-60s %4d/%-4d", what.c_str(), done, total);
   if (done == total) std::fprintf(stderr, "\n");
   std::fflush(stderr);
+}
+
+/// The command line of the case-study benchmarks: [--quick] [--out DIR] [--repeat N] [--only PART].
+struct CaseStudyArgs {
+  bool quick = false;
+  std::string out = "benchmark-results";
+  int repeat = 0;    ///< The caller's default unless given (--quick: `quick_repeat`).
+  std::string only;  ///< One of the parts, or empty: all of them.
+  bool want(const char* part) const { return only.empty() || only == part; }
+};
+
+/// Parses the arguments; prints a clear error and returns false on an unknown argument, a repeat
+/// count below 1 or a part not in `parts` (separated by '|', as in the usage line).
+inline bool parse_case_study_args(int argc, char** argv, const std::string& program, const std::string& parts,
+                                  int repeat, int quick_repeat, CaseStudyArgs& args) {
+  args.repeat = repeat;
+  bool repeat_given = false;
+  const std::string usage = "usage: " + program + " [--quick] [--out DIR] [--repeat N] [--only " + parts + "]\n";
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--quick") {
+      args.quick = true;
+    } else if (a == "--out" && i + 1 < argc) {
+      args.out = argv[++i];
+    } else if (a == "--repeat" && i + 1 < argc) {
+      args.repeat = std::atoi(argv[++i]);
+      repeat_given = true;
+      if (args.repeat < 1) {
+        std::fprintf(stderr, "error: --repeat must be a positive integer (got %s)\n", argv[i]);
+        return false;
+      }
+    } else if (a == "--only" && i + 1 < argc) {
+      args.only = argv[++i];
+      if (("|" + parts + "|").find("|" + args.only + "|") == std::string::npos) {
+        std::fprintf(stderr, "error: --only must be one of %s (got %s)\n", parts.c_str(), args.only.c_str());
+        return false;
+      }
+    } else {
+      std::fprintf(stderr, "%s", usage.c_str());
+      return false;
+    }
+  }
+  if (args.quick && !repeat_given) args.repeat = quick_repeat;
+  return true;
 }
 
 // ---- the paper code's reference data (benchmarks/data) ---------------------------------------

@@ -383,6 +383,106 @@ def readme_speed():
     return textwrap.fill(text, width=100, initial_indent="  ", subsequent_indent="  ", break_on_hyphens=False)
 
 
+# Scenario 3 (bench_helical): helical routing, the disk force, disk counts.
+s3 = read("scenario3.csv")
+S3_MODELS = ["ccsub", "prb", "vc", "vcref_eq58", "vcref"]
+S3_LABEL = dict(LABEL, vcref_eq58="VCref Eq. 58")
+
+
+def s3_get(part, n, sf, turns, pairs, load, model, ref):
+    for r in s3:
+        if (r["part"], r["n"], float(r["stiffness_factor"]), float(r["turns"]), r["pairs"], r["tip_force"], r["model"],
+                r["reference"]) == (part, str(n), sf, turns, pairs, load, model, ref):
+            return r
+    return None
+
+
+def s3_cell(r):
+    if not r or r["e_p_pct"] in ("nan", ""):
+        return "-"
+    fails = f", {r['failures']} failed" if r["failures"] not in ("0", "") else ""
+    return f"{f(r['e_p_pct'])} % / {f(r['e_R_deg'])} deg{fails}"
+
+
+tables["scenario3"] = tables["scenario3_n"] = tables["scenario3_stiffness"] = tables["scenario3_time"] = ""
+tables["scenario3_cc"] = tables["helical_run"] = tables["disk_force"] = tables["disks"] = ""
+if s3:
+    turns = sorted({float(r["turns"]) for r in s3})
+    cols = [m for m in S3_MODELS if m != "vcref"]
+    rows = ["| turns / segment | pairs | tip force | " + " | ".join(f"{S3_LABEL[m]} vs VCref" for m in cols) +
+            " | VCref vs VC | VCref Eq. 58 vs VC |", "| --- | --- | --- |" + " --- |" * (len(cols) + 2)]
+    for t in turns:
+        for pairs in ["antagonistic", "adjacent"]:
+            for load in ["0", "1"]:
+                cells = [s3_cell(s3_get("n", 10, 1.0, t, pairs, load, m, "vcref")) for m in cols]
+                cells.append(s3_cell(s3_get("n", 10, 1.0, t, pairs, load, "vcref", "vc")))
+                cells.append(s3_cell(s3_get("n", 10, 1.0, t, pairs, load, "vcref_eq58", "vc")))
+                rows.append(f"| {f(t)} | {pairs} | {'0.25 N' if load == '1' else '-'} | " + " | ".join(cells) + " |")
+    tables["scenario3"] = "\n".join(rows)
+    ns = sorted({int(r["n"]) for r in s3 if r["part"] == "n"})
+    rows = ["| n | " + " | ".join(f"{S3_LABEL[m]} vs VCref" for m in cols) + " | " +
+            " | ".join(f"{S3_LABEL[m]} vs VC" for m in ["ccsub", "prb", "vcref_eq58", "vcref"]) + " |",
+            "| --- |" + " --- |" * (len(cols) + 4)]
+    for n in ns:
+        cells = [s3_cell(s3_get("n", n, 1.0, 0.5, "adjacent", "1", m, "vcref")) for m in cols]
+        cells += [s3_cell(s3_get("n", n, 1.0, 0.5, "adjacent", "1", m, "vc")) for m in ["ccsub", "prb", "vcref_eq58", "vcref"]]
+        rows.append(f"| {n} | " + " | ".join(cells) + " |")
+    tables["scenario3_n"] = "\n".join(rows)
+    sfs = sorted({float(r["stiffness_factor"]) for r in s3 if r["part"] == "stiffness"})
+    rows = ["| stiffness factor | turns / segment | pairs | " + " | ".join(f"{S3_LABEL[m]} vs VCref" for m in cols) +
+            " | VCref vs VC |", "| --- | --- | --- |" + " --- |" * (len(cols) + 1)]
+    for sf in sfs:
+        for t in turns:
+            for pairs in ["antagonistic", "adjacent"]:
+                cells = [s3_cell(s3_get("stiffness", 10, sf, t, pairs, "1", m, "vcref")) for m in cols]
+                cells.append(s3_cell(s3_get("stiffness", 10, sf, t, pairs, "1", "vcref", "vc")))
+                rows.append(f"| {f(sf)} | {f(t)} | {pairs} | " + " | ".join(cells) + " |")
+    tables["scenario3_stiffness"] = "\n".join(rows)
+    rows = ["| n | " + " | ".join(S3_LABEL[m] for m in S3_MODELS) + " |", "| --- |" + " --- |" * len(S3_MODELS)]
+    for n in ns:
+        cells = []
+        for m in S3_MODELS:
+            r = s3_get("n", n, 1.0, 0.5, "antagonistic", "0", m, "vc" if m != "vc" else "vcref")
+            cells.append(f"{time_us(r['median_cpu_us'])} ({time_us(r['median_us'])})" if r and r["median_us"] != "nan" else "-")
+        rows.append(f"| {n} | " + " | ".join(cells) + " |")
+    tables["scenario3_time"] = "\n".join(rows)
+    cc = [r for r in s3 if r["model"] == "cc" and r["note"]]
+    if cc:
+        tables["scenario3_cc"] = ("CC has no row: it refuses these robots (" +
+                                  cc[0]["note"].replace("refuses: ", "").replace(";", ",") +
+                                  "): constant curvature needs tendons parallel to the backbone.")
+if os.path.exists(os.path.join(res, "helical_machine.txt")):
+    with open(os.path.join(res, "helical_machine.txt")) as fh:
+        tables["helical_run"] = "; ".join(line.lstrip("# ").rstrip() for line in fh if line.strip())
+df = read("disk_force.csv")
+if df:
+    rows = ["| robot (one 100 mm segment) | n | VCref kept vs VC | VCref removed (Eq. 58) vs VC | removed vs kept | "
+            "force Eq. 58 drops |", "| --- | --- | --- | --- | --- | --- |"]
+    for r in df:
+        rows.append(f"| {r['case']} | {r['n']} | {f(1e3 * float(r['kept_vs_vc_m']))} mm | "
+                    f"{f(1e3 * float(r['removed_vs_vc_m']))} mm | {f(1e3 * float(r['removed_vs_kept_m']))} mm | "
+                    f"{f(r['eq58_net_force_N'])} N |")
+    tables["disk_force"] = "\n".join(rows)
+dk = read("disks.csv")
+if dk:
+    accs = []
+    for r in dk:
+        if r["accuracy_fraction"] not in accs:
+            accs.append(r["accuracy_fraction"])
+    rows = ["| robot | model | " + " | ".join(f"within {f(100 * float(a))} % of L" for a in accs) + " | observed order |",
+            "| --- | --- |" + " --- |" * (len(accs) + 1)]
+    keys = []
+    for r in dk:
+        if (r["robot"], r["model"]) not in keys:
+            keys.append((r["robot"], r["model"]))
+    for rb, m in keys:
+        by = {r["accuracy_fraction"]: r for r in dk if r["robot"] == rb and r["model"] == m}
+        cells = [(by[a]["n_min"] if by[a]["n_min"] != "-1" else "not resolved") if a in by else "-" for a in accs]
+        order = next(iter(by.values()))["order"]
+        rows.append(f"| {rb} | {LABEL.get(m, m)} | " + " | ".join(cells) + f" | {f(order, 2)} |")
+    tables["disks"] = "\n".join(rows)
+
+
 if "--readme" in sys.argv:
     readme = sys.argv[sys.argv.index("--readme") + 1]
     sentence = readme_speed()

@@ -228,6 +228,45 @@ def vcref_scaling(res, out):
     save(fig, out, "vcref_scaling")
 
 
+def scenario3(res, out):
+    """bench_helical's scenario3.csv: e_p against n (stiffness 1) per turn count, against VCref and
+    against VC, unloaded (solid) and with the tip force (dashed); solve time of configuration 2."""
+    rows = read(os.path.join(res, "scenario3.csv"))
+    if not rows:
+        return
+    rows = [r for r in rows if r["part"] == "n" and r["reference"] != "-"]
+    turns = sorted({r["turns"] for r in rows}, key=float)
+    colors = dict(COLORS, vcref_eq58="tab:purple")
+    labels = dict(LABELS, vcref_eq58="VCref Eq. 58")
+    fig, ax = plt.subplots(len(turns), 3, figsize=(15, 3.6 * len(turns)), squeeze=False)
+    for i, t in enumerate(turns):
+        for j, ref in enumerate(["vcref", "vc"]):
+            for loaded, style in (("0", "o-"), ("1", "x--")):
+                sel = [r for r in rows if r["turns"] == t and r["reference"] == ref and r["tip_force"] == loaded
+                       and r["pairs"] == "antagonistic"]
+                for model, rs in sorted(by_model(sel).items()):
+                    ax[i][j].plot([num(r["n"]) for r in rs], [num(r["e_p_pct"]) for r in rs], style,
+                                  color=colors.get(model), label=f"{labels.get(model, model)}" + (" + F" if loaded == "1" else ""))
+            ax[i][j].set_ylabel(f"{t} turn/segment: e_p vs {LABELS[ref]} (%)")
+            ax[i][j].set_yscale("log")
+        # One row per model for its time: VC's rows are those against VCref, the others' against VC.
+        sel = [r for r in rows if r["turns"] == t and r["reference"] == ("vcref" if r["model"] == "vc" else "vc")
+               and r["tip_force"] == "0" and r["pairs"] == "antagonistic"]
+        for model, rs in sorted(by_model(sel).items()):
+            ax[i][2].plot([num(r["n"]) for r in rs], [num(r["median_cpu_us"]) / 1e3 for r in rs], "o-",
+                          color=colors.get(model), label=labels.get(model, model))
+        ax[i][2].set_ylabel("thread CPU time, configuration 2 (ms)")
+        ax[i][2].set_yscale("log")
+        for a in ax[i]:
+            a.set_xlabel("disks per segment n")
+            a.set_xscale("log")
+            a.grid(True, which="both", alpha=0.3)
+    ax[0][0].legend(fontsize=6, ncol=2)
+    ax[0][2].legend(fontsize=7)
+    fig.suptitle("Scenario 3: helical routing (antagonistic pairs; solid: tendons only, dashed: 0.25 N tip force)")
+    save(fig, out, "fig_scenario3")
+
+
 def main():
     if len(sys.argv) < 2:
         print(__doc__)
@@ -235,7 +274,7 @@ def main():
     res = sys.argv[1]
     out = sys.argv[2] if len(sys.argv) > 2 else res
     os.makedirs(out, exist_ok=True)
-    for f in (scenario1, scenario2, tradeoff, effects, warmstart, vcref_scaling):
+    for f in (scenario1, scenario2, scenario3, tradeoff, effects, warmstart, vcref_scaling):
         f(res, out)
     return 0
 

@@ -19,6 +19,8 @@ py=/usr/bin/python3; [ -x "$py" ] || py=python3
 } > "$out/machine.txt"
 cp "$out/machine.txt" "$out/vcref_machine.txt"  # the stamp of bench_vcref's run (also run on its own)
 "$build/bin/bench_case_study" $quick --out "$out"
+cp "$out/machine.txt" "$out/helical_machine.txt"  # the stamp of bench_helical's run (also run on its own)
+"$build/bin/bench_helical" $quick --out "$out" | tee "$out/bench_helical.txt"
 "$build/bin/bench_vcref" $quick --csv "$out/vcref.csv" | tee "$out/bench_vcref.txt"
 "$build/bin/bench_vc" $quick | tee "$out/bench_vc.txt"
 "$build/bin/bench_lumped" $quick | tee "$out/bench_lumped.txt"

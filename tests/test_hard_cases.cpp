@@ -382,6 +382,7 @@ namespace {
 TEST(VerifyEquilibrium, DetectsAnImbalance) {
   Scene s = paper_scene(10, {TM(), 0, TM(), 0});
   s.loads.tip_force = Vec3(0.1, 0.2, 0.0);
+  s.effects.disk_normal_force = DiskNormalForce::Removed;  // Eq. 58: its dropped forces are accounted
   const auto model = make_model(ModelKind::VCref, s);
   const auto ws = model->make_workspace();
   const Solution sol = solve(*model, *ws, s.input(), s.solver);

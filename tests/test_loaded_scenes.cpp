@@ -518,12 +518,18 @@ TEST(LoadedSceneGenerator, DrawsWithinTheStatedRanges) {
 }  // namespace
 
 namespace {
-const Scene& suite_scene(const std::string& name) {
+// With the paper's disk force (Eq. 58): the folds, snaps and limits below were found and
+// measured with it (with the disk force kept these scenes load differently, docs/models.md).
+Scene suite_scene(const std::string& name) {
   for (const LoadedScene& ls : scenes())
-    if (ls.name == name) return ls.scene;
+    if (ls.name == name) {
+      Scene s = ls.scene;
+      s.effects.disk_normal_force = DiskNormalForce::Removed;
+      return s;
+    }
   throw std::runtime_error("loaded scene " + name + " not generated");
 }
-const Scene& s1006_scene() { return suite_scene("s1006"); }
+Scene s1006_scene() { return suite_scene("s1006"); }
 
 // A suite scene with its tensions and tip force times `factor`.
 Scene scaled(const Scene& scene, double factor) {

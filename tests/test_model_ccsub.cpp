@@ -187,7 +187,8 @@ TEST(CcsubModel, GlobalEquilibriumWithGravityAndTipForce) {
   const int N = routing.disk_count() - 1;
   const double rhoA = s.robot.backbone.linear_mass();
   for (int j = 1; j <= N; ++j) {
-    const tendon::DiskWrench w = tendon::disk_wrench(j, sol.disk_frames.data(), routing, s.actuation.values.data(), true);
+    const tendon::DiskWrench w = tendon::disk_wrench(j, sol.disk_frames.data(), routing, s.actuation.values.data(),
+                                                         s.effects.disk_normal_force == DiskNormalForce::Removed);
     m_loads += w.moment + sol.disk_frames[j].p.cross(w.force);
     const double mass = s.robot.segments[routing.disk_segment[j]].disk_mass;
     m_loads += sol.disk_frames[j].p.cross(mass * s.loads.gravity);

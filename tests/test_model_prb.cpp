@@ -183,7 +183,8 @@ TEST(PrbModel, GlobalEquilibriumWithGravityAndTipForce) {
 
   Vec3 F = s.loads.tip_force, Mb = s.loads.tip_moment + sol.tip().p.cross(s.loads.tip_force);
   for (int j = 1; j <= N; ++j) {
-    const tendon::DiskWrench w = tendon::disk_wrench(j, sol.disk_frames.data(), routing, s.actuation.values.data(), true);
+    const tendon::DiskWrench w = tendon::disk_wrench(j, sol.disk_frames.data(), routing, s.actuation.values.data(),
+                                                         s.effects.disk_normal_force == DiskNormalForce::Removed);
     const Vec3 dw = s.robot.segments[routing.disk_segment[j]].disk_mass * s.loads.gravity;
     F += w.force + dw;
     Mb += w.moment + sol.disk_frames[j].p.cross(w.force + dw);

@@ -40,12 +40,21 @@ std::vector<double> configuration_tensions(int c, double t_max) {
   return t;
 }
 
+Effects effects() {
+  Effects e;
+  // The paper's case study removes the normal component at the disks (its Eq. 58); the library's
+  // default keeps it (docs/models.md, "The tendon force at a disk"). Unloaded, the two coincide.
+  e.disk_normal_force = DiskNormalForce::Removed;
+  return e;
+}
+
 Scene scene(int disks_per_segment, int configuration, const std::string& model) {
   Scene s;
   s.robot = robot(disks_per_segment);
   s.actuation.kind = Actuation::Kind::Tensions;
   s.actuation.values = configuration_tensions(configuration, max_tension(s.robot));
   s.model = model;
+  s.effects = effects();
   return s;
 }
 

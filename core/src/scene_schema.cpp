@@ -381,9 +381,12 @@ const Schema<Effects>& effects_schema() {
                      "inextensible."}),
       choice_field("disk_normal_force", &E::disk_normal_force, kDiskNormalForce,
                    {"", nullptr,
-                    "`\"removed\"`: frictionless disks, the tendon force component along the disk normal is "
-                    "removed at disks a tendon passes through (paper Eq. 58); `\"kept\"`: the full force of "
-                    "Eq. 32-33",
+                    "`\"kept\"`: a frictionless hole, one tension on both sides of a disk the tendon passes "
+                    "through, the disk takes the full force of Eq. 32-33 (the force balance of the tendon in "
+                    "the hole, docs/models.md; VCref then converges to VC as the disks grow, helical routing "
+                    "included); `\"removed\"`: the paper's Eq. 58, the component along the disk normal "
+                    "dropped (robot and tendons then miss that force, and VCref levels off away from VC under "
+                    "loads and on helical robots; the paper's case study)",
                     "CCsub, PRB, VCref (VC and CC have no discrete disk forces)"}),
       boolean_field("kink_forces", &E::kink_forces,
                     {"", nullptr,

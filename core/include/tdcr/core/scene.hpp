@@ -50,9 +50,10 @@ struct Loads {
 
 /// @brief Disk reaction model at disks a tendon only passes through.
 enum class DiskNormalForce {
-  Removed,  ///< Frictionless disks: the tendon force component along the disk normal is
-            ///< removed (paper Eq. 58). Default, as the paper's case study.
-  Kept      ///< The full force of Eq. 32 acts (the literature's usual form).
+  Removed,  ///< The tendon force component along the disk normal is removed (paper Eq. 58, its
+            ///< case study's setting). Not an equilibrium of a frictionless hole: the dropped
+            ///< force acts on neither robot nor tendon (docs/models.md, "The tendon force at a disk").
+  Kept      ///< The full force of Eq. 32-33: a frictionless hole, one tension on both sides. Default.
 };
 
 /// @brief Tendon path assumption for the CC model.
@@ -103,7 +104,7 @@ struct Effects {
   bool shear_extension = true;  ///< Cosserat rod with shear and extension (VC, VCref; CC with
                                 ///< tension input: axial strain); else inextensible,
                                 ///< unshearable Kirchhoff rod. CCsub and PRB are inextensible.
-  DiskNormalForce disk_normal_force = DiskNormalForce::Removed;  ///< Eq. 58 (VCref, CCsub, PRB).
+  DiskNormalForce disk_normal_force = DiskNormalForce::Kept;  ///< Eq. 32-33 or Eq. 58 (VCref, CCsub, PRB).
   /// VC: the point force T_k R (t_k+ - t_k-) of a tensioned tendon passing a disk where the
   /// strains jump (VcOptions::kink_forces). False: the paper code's formulation, which omits it.
   bool kink_forces = true;
@@ -140,7 +141,7 @@ struct SceneEffects {
   bool backbone_weight = false;  ///< Gravity and nonzero backbone mass per length.
   bool disk_weight = false;      ///< Gravity and nonzero disk mass.
   bool shear_extension = true;            ///< Effects::shear_extension (CC, VC, VCref).
-  bool disk_normal_force_removed = true;  ///< Effects::disk_normal_force is Removed (Eq. 58).
+  bool disk_normal_force_removed = false;  ///< Effects::disk_normal_force is Removed (Eq. 58).
   bool tendon_friction = false;           ///< Effects::tendon_friction is on (some mu > 0).
 };
 
