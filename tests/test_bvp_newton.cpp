@@ -306,6 +306,43 @@ TEST(BvpNewton, MaxIterationsIsReportedAsSuch) {
   EXPECT_GE(r.residual_norm, 1.0);
 }
 
+// f(x) = x^2: Newton halves x, so the residual falls by 4 per iteration (1/4^k from x = 1). With
+// the Jacobian frozen below 1e-3 and a budget of 5 iterations, exact Newton reaches 1e-3 with its
+// last iteration (4^-5 = 9.8e-4): that is convergence to the freezing threshold only, and the
+// solve must say it ran out of iterations, not that it converged (a capped cold attempt of CCsub
+// was returned as converged at 5e-4 and its caller never tried the loading path).
+class DoubleRoot : public tdcr::bvp::ResidualSystem {
+ public:
+  int size() const override { return 1; }
+  bool residual(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> f) override {
+    f[0] = x[0] * x[0];
+    return true;
+  }
+};
+
+TEST(BvpNewton, BudgetEndingAtTheFreezingThresholdIsNotConvergence) {
+  DoubleRoot sys;
+  NewtonSolver solver;
+  Eigen::VectorXd x(1);
+  x << 1.0;
+  NewtonOptions o;
+  o.line_search = false;
+  o.function_tolerance = 1e-10;
+  o.freeze_jacobian_below = 1e-3;
+  o.max_iterations = 5;
+  const auto r = solver.solve(sys, x, o);
+  EXPECT_EQ(r.termination, TerminationType::MaxIterations) << r.message;
+  EXPECT_EQ(r.iterations, 5);
+  EXPECT_GT(r.residual_norm, o.function_tolerance);
+  EXPECT_LE(r.residual_norm, 1e-3);
+  // With room for the frozen iterations it converges.
+  x << 1.0;
+  o.max_iterations = 60;
+  const auto ok = solver.solve(sys, x, o);
+  EXPECT_EQ(ok.termination, TerminationType::Converged) << ok.message;
+  EXPECT_LE(ok.residual_norm, o.function_tolerance);
+}
+
 TEST(BvpNewton, ResidualFailureAtInitialGuess) {
   Fragile sys(0.0, false);
   NewtonSolver solver;

@@ -328,8 +328,15 @@ NewtonResult NewtonSolver::solve(ResidualSystem& system, Eigen::VectorXd& x,
     // Done if it met the full tolerance as KINSOL judges it: after an iteration, or at the
     // initial guess with KINSOL's margin of 0.01.
     const double done = first.iterations > 0 ? options.function_tolerance : 0.01 * options.function_tolerance;
-    if (!first.converged() || first.residual_norm <= done || first.iterations >= options.max_iterations)
+    if (!first.converged() || first.residual_norm <= done) return first;
+    if (first.iterations >= options.max_iterations) {
+      // Converged only to the freezing threshold when the budget ran out: not the solve's
+      // tolerance (a cold CCsub attempt capped at 30 iterations was returned as converged at
+      // |F| = 5e-4, and its caller never tried the loading path).
+      first.termination = TerminationType::MaxIterations;
+      first.message += " (the iteration budget ended at the Jacobian-freezing threshold, above function_tolerance)";
       return first;
+    }
     // Modified Newton converges linearly and stops just below its tolerance, where exact
     // Newton's last step lands far below it: ask it for kFrozenTighter times more, and accept
     // function_tolerance if round-off stops it first.
