@@ -112,6 +112,12 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   bool tendon_pulls(const Eigen::VectorXd& y, Eigen::VectorXd& d) final;
   /// Eigenvalues of the Jacobian of the constitutive residuals in the x_j (lumped_stability.cpp).
   Stability stability(const Eigen::VectorXd& y, double load_factor) final;
+  /// A direct answer under loads (automatic rule): first a sufficient test (the structured
+  /// Jacobian, a Cholesky factorisation of its balanced symmetric part), stability() where it
+  /// does not prove the answer stable (lumped_stability.cpp).
+  Stability direct_stability(const Eigen::VectorXd& y, double load_factor) final;
+  /// The automatic rule tests direct answers under external loads (direct_stability()).
+  bool automatic_stability_under_loads() const final { return true; }
 
   int size() const final { return stride() * loads_.active; }
   void set_parameter(double lambda) final { loads_.set_load_factor(lambda); }
@@ -273,6 +279,11 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   bool jac_external_ = false;
   std::vector<Vec3> jac_FT_, jac_MT_, jac_FE_, jac_pure_, jac_df_, jac_dm_;
   Eigen::VectorXd next_x_;  // fixed_point_passes()
+  Eigen::MatrixXd stab_A_;  // direct_stability(): the scaled Jacobian, its balanced symmetric part
+  Eigen::VectorXd stab_r_, stab_s_, stab_t_, stab_v_;
+  // direct_stability()'s sufficient test: true and the margin (the smallest eigenvalue of the
+  // balanced symmetric part) if it proves the answer stable; at x_ in the stability chart.
+  bool proven_stable(double& margin, std::string& how);
   std::vector<Mat3> jac_G_;
 };
 

@@ -91,6 +91,12 @@ class ModelProblem {
     (void)load_factor;
     return Stability{};
   }
+  /// The stability test of a direct answer under external loads that the automatic rule
+  /// (StabilityCheck::Automatic) asks for: the same verdict as stability(), possibly reached by a
+  /// cheaper sufficient test first (CCsub, PRB: lumped_stability.cpp). Default: stability().
+  virtual Stability direct_stability(const Eigen::VectorXd& x, double load_factor) {
+    return stability(x, load_factor);
+  }
   /// Whether the automatic stability rule (SolverOptions::stability, StabilityCheck::Automatic)
   /// tests this problem's answers for their external loads alone, without a loading path: where
   /// the test costs a fraction of a cold solve (VC, VCref: shots on a coarse mesh). Default false:

@@ -565,8 +565,31 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
     SolverOptions last;
     bool test = false;
     Solution sol = solve_refined(model, workspace, input, options, warm_start, path, keep_history, last, test);
-    if (sol.converged() && test) {
-      // The last answer tested: a solve on its mesh from it (no Newton iteration where it already
+    const bool displacement = detail::needs_displacement_solve(model, input);
+    // The rule for the direct answers under loads, as the model says (solve_refined decides by
+    // the path alone).
+    bool direct = false;
+    if (sol.converged() && !test && options.stability == StabilityCheck::Automatic &&
+        externally_loaded(input.loads) && !displacement) {
+      detail::ModelProblem& P = model.bind(workspace, input, last);
+      direct = test = P.automatic_stability_under_loads();
+    }
+    bool tested = false;
+    if (sol.converged() && test && !displacement) {
+      // The last answer tested on its own mesh: the problem bound with the options of the solve
+      // that returned it (not the estimate's mesh) and tested at the answer's unknowns as a warm
+      // start gives them (VCref: its chart references at the answer's disks), without a solve.
+      detail::ModelProblem& P = model.bind(workspace, input, last);
+      Eigen::VectorXd x;
+      if (P.system() && P.warm_guess(sol, x) && x.size() == P.system()->size()) {
+        P.system()->set_parameter(1.0);
+        sol.stability = direct ? P.direct_stability(x, 1.0) : P.stability(x, 1.0);
+        sol.summary.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        tested = true;
+      }
+    }
+    if (sol.converged() && test && !tested) {
+      // Displacement input: a solve on its mesh from it (no Newton iteration where it already
       // meets the tolerance there) with the test forced on, so that the test reads the answer's
       // own evaluation, not the estimate's on another mesh; the warm-start history is left as
       // the refinement made it.
@@ -704,7 +727,9 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
       // displacement input, its tension start's.
       const bool by_path = reached_by_path(sol) || (from_tensions && reached_by_path(*from_tensions));
       if (sum.converged() && wants_stability(options.stability, input, by_path, P.automatic_stability_under_loads()))
-        sol.stability = P.stability(x, 1.0);
+        // A direct answer tested for its loads alone: the model's cheaper test where it has one.
+        sol.stability = options.stability == StabilityCheck::Automatic && !by_path ? P.direct_stability(x, 1.0)
+                                                                                    : P.stability(x, 1.0);
       else sol.stability.method = kStabilityNotChecked;  // short: no allocation
     }
     if (sol.converged() && options.differential_kinematics && !displacement)
