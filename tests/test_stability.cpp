@@ -4,8 +4,6 @@
 // configurations.
 #include <cmath>
 #include <string>
-#include <utility>
-#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -82,27 +80,16 @@ TEST(Stability, AutomaticRuleSkipsPlainUnloadedSolves) {
 // Whether the automatic rule tests a model's direct answers under external loads alone (the
 // lumped models, whose sufficient test makes it cheap; not VC and VCref, whose tests cost more
 // than the 25 % of their median loaded solve allowed: docs/models.md, "Stability").
-// The answer `sol` of scene `s` tested with the test forced on: a warm solve from it at its own
-// input (the same equilibrium: at most a Newton step within the tolerance).
-Solution forced_at(ModelKind kind, const Scene& s, const Solution& sol) {
-  auto m = make_model(kind, s.robot, s.effects);
-  auto ws = m->make_workspace();
-  SolverOptions options = s.solver;
-  options.stability = StabilityCheck::Always;
-  Solution out = solve(*m, *ws, s.input(), options, &sol);
-  EXPECT_LE(out.summary.iterations, 1) << to_string(kind) << ": the same answer";
-  EXPECT_LT((out.tip().p - sol.tip().p).norm(), 1e-9) << to_string(kind) << ": the same answer";
-  return out;
-}
-
-bool tests_loaded_direct_answers(ModelKind kind) { return kind == ModelKind::CCsub || kind == ModelKind::PRB; }
+// Whether the automatic rule tests a model's direct answers under external loads alone: VCref,
+// whose test adds 17 % to its median loaded solve; not VC (75 %), CCsub and PRB (about 50 % with
+// their sufficient test, tests/test_lumped_jacobian.cpp): over the rule's 25 % budget
+// (docs/models.md, "Stability").
+bool tests_loaded_direct_answers(ModelKind kind) { return kind == ModelKind::VCref; }
 
 // Under moderate external loads (tip force, tip moment, gravity) a cold solve is direct and lands
-// on the branch connected to rest. The automatic rule tests it in CCsub and PRB (a sufficient
-// test: a Cholesky factorisation of the balanced symmetric part of their stiffness, which proves
-// these answers stable), with the verdict that forcing the test gives; VC's and VCref's tests
-// cost more than the budget, so there it is not tested. Answers of a loading path are tested
-// (below); true forces the test.
+// on the branch connected to rest. The automatic rule tests it in VCref, with the verdict and
+// margin that forcing the test gives; in the other models it is not tested. Answers of a loading
+// path are tested (below); true forces the test.
 TEST(Stability, AutomaticRuleTestsLoadedAnswers) {
   Scene force = paper::scene(10, 2), moment = force, weight = force;
   force.loads.tip_force = Vec3(0.1, -0.05, -0.1);
@@ -114,76 +101,38 @@ TEST(Stability, AutomaticRuleTestsLoadedAnswers) {
       const Solution sol = solve_checked(kind, *s, StabilityCheck::Automatic);
       ASSERT_TRUE(sol.converged()) << to_string(kind) << ": " << sol.summary.message;
       ASSERT_EQ(sol.summary.continuation_steps, 0) << to_string(kind) << ": a direct solve";
-      const Solution forced = tests_loaded_direct_answers(kind) ? forced_at(kind, *s, sol)
-                                                                 : solve_checked(kind, *s, StabilityCheck::Always);
+      const Solution forced = solve_checked(kind, *s, StabilityCheck::Always);
       EXPECT_EQ(forced.stability.status, StabilityStatus::Stable) << to_string(kind) << ": " << forced.stability.method;
       if (!tests_loaded_direct_answers(kind)) {
         EXPECT_TRUE(not_checked(sol)) << to_string(kind) << ": " << sol.stability.method;
         continue;
       }
       EXPECT_EQ(sol.stability.status, StabilityStatus::Stable) << to_string(kind) << ": " << sol.stability.method;
-      EXPECT_NE(sol.stability.method.find("sufficient test"), std::string::npos) << to_string(kind) << ": "
-                                                                                 << sol.stability.method;
-      // The sufficient test's margin bounds the smallest real part from below.
-      EXPECT_GT(sol.stability.margin, 0.0) << to_string(kind);
-      EXPECT_LE(sol.stability.margin, forced.stability.margin * (1.0 + 1e-4)) << to_string(kind);
+      EXPECT_EQ(sol.stability.method, forced.stability.method) << to_string(kind);
+      EXPECT_NEAR(sol.stability.margin, forced.stability.margin, 1e-9 * forced.stability.margin) << to_string(kind);
     }
   }
 }
 
-// The lumped models' test of a direct answer under loads (the automatic rule) gives the verdict
-// of their eigen test (forced on) on loaded robots (paper robot, n = 3, 5, 10, 20, tensions and
-// tip forces as bench_loaded draws them), on the straight column below and past Euler's load
-// (Newton from the straight shape, no continuation: the unstable straight branch), and on the
-// imperfect column held near straight past its load (unstable): where the sufficient test does
-// not prove stability the eigen test decides.
-TEST(Stability, LumpedDirectTestAgreesWithTheEigenTest) {
-  std::vector<std::pair<std::string, Scene>> scenes;
-  unsigned state = 12345u;
-  const auto uniform = [&state]() {
-    state = state * 1103515245u + 12345u;
-    return static_cast<double>((state >> 8) & 0xffffu) / 65535.0;
-  };
-  for (int n : {3, 5, 10, 20}) {
-    for (int c = 0; c < 3; ++c) {
-      Scene s = paper::scene(n, 1 + 5 * c);
-      const double t_max = paper::max_tension(s.robot);
-      for (double& T : s.actuation.values) T = 1.5 * t_max * uniform() * (uniform() < 0.5 ? 0.0 : 1.0);
-      s.loads.tip_force = 0.5 * Vec3(2.0 * uniform() - 1.0, 2.0 * uniform() - 1.0, 2.0 * uniform() - 1.0) / std::sqrt(3.0);
-      scenes.emplace_back("n = " + std::to_string(n) + ", draw " + std::to_string(c), s);
+// A direct answer under loads that is unstable: the straight column past Euler's load, Newton
+// from the straight shape without continuation. The automatic rule reports it unstable in VCref
+// without asking (the others leave it untested); forced on, every static model does.
+TEST(Stability, AutomaticRuleReportsAnUnstableDirectLoadedAnswer) {
+  for (ModelKind kind : kStaticKinds) {
+    const Scene straight = column(1.2, 0.0, false);
+    const Solution sol = solve_checked(kind, straight, StabilityCheck::Automatic);
+    ASSERT_TRUE(sol.converged()) << to_string(kind) << ": " << sol.summary.message;
+    ASSERT_EQ(sol.summary.continuation_steps, 0) << to_string(kind) << ": a direct solve";
+    EXPECT_LT(lateral(sol), 1e-9) << to_string(kind) << ": the straight branch";
+    if (tests_loaded_direct_answers(kind)) {
+      EXPECT_EQ(sol.stability.status, StabilityStatus::Unstable) << to_string(kind) << ": " << sol.stability.method;
+      EXPECT_LT(sol.stability.margin, 0.0) << to_string(kind);
+    } else {
+      EXPECT_TRUE(not_checked(sol)) << to_string(kind) << ": " << sol.stability.method;
     }
+    const Solution forced = solve_checked(kind, straight, StabilityCheck::Always);
+    EXPECT_EQ(forced.stability.status, StabilityStatus::Unstable) << to_string(kind) << ": " << forced.stability.method;
   }
-  scenes.emplace_back("column at 0.8 of Euler's load", column(0.8, 0.0, false));
-  scenes.emplace_back("column at 1.2 of Euler's load, straight", column(1.2, 0.0, false));
-  scenes.emplace_back("column at 1.5 of Euler's load, straight", column(1.5, 0.0, false));
-  int unstable = 0, proven = 0, draws = 0;
-  for (ModelKind kind : {ModelKind::CCsub, ModelKind::PRB}) {
-    for (const auto& [label, scene] : scenes) {
-      const std::string name = to_string(kind) + ", " + label;
-      Scene direct = scene;
-      direct.solver.continuation = false;
-      const Solution a = solve_checked(kind, direct, StabilityCheck::Automatic);
-      if (!a.converged()) continue;
-      const Solution b = forced_at(kind, direct, a);
-      ASSERT_TRUE(b.converged()) << name;
-      ASSERT_EQ(a.summary.continuation_steps, 0) << name << ": a direct solve";
-      ASSERT_FALSE(not_checked(a)) << name << ": tested under loads";
-      EXPECT_EQ(a.stability.status, b.stability.status) << name << ": " << a.stability.method << " vs "
-                                                        << b.stability.method;
-      if (b.stability.status == StabilityStatus::Unstable) ++unstable;
-      if (label.rfind("n = ", 0) == 0) ++draws;
-      if (a.stability.method.find("sufficient test") != std::string::npos) {
-        ++proven;
-        EXPECT_GT(a.stability.margin, 0.0) << name;
-        EXPECT_LE(a.stability.margin, b.stability.margin * (1.0 + 1e-4)) << name << ": a lower bound";
-      } else {
-        EXPECT_EQ(a.stability.margin, b.stability.margin) << name << ": the eigen test's";
-      }
-    }
-  }
-  EXPECT_EQ(unstable, 4) << "the straight columns past Euler's load, in both models";
-  EXPECT_GE(draws, 16) << "loaded draws solved directly";
-  EXPECT_GE(4 * proven, 3 * draws) << "most loaded answers proven stable by the sufficient test";
 }
 
 // An answer reached by the loading path from rest is tested by every static model: the column
