@@ -109,7 +109,8 @@ TEST(Stability, AutomaticRuleTestsLoadedAnswers) {
       }
       EXPECT_EQ(sol.stability.status, StabilityStatus::Stable) << to_string(kind) << ": " << sol.stability.method;
       EXPECT_EQ(sol.stability.method, forced.stability.method) << to_string(kind);
-      EXPECT_NEAR(sol.stability.margin, forced.stability.margin, 1e-9 * forced.stability.margin) << to_string(kind);
+      // (forced: the solve from the answer on its mesh, which may move it within the tolerance)
+      EXPECT_NEAR(sol.stability.margin, forced.stability.margin, 1e-6 * forced.stability.margin) << to_string(kind);
     }
   }
 }
