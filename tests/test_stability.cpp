@@ -81,7 +81,7 @@ TEST(Stability, AutomaticRuleSkipsPlainUnloadedSolves) {
 // lumped models, whose sufficient test makes it cheap; not VC and VCref, whose tests cost more
 // than the 25 % of their median loaded solve allowed: docs/models.md, "Stability").
 // Whether the automatic rule tests a model's direct answers under external loads alone: VCref,
-// whose test adds 17 % to its median loaded solve; not VC (75 %), CCsub and PRB (about 50 % with
+// whose test adds 17 % to its median loaded solve; not VC (75 %), CCsub and PRB (42 and 44 % with
 // their sufficient test, tests/test_lumped_jacobian.cpp): over the rule's 25 % budget
 // (docs/models.md, "Stability").
 bool tests_loaded_direct_answers(ModelKind kind) { return kind == ModelKind::VCref; }
