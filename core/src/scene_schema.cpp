@@ -484,8 +484,9 @@ const Schema<SolverOptions>& solver_schema() {
                       {"", nullptr,
                        "`\"auto\"`, `true` or `false`: which converged answers get their stability decided "
                        "(`stability` in the JSON output, its method `\"not checked\"` where not). `\"auto\"`: "
-                       "answers reached by a loading path (from rest, a snap, a warm start's input path); not "
-                       "direct or warm solves (a test costs about as much as a solve or more); `true`: every "
+                       "answers reached by a loading path (from rest, a snap, a warm start's input path), and "
+                       "under external loads every VCref answer; not other direct or warm solves (VC's, CCsub's "
+                       "and PRB's tests cost more than 25 % of their median loaded solve); `true`: every "
                        "answer; `false`: none. VC by the "
                        "conjugate-point test of the fixed-free rod, CCsub and PRB by the eigenvalues of their "
                        "reduced stiffness, VCref by its reduced stiffness in the disk poses; CC: undetermined "

@@ -503,7 +503,15 @@ void DisplacementProblem::extract(const Eigen::VectorXd& y, bool evaluated, Solu
 
 Stability DisplacementProblem::stability(const Eigen::VectorXd& y, double load_factor) {
   if (!apply(y.tail(k_))) return Stability{};
-  Stability s = inner_->stability(y.head(n_), load_factor);
+  return held_tensions(inner_->stability(y.head(n_), load_factor));
+}
+
+Stability DisplacementProblem::direct_stability(const Eigen::VectorXd& y, double load_factor) {
+  if (!apply(y.tail(k_))) return Stability{};
+  return held_tensions(inner_->direct_stability(y.head(n_), load_factor));
+}
+
+Stability DisplacementProblem::held_tensions(Stability s) const {
   // The test holds the driven tensions fixed. A tendon held at its length instead only adds a
   // constraint, which cannot make a stable equilibrium unstable, but can stabilise an unstable
   // one: stable stays stable, unstable is not decided.

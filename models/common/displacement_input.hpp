@@ -97,6 +97,7 @@ class DisplacementProblem final : public ModelProblem, public bvp::Parameterized
   bool final_residual(const Eigen::VectorXd& y, Eigen::Ref<Eigen::VectorXd> f) override;
   void extract(const Eigen::VectorXd& y, bool evaluated, Solution& solution) override;
   Stability stability(const Eigen::VectorXd& y, double load_factor) override;
+  Stability direct_stability(const Eigen::VectorXd& y, double load_factor) override;
   bool automatic_stability_under_loads() const override { return inner_->automatic_stability_under_loads(); }
   bool infeasibility(const Eigen::VectorXd& y, double threshold, std::string& why) override;
   bool differentiable(const Eigen::VectorXd& y) const override { return inner_->differentiable(y.head(n_)); }
@@ -127,6 +128,9 @@ class DisplacementProblem final : public ModelProblem, public bvp::Parameterized
   const std::vector<int>& driven() const { return index_; }
 
  private:
+  // The inner problem's verdict at the answer's tensions held fixed, read for tendons held at
+  // their lengths (stable stays stable, unstable is not decided).
+  Stability held_tensions(Stability s) const;
   // Set the inner problem's driven tensions to T_s tau (if they changed).
   bool apply(const Eigen::Ref<const Eigen::VectorXd>& tau);
   // The rows of the driven tendons at y (pulls d_ evaluated at x): into r.

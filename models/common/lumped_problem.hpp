@@ -113,6 +113,12 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   bool tendon_pulls(const Eigen::VectorXd& y, Eigen::VectorXd& d) final;
   /// Eigenvalues of the Jacobian of the constitutive residuals in the x_j (lumped_stability.cpp).
   Stability stability(const Eigen::VectorXd& y, double load_factor) final;
+  /// The test of a direct answer under loads: first a sufficient test (the structured Jacobian,
+  /// a block Cholesky factorisation of its balanced symmetric part, O(J)), stability() where it
+  /// does not prove the answer stable (lumped_stability.cpp). The automatic rule does not call
+  /// it (automatic_stability_under_loads() is false: it still adds 42 % (CCsub) and 44 % (PRB) to
+  /// the median loaded solve, docs/models.md "Stability"); tests compare it with stability().
+  Stability direct_stability(const Eigen::VectorXd& y, double load_factor) final;
 
   int size() const final { return stride() * loads_.active; }
   void set_parameter(double lambda) final { loads_.set_load_factor(lambda); }
@@ -294,6 +300,13 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   bool jac_external_ = false;
   std::vector<Vec3> jac_FT_, jac_MT_, jac_FE_, jac_pure_, jac_df_, jac_dm_;
   Eigen::VectorXd next_x_;  // fixed_point_passes()
+  // direct_stability(): the scaled Jacobian's block tridiagonal part, its balancing, the
+  // generators of the balanced symmetric part.
+  Eigen::MatrixXd stab_G_, stab_up_, stab_lo_, stab_P_, stab_Q_;
+  Eigen::VectorXd stab_r_, stab_s_, stab_t_;
+  // direct_stability()'s sufficient test: true and the margin (the smallest eigenvalue of the
+  // balanced symmetric part) if it proves the answer stable; at x_ in the stability chart.
+  bool proven_stable(double& margin, std::string& how);
   std::vector<Mat3> jac_G_;
 };
 

@@ -91,11 +91,17 @@ class ModelProblem {
     (void)load_factor;
     return Stability{};
   }
+  /// The stability test of a direct answer under external loads that the automatic rule
+  /// (StabilityCheck::Automatic) asks for: the same verdict as stability(), possibly reached by a
+  /// cheaper sufficient test first (CCsub, PRB: lumped_stability.cpp). Default: stability().
+  virtual Stability direct_stability(const Eigen::VectorXd& x, double load_factor) {
+    return stability(x, load_factor);
+  }
   /// Whether the automatic stability rule (SolverOptions::stability, StabilityCheck::Automatic)
   /// tests this problem's answers for their external loads alone, without a loading path: where
-  /// the test costs a fraction of a cold solve (VC, VCref: shots on a coarse mesh). Default false:
-  /// CCsub's and PRB's dense eigen-solve costs several times their cold loaded solve (4.3 and 8.0
-  /// times on the median loaded case of bench_loaded, up to 17 and 38 times at n = 20), so their
+  /// the test adds at most 25 % to the median loaded cold solve of bench_loaded (VCref: +17 %).
+  /// Default false: VC's conjugate-point test adds about 75 %, CCsub's and PRB's sufficient test
+  /// (direct_stability) 42 and 44 % (their eigen test 4.3 and 8.0 times the solve), so their
   /// answers are tested when a path reached them (or when asked); docs/models.md, "Stability".
   virtual bool automatic_stability_under_loads() const { return false; }
   /// Called when loading from rest stopped short of full load, after extract() at x, the

@@ -30,9 +30,9 @@ enum class LinearSolverKind {
 /// `solver.stability`: `"auto"`, `true`, `false`).
 enum class StabilityCheck {
   Automatic,  ///< Where it matters: an answer reached by a loading path (from rest, a snap, a warm
-              ///< start's input path, a displacement solve's path), in every model. Not a direct
-              ///< or warm solve (under loads within the direct-solve bounds it lands on the branch
-              ///< connected to rest).
+              ///< start's input path, a displacement solve's path), in every model; under external
+              ///< loads every VCref answer. Not another direct or warm solve (under loads within the
+              ///< direct-solve bounds it lands on the branch connected to rest).
   Always,     ///< Every converged answer.
   Never       ///< No answer (Solution::stability says "not checked").
 };
@@ -138,10 +138,10 @@ struct SolverOptions {
   /// conjugate-point test of the fixed-free rod, CCsub and PRB by the eigenvalues of the reduced
   /// stiffness, VCref by its reduced stiffness in the disk poses; CC reports "undetermined"
   /// (docs/models.md, "Stability"). Automatic by default (StabilityCheck::Automatic): answers
-  /// reached by a loading path are tested; direct and warm solves are not (CCsub's and PRB's
-  /// dense eigen-solve costs several of their solves; VC's coarse-mesh test about as much as its
-  /// accuracy-driven solve: with it the loaded cases' median VC solve went from 280 to 610 us,
-  /// `bench_loaded`, 2026-11-27). An untested Solution's stability says "not checked"
+  /// reached by a loading path are tested, and under external loads VCref's direct and warm
+  /// answers (+17 % on its median loaded solve, `bench_loaded`, 2026-11-27); other direct and
+  /// warm solves are not (VC's test adds 75 %, CCsub's and PRB's 42 % and 44 % even with their
+  /// sufficient test, over the 25 % budget). An untested Solution's stability says "not checked"
   /// (kStabilityNotChecked); true tests every answer.
   StabilityCheck stability = StabilityCheck::Automatic;
   /// Differential kinematics of every converged answer (Solution::tip_jacobian,
