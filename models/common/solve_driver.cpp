@@ -41,8 +41,8 @@ bool externally_loaded(const Loads& loads) {
 
 // Whether an answer reached by a loading path or not (`by_path`) is tested: the automatic rule
 // tests the answers of loading paths (from rest, snaps, a warm start's input path) and, where
-// the model's test is cheap (`loads_count`: ModelProblem::automatic_stability_under_loads), of
-// loaded scenes; not plain unloaded direct or warm solves.
+// the model's test is cheap (`loads_count`: ModelProblem::automatic_stability_under_loads, for a
+// cold solve), of loaded scenes; not plain unloaded direct solves nor warm steps.
 bool wants_stability(StabilityCheck check, const ModelInput& input, bool by_path, bool loads_count) {
   switch (check) {
     case StabilityCheck::Always: return true;
@@ -596,8 +596,10 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
     // SweepRun.MergedShardsEqualOneRun under load).
     bool under_loads = false;
     const bool displacement = detail::needs_displacement_solve(model, input);
+    // Cold solves only: a trajectory's warm step from a tested answer is not tested again (VCref's
+    // test would add 92 % to a loaded trajectory's step); it is when its input path snaps.
     const bool ask = options.stability == StabilityCheck::Automatic && externally_loaded(input.loads) &&
-                     !displacement && model.kind() != ModelKind::VC;
+                     !displacement && model.kind() != ModelKind::VC && !warm_start;
     if ((!warm_start && options.continuation && !displacement) || ask) {
       SolverOptions first = options;
       first.integrator = IntegratorKind::FixedStepRK4;
@@ -771,7 +773,8 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
       // The answer reached along a path: this solve's (continuation steps, path events) or, for
       // displacement input, its tension start's.
       const bool by_path = reached_by_path(sol) || (from_tensions && reached_by_path(*from_tensions));
-      if (sum.converged() && wants_stability(options.stability, input, by_path, P.automatic_stability_under_loads()))
+      if (sum.converged() &&
+          wants_stability(options.stability, input, by_path, P.automatic_stability_under_loads() && !warm_start))
         // A direct answer tested for its loads alone: the model's cheaper test where it has one.
         sol.stability = options.stability == StabilityCheck::Automatic && !by_path ? P.direct_stability(x, 1.0)
                                                                                     : P.stability(x, 1.0);

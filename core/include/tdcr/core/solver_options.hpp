@@ -138,9 +138,10 @@ struct SolverOptions {
   /// conjugate-point test of the fixed-free rod, CCsub and PRB by the eigenvalues of the reduced
   /// stiffness, VCref by its reduced stiffness in the disk poses; CC reports "undetermined"
   /// (docs/models.md, "Stability"). Automatic by default (StabilityCheck::Automatic): answers
-  /// reached by a loading path are tested, and under external loads VCref's direct and warm
-  /// answers (+17 % on its median loaded solve, `bench_loaded`, 2026-11-27); other direct and
-  /// warm solves are not (VC's test adds 75 %, CCsub's and PRB's 42 % and 44 % even with their
+  /// reached by a loading path are tested, and under external loads VCref's cold direct answers
+  /// (+17 % on its median loaded solve, `bench_loaded`, 2026-11-27); warm steps that follow no
+  /// path (a trajectory: the test would add 92 % to VCref's loaded step) and other direct solves
+  /// are not (VC's test adds 75 %, CCsub's and PRB's 42 % and 44 % even with their
   /// sufficient test, over the 25 % budget). An untested Solution's stability says "not checked"
   /// (kStabilityNotChecked); true tests every answer.
   StabilityCheck stability = StabilityCheck::Automatic;
