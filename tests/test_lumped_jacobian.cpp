@@ -19,7 +19,7 @@
 
 #include "allocation_counter.hpp"
 
-#include "common/lumped_problem.hpp"
+#include "lumped/lumped_problem.hpp"
 #include "tdcr/bvp/residual_system.hpp"
 #include "tdcr/core/paper_robot.hpp"
 #include "tdcr/models/ccsub.hpp"

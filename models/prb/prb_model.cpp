@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "common/lumped_problem.hpp"
+#include "lumped/lumped_problem.hpp"
 #include "tdcr/core/lie.hpp"
 
 namespace tdcr {

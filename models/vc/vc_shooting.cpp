@@ -8,7 +8,7 @@
 
 #include <Eigen/LU>
 
-#include "common/stability_mesh.hpp"
+#include "solve/stability_mesh.hpp"
 #include "physics/geometry_check.hpp"
 #include "physics/tendon_path.hpp"
 #include "vc/vc_friction.hpp"

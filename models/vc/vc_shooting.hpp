@@ -8,7 +8,7 @@
 
 #include <Eigen/Core>
 
-#include "common/model_problem.hpp"
+#include "solve/model_problem.hpp"
 #include "physics/load_case.hpp"
 #include "tdcr/bvp/integrator.hpp"
 #include "tdcr/models/cosserat_rod.hpp"
@@ -43,7 +43,7 @@ struct VcWorkspace::Impl {
   std::unique_ptr<bvp::Integrator> shot_integrator;
   std::unique_ptr<bvp::Integrator> final_integrator;  ///< Null with CVODE (lengths in every shot).
   long retired_rhs = 0;                               ///< Evaluations of replaced integrators.
-  /// The stability test's coarse RK4 mesh (common/stability_mesh.hpp); null with CVODE (the test
+  /// The stability test's coarse RK4 mesh (solve/stability_mesh.hpp); null with CVODE (the test
   /// then takes shot_integrator).
   std::unique_ptr<bvp::Rk4Integrator> stability_integrator;
   // The stability test's buffers (vc_stability.cpp): kept, so that a test allocates none once warm.

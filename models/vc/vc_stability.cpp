@@ -70,7 +70,7 @@
 // between it and the tip on. Between -u and u, u = max(1e-6, 10 sqrt(integrator noise)), the
 // test does not decide.
 // Every shot of the test, the sweep from the base included, is taken on a coarse RK4 mesh when
-// the solve integrates with RK4 (common/stability_mesh.hpp: at least 1 step per disk interval,
+// the solve integrates with RK4 (solve/stability_mesh.hpp: at least 1 step per disk interval,
 // steps of at most 8 mm, never finer than the solve's), with CVODE by the solve's integrator.
 // A dead tip moment (fixed in the base frame) is not conservative for finite 3-D rotations; it
 // is treated as if it were (delta w(L) = 0, the symmetric part of K), exact for a moment normal

@@ -6,8 +6,8 @@
 #include <cmath>
 #include <cstdio>
 
-#include "common/model_problem.hpp"
-#include "common/stability_mesh.hpp"
+#include "solve/model_problem.hpp"
+#include "solve/stability_mesh.hpp"
 #include "tdcr/bvp/integrator.hpp"
 #include "tdcr/core/error.hpp"
 #include "tdcr/core/lie.hpp"
@@ -143,7 +143,7 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
   }
   void rest_state(Eigen::VectorXd& x) override { shape_guess(x, false); }
   std::string integrator_name() const override { return integrator_->name(); }
-  // The test on a coarse mesh costs a fraction of a cold loaded solve (common/stability_mesh.hpp):
+  // The test on a coarse mesh costs a fraction of a cold loaded solve (solve/stability_mesh.hpp):
   // +17 % on the median loaded case of bench_loaded, so the automatic rule tests direct answers
   // under loads too.
   bool automatic_stability_under_loads() const override { return true; }
@@ -332,7 +332,7 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
   VcrefShooting problem_;
   SolverOptions integrator_options_;
   std::unique_ptr<bvp::Integrator> integrator_;
-  std::unique_ptr<bvp::Rk4Integrator> stability_integrator_;  // common/stability_mesh.hpp; null with CVODE
+  std::unique_ptr<bvp::Rk4Integrator> stability_integrator_;  // solve/stability_mesh.hpp; null with CVODE
   bvp::ShootingSystem shooting_;
   VcrefSystem system_;
   bvp::NewtonSolver newton_;

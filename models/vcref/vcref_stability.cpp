@@ -20,7 +20,7 @@
 // without the backbone's weight 6, the rotation columns following from the rod's rotation
 // invariance; 6 for the first, whose start pose is the clamp; by the integrator the caller
 // gives: the test's coarse RK4 mesh when the solve integrates with RK4,
-// common/stability_mesh.hpp). Its start wrench follows from both end poses,
+// solve/stability_mesh.hpp). Its start wrench follows from both end poses,
 // dw_j = B^-1 (dg_j+1 - A dg_j), and its end wrench dv_j+1 = C dg_j + D dw_j; disk i receives
 // +dv_i - dw_i. The tendon wrenches are differentiated by forward differences of
 // tendon::disk_wrench in the poses of the disks i-1, i, i+1 (no integration). Rows of moments are
@@ -50,7 +50,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 
-#include "common/least_stable_mode.hpp"
+#include "physics/least_stable_mode.hpp"
 #include "tdcr/core/lie.hpp"
 #include "tdcr/models/tendon_physics.hpp"
 

@@ -57,7 +57,7 @@ class LumpedModel : public StaticModel {
                                                               LumpedFormulation);
   /// @brief Validates robot and effects (InputError) and builds the body with `make_body`.
   LumpedModel(const Robot& robot, const Effects& effects, LumpedFormulation formulation, BodyFactory make_body);
-  /// @brief The model's subsegments (private type, models/common/lumped_problem.hpp).
+  /// @brief The model's subsegments (private type, models/lumped/lumped_problem.hpp).
   const detail::LumpedBody& body() const { return *body_; }
 
  private:

@@ -22,7 +22,7 @@ struct ModelCapabilities {
   /// (Eq. 30-33); else along the backbone (fully constrained path, Eq. 24-29).
   bool tendon_forces_at_disks = false;
   /// Displacement input with statics: the tensions of the displacement-driven tendons are
-  /// unknowns (common/displacement_input.hpp); mixed input and elastic tendons. Else a model
+  /// unknowns (solve/displacement_input.hpp); mixed input and elastic tendons. Else a model
   /// that takes displacements maps them kinematically (CC).
   bool displacement_statics = false;
   bool tendon_friction = false;  ///< Capstan tendon friction (Effects::tendon_friction).

@@ -66,7 +66,7 @@ struct SolveHistory {
 
 class ModelWorkspace;
 namespace detail {
-/// Displacement input (models/common/displacement_input.hpp): the workspace's problem with the
+/// Displacement input (models/solve/displacement_input.hpp): the workspace's problem with the
 /// driven tendons' tensions as unknowns, bound for `input` (started from `tension_start`, a
 /// tension solve of the same model, if given).
 ModelProblem& bind_displacement_problem(const StaticModel& model, ModelWorkspace& workspace, const ModelInput& input,

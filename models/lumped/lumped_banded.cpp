@@ -8,7 +8,7 @@
 
 #include <Eigen/Geometry>
 
-#include "common/lumped_problem.hpp"
+#include "lumped/lumped_problem.hpp"
 
 namespace tdcr::detail {
 

@@ -1,6 +1,6 @@
 // Displacement input: the driven tendons' tensions as unknowns of the model's own residual
 // system (displacement_input.hpp, docs/models.md "Displacement input").
-#include "common/displacement_input.hpp"
+#include "solve/displacement_input.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -10,7 +10,7 @@
 
 #include <Eigen/SVD>
 
-#include "common/newton_summary.hpp"
+#include "solve/newton_summary.hpp"
 #include "physics/geometry_check.hpp"
 #include "physics/tendon_path.hpp"
 #include "tdcr/core/error.hpp"

@@ -4,7 +4,7 @@
 
 #include <cmath>
 
-#include "common/lumped_problem.hpp"
+#include "lumped/lumped_problem.hpp"
 #include "tdcr/core/error.hpp"
 #include "tdcr/core/lie.hpp"
 #include "tdcr/models/tendon_physics.hpp"

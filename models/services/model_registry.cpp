@@ -1,7 +1,7 @@
 // The registry table, the StaticModel and ModelWorkspace base classes, and the scene front door.
 #include "tdcr/models/model_registry.hpp"
 
-#include "common/displacement_input.hpp"
+#include "solve/displacement_input.hpp"
 
 #include <algorithm>
 #include <cctype>

@@ -1,5 +1,5 @@
 // Differential kinematics by the implicit function theorem (differential_kinematics.hpp).
-#include "common/differential_kinematics.hpp"
+#include "solve/differential_kinematics.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -8,11 +8,11 @@
 #include <limits>
 #include <optional>
 
-#include "common/differential_kinematics.hpp"
-#include "common/displacement_input.hpp"
-#include "common/load_continuation.hpp"
-#include "common/model_problem.hpp"
-#include "common/newton_summary.hpp"
+#include "solve/differential_kinematics.hpp"
+#include "solve/displacement_input.hpp"
+#include "solve/load_continuation.hpp"
+#include "solve/model_problem.hpp"
+#include "solve/newton_summary.hpp"
 #include "physics/geometry_check.hpp"
 #include "physics/load_case.hpp"
 #include "tdcr/core/error.hpp"

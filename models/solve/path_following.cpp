@@ -5,9 +5,9 @@
 #include <cmath>
 #include <cstdio>
 
-#include "common/least_stable_mode.hpp"
-#include "common/load_continuation.hpp"
-#include "common/model_problem.hpp"
+#include "physics/least_stable_mode.hpp"
+#include "solve/load_continuation.hpp"
+#include "solve/model_problem.hpp"
 #include "physics/geometry_check.hpp"
 
 namespace tdcr::detail {

@@ -22,8 +22,8 @@
 
 #include <Eigen/Core>
 
-#include "common/model_problem.hpp"
-#include "common/subsegment_statics.hpp"
+#include "solve/model_problem.hpp"
+#include "lumped/subsegment_statics.hpp"
 #include "tdcr/bvp/sparse_lu.hpp"
 #include "tdcr/models/lumped_model.hpp"
 

@@ -38,8 +38,8 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 
-#include "common/least_stable_mode.hpp"
-#include "common/lumped_problem.hpp"
+#include "physics/least_stable_mode.hpp"
+#include "lumped/lumped_problem.hpp"
 
 namespace tdcr::detail {
 

@@ -1,4 +1,4 @@
-#include "common/subsegment_statics.hpp"
+#include "lumped/subsegment_statics.hpp"
 
 #include <algorithm>
 

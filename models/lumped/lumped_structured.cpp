@@ -17,7 +17,7 @@
 #include <utility>
 #include <vector>
 
-#include "common/lumped_problem.hpp"
+#include "lumped/lumped_problem.hpp"
 
 namespace tdcr::detail {
 

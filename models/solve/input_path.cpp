@@ -2,9 +2,9 @@
 #include <cstdio>
 #include <string>
 
-#include "common/load_continuation.hpp"
-#include "common/model_problem.hpp"
-#include "common/newton_summary.hpp"
+#include "solve/load_continuation.hpp"
+#include "solve/model_problem.hpp"
+#include "solve/newton_summary.hpp"
 
 namespace tdcr::detail {
 
