@@ -144,12 +144,8 @@ int run_inverse(const std::vector<std::string>& argv) {
     scene.actuation.values.assign(static_cast<std::size_t>(scene.robot.tendon_count()), 0.0);
   }
   args.target.validate();
-  std::string lower = scene.model;
-  for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  if (lower == "auto") scene.model = "auto";
-  validate_scene(scene);
-  const ModelKind kind = scene.model == "auto" ? choose_model(scene).kind : parse_model_kind(scene.model);
-  const std::unique_ptr<StaticModel> model = make_model(kind, scene);
+  const SceneModel chosen = make_scene_model(scene);
+  const std::unique_ptr<StaticModel>& model = chosen.model;
   auto ws = model->make_workspace();
   const InverseResult r = inverse_solve(*model, *ws, scene.input(), args.target, scene.solver);
   if (args.json)

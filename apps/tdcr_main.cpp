@@ -214,21 +214,6 @@ void apply_overrides(const SolveArgs& args, tdcr::Scene& scene) {
   if (args.jacobian) scene.solver.differential_kinematics = true;
 }
 
-/// "auto" in any case is "auto"; other names are checked against the registry by validate_scene.
-bool is_auto(const std::string& name) {
-  std::string lower = name;
-  std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return std::tolower(c); });
-  return lower == "auto";
-}
-
-/// The model to solve with; "auto" chooses from the scene and the requested accuracy and says why.
-tdcr::ModelKind model_kind(const tdcr::Scene& scene, double accuracy, std::string* selection) {
-  if (scene.model != "auto") return tdcr::parse_model_kind(scene.model);
-  const tdcr::ModelChoice choice = tdcr::choose_model(scene, accuracy);
-  *selection = "auto: " + choice.reason;
-  return choice.kind;
-}
-
 struct Timed {
   tdcr::Solution solution;
   double median_us = 0.0;
@@ -282,14 +267,10 @@ int run_solve(const std::vector<std::string>& argv) {
   const SolveArgs args = parse_solve_args(argv);
   tdcr::Scene scene = load(args.scene_path);
   apply_overrides(args, scene);
-  if (is_auto(scene.model)) scene.model = "auto";
-  tdcr::validate_scene(scene);
-  std::string selection;
-  const tdcr::ModelKind kind = model_kind(scene, args.accuracy, &selection);
-  scene.model = tdcr::to_string(kind);
-  const std::unique_ptr<tdcr::StaticModel> model = tdcr::make_model(kind, scene);
-  Timed t = solve_timed(*model, scene, args.repeat);
-  t.solution.model_selection = selection;
+  const tdcr::SceneModel chosen = tdcr::make_scene_model(scene, args.accuracy);
+  scene.model = chosen.model->name();
+  Timed t = solve_timed(*chosen.model, scene, args.repeat);
+  t.solution.model_selection = chosen.selection();
   if (args.json) {
     tdcr::SolutionJsonOptions o;
     o.repeat = args.repeat;

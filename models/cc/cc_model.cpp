@@ -5,7 +5,7 @@
 
 #include <Eigen/Dense>
 
-#include "solve/model_problem.hpp"
+#include "tdcr/models/model_problem.hpp"
 #include "tdcr/core/error.hpp"
 #include "tdcr/core/lie.hpp"
 

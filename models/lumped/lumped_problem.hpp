@@ -22,7 +22,7 @@
 
 #include <Eigen/Core>
 
-#include "solve/model_problem.hpp"
+#include "tdcr/models/model_problem.hpp"
 #include "lumped/subsegment_statics.hpp"
 #include "tdcr/bvp/sparse_lu.hpp"
 #include "tdcr/models/lumped_model.hpp"

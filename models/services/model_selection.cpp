@@ -48,7 +48,7 @@ std::vector<const ModelInfo*> candidates(bool displacements, bool statics, bool 
   for (const ModelInfo& m : model_registry()) {
     const ModelCapabilities& c = m.capabilities;
     if ((displacements ? c.displacement_input : c.tension_input) && (!statics || c.displacement_statics) &&
-        (!loaded || c.external_loads) && (!friction || c.tendon_friction))
+        (!loaded || c.external_loads) && (!friction || c.tendon_friction) && m.cost_rank >= 0)
       v.push_back(&m);
   }
   auto rank = [loaded](const ModelInfo* m) { return loaded && m->loaded_cost_rank >= 0 ? m->loaded_cost_rank : m->cost_rank; };
@@ -80,11 +80,12 @@ ModelChoice choose_model(const Scene& scene, double tolerance) {
     for (const TendonSpec& t : seg.tendons) elastic = elastic || t.stiffness.has_value();
   std::vector<const ModelInfo*> order =
       candidates(displacements, scene.actuation.mixed() || (displacements && elastic), loaded, e.tendon_friction);
-  // CC represents straight routing only.
+  // Curved routing (helical, polynomial) needs a model that represents it (not CC's closed form).
   for (const Segment& s : scene.robot.segments)
     for (const TendonSpec& t : s.tendons)
       if (t.routing.type != TendonRoutingSpec::Type::Straight)
-        order.erase(std::remove_if(order.begin(), order.end(), [](const ModelInfo* m) { return m->kind == ModelKind::CC; }),
+        order.erase(std::remove_if(order.begin(), order.end(),
+                                   [](const ModelInfo* m) { return !m->capabilities.curved_routing; }),
                     order.end());
   if (order.empty())
     throw InputError("model", "auto", "no model takes this scene");
@@ -117,17 +118,6 @@ ModelChoice choose_model(const Scene& scene, double tolerance) {
     return c;
   }
   throw InputError("accuracy", format_value(tolerance), "no model is expected to meet it");
-}
-
-Solution solve_auto(const Scene& scene, double tolerance, const Solution* warm_start) {
-  const ModelChoice c = choose_model(scene, tolerance);
-  const auto model = make_model(c.kind, scene);
-  const auto ws = model->make_workspace();
-  const Solution* warm =
-      warm_start && warm_start->model_fingerprint == model->fingerprint() ? warm_start : nullptr;
-  Solution sol = solve(*model, *ws, scene.input(), scene.solver, warm);
-  sol.model_selection = "auto: " + c.reason;
-  return sol;
 }
 
 }  // namespace tdcr

@@ -4,7 +4,7 @@
 
 #include <functional>
 
-#include "solve/model_problem.hpp"
+#include "tdcr/models/model_problem.hpp"
 #include "tdcr/core/scene.hpp"
 
 namespace tdcr::detail {

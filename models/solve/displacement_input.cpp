@@ -14,7 +14,6 @@
 #include "physics/geometry_check.hpp"
 #include "physics/tendon_path.hpp"
 #include "tdcr/core/error.hpp"
-#include "tdcr/models/model_registry.hpp"
 #include "tdcr/models/static_model.hpp"
 
 namespace tdcr::detail {
@@ -29,7 +28,7 @@ constexpr int kMaxConstraintUpdates = 8;
 
 bool needs_displacement_solve(const StaticModel& model, const ModelInput& input) {
   return input.actuation.kind == Actuation::Kind::Displacements &&
-         model_info(model.kind()).capabilities.displacement_statics;
+         model.capabilities().displacement_statics;
 }
 
 ModelInput tension_form(const ModelInput& input, const std::vector<double>& placeholder) {

@@ -11,7 +11,7 @@
 
 #include <Eigen/Core>
 
-#include "solve/model_problem.hpp"
+#include "tdcr/models/model_problem.hpp"
 #include "tdcr/bvp/continuation.hpp"
 #include "tdcr/bvp/newton_solver.hpp"
 #include "tdcr/core/scene.hpp"

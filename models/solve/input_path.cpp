@@ -3,7 +3,7 @@
 #include <string>
 
 #include "solve/load_continuation.hpp"
-#include "solve/model_problem.hpp"
+#include "tdcr/models/model_problem.hpp"
 #include "solve/newton_summary.hpp"
 
 namespace tdcr::detail {

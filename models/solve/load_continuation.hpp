@@ -15,9 +15,9 @@
 #include "tdcr/core/solution.hpp"
 #include "tdcr/core/solver_options.hpp"
 
-namespace tdcr::detail {
+#include "tdcr/models/model_problem.hpp"
 
-class ModelProblem;
+namespace tdcr::detail {
 
 /// @brief The answer to a loaded scene (docs/models.md): follow the loading path from the
 /// unloaded straight robot (load factor 0) to the full input (1) by pseudo-arclength

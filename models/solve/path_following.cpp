@@ -7,7 +7,7 @@
 
 #include "physics/least_stable_mode.hpp"
 #include "solve/load_continuation.hpp"
-#include "solve/model_problem.hpp"
+#include "tdcr/models/model_problem.hpp"
 #include "physics/geometry_check.hpp"
 
 namespace tdcr::detail {

@@ -11,7 +11,7 @@
 #include "solve/differential_kinematics.hpp"
 #include "solve/displacement_input.hpp"
 #include "solve/load_continuation.hpp"
-#include "solve/model_problem.hpp"
+#include "tdcr/models/model_problem.hpp"
 #include "solve/newton_summary.hpp"
 #include "physics/geometry_check.hpp"
 #include "physics/load_case.hpp"
@@ -530,7 +530,7 @@ bool wants_coarse_path(const StaticModel& model, const SolverOptions& options, c
                        const std::string& reason) {
   return options.coarse_loading_path && !warm_start && options.continuation && !reason.empty() &&
          options.integrator == IntegratorKind::FixedStepRK4 &&
-         (model.kind() == ModelKind::VC || model.kind() == ModelKind::VCref) &&
+         model.capabilities().rk4_mesh &&
          (options.rk4_steps > SolverOptions::kCoarsePathRk4Steps ||
           options.rk4_max_step < SolverOptions::kCoarsePathRk4MaxStep);
 }
@@ -586,12 +586,11 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
     throw InputError("workspace", "a workspace of another model",
                      "use the workspace made by this model's make_workspace() (" + model.name() + ")");
   if (warm_start) check_warm_start(model, *warm_start);
-  if (options.integrator == IntegratorKind::AccuracyDrivenRK4 &&
-      (model.kind() == ModelKind::VC || model.kind() == ModelKind::VCref)) {
+  if (options.integrator == IntegratorKind::AccuracyDrivenRK4 && model.capabilities().rk4_mesh) {
     bool path = false;
     // Whether the automatic rule tests a direct answer under these loads (as the model says),
-    // asked before the refinement binds its own solves. VC's problems say no and are not asked:
-    // a bind just to ask changed the state a workspace's next cold solve starts from (a sweep's
+    // asked before the refinement binds its own solves. Models whose problems always say no are
+    // not asked (ModelCapabilities::stability_under_loads, VC): a bind just to ask changed the state a workspace's next cold solve starts from (a sweep's
     // rows then depended on which samples a thread had solved before,
     // SweepRun.MergedShardsEqualOneRun under load).
     bool under_loads = false;
@@ -599,7 +598,7 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
     // Cold solves only: a trajectory's warm step from a tested answer is not tested again (VCref's
     // test would add 92 % to a loaded trajectory's step); it is when its input path snaps.
     const bool ask = options.stability == StabilityCheck::Automatic && externally_loaded(input.loads) &&
-                     !displacement && model.kind() != ModelKind::VC && !warm_start;
+                     !displacement && model.capabilities().stability_under_loads && !warm_start;
     if ((!warm_start && options.continuation && !displacement) || ask) {
       SolverOptions first = options;
       first.integrator = IntegratorKind::FixedStepRK4;

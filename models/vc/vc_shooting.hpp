@@ -8,7 +8,7 @@
 
 #include <Eigen/Core>
 
-#include "solve/model_problem.hpp"
+#include "tdcr/models/model_problem.hpp"
 #include "physics/load_case.hpp"
 #include "tdcr/bvp/integrator.hpp"
 #include "tdcr/models/cosserat_rod.hpp"

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <cstdio>
 
-#include "solve/model_problem.hpp"
+#include "tdcr/models/model_problem.hpp"
 #include "solve/stability_mesh.hpp"
 #include "tdcr/bvp/integrator.hpp"
 #include "tdcr/core/error.hpp"

@@ -235,10 +235,8 @@ void bind_models(py::module_& m) {
   m.def(
       "solve_scene",
       [](const tdcr::Scene& scene, double accuracy, const tdcr::Solution* warm) {
-        tdcr::validate_scene(scene);
         py::gil_scoped_release release;
-        if (scene.model == "auto") return tdcr::solve_auto(scene, accuracy, warm);
-        return tdcr::solve(scene, warm);
+        return tdcr::solve_scene(scene, accuracy, warm);
       },
       "scene"_a, "accuracy"_a = 0.01, "warm_start"_a = py::none());
 

@@ -47,6 +47,16 @@ class CcModel final : public StaticModel {
   /// displacement-to-curvature map once.
   CcModel(const Robot& robot, const Effects& effects);
   ModelKind kind() const override { return ModelKind::CC; }
+  /// @brief What CC takes (closed form: tensions or displacements, no external load, straight routing);
+  /// its registry row reads the same.
+  static constexpr ModelCapabilities kCapabilities = [] {
+    ModelCapabilities c;
+    c.displacement_input = true;
+    c.external_loads = false;
+    c.curved_routing = false;
+    return c;
+  }();
+  ModelCapabilities capabilities() const override { return kCapabilities; }
   std::unique_ptr<ModelWorkspace> make_workspace() const override;
   /// @brief StaticModel::check_input (no external loads: CC has no statics of them), and for
   /// displacement input every segment needs at least 2 tendons
@@ -61,7 +71,7 @@ class CcModel final : public StaticModel {
   void arcs(const ModelInput& input, std::vector<CcArc>& out, double* misfit = nullptr) const;
 
  private:
-  detail::ModelProblem& bind(ModelWorkspace& workspace, const ModelInput& input,
+  ModelProblem& bind(ModelWorkspace& workspace, const ModelInput& input,
                              const SolverOptions& options) const override;
   /// Per segment: the least-squares (minimum-norm) map from the segment's own displacements to
   /// its curvature vector, factorised once here so that a solve does no decomposition.

@@ -61,7 +61,7 @@ class LumpedModel : public StaticModel {
   const detail::LumpedBody& body() const { return *body_; }
 
  private:
-  detail::ModelProblem& bind(ModelWorkspace& workspace, const ModelInput& input,
+  ModelProblem& bind(ModelWorkspace& workspace, const ModelInput& input,
                              const SolverOptions& options) const override;
   std::unique_ptr<detail::LumpedBody> body_;
 };

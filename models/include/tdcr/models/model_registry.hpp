@@ -4,6 +4,7 @@
 /// is one header, one source file, one row here and one line in the conformance suite.
 #pragma once
 
+#include <cstddef>
 #include <memory>
 #include <string>
 #include <vector>
@@ -11,22 +12,6 @@
 #include "tdcr/models/static_model.hpp"
 
 namespace tdcr {
-
-/// @brief What a model can take and compute.
-struct ModelCapabilities {
-  bool tension_input = true;        ///< Actuation by tendon tensions.
-  bool displacement_input = false;  ///< Actuation by tendon displacements.
-  bool external_loads = true;       ///< Tip wrench and gravity.
-  bool backbone_wrench = false;     ///< Solutions carry internal force and moment samples.
-  /// Tendons act on the backbone at the disks only, along straight chords between holes
-  /// (Eq. 30-33); else along the backbone (fully constrained path, Eq. 24-29).
-  bool tendon_forces_at_disks = false;
-  /// Displacement input with statics: the tensions of the displacement-driven tendons are
-  /// unknowns (solve/displacement_input.hpp); mixed input and elastic tendons. Else a model
-  /// that takes displacements maps them kinematically (CC).
-  bool displacement_statics = false;
-  bool tendon_friction = false;  ///< Capstan tendon friction (Effects::tendon_friction).
-};
 
 /// @brief Mean tip position error of a model against VCref (% of the robot length) on the
 /// paper's case study, measured by bench_case_study (docs/benchmarks.md), at 1, 2, 5 and 10
@@ -49,13 +34,29 @@ struct ModelInfo {
   std::unique_ptr<StaticModel> (*make)(const Robot& robot, const Effects& effects);
   ModelCapabilities capabilities;  ///< What it takes.
   ExpectedAccuracy accuracy;       ///< Expected error against VCref.
-  int cost_rank;                   ///< Order of typical solve time, cheapest first (auto).
+  /// Order of typical solve time, cheapest first (auto); negative: never chosen by auto.
+  int cost_rank;
   /// The same order with external loads, where it differs (-1: cost_rank).
   int loaded_cost_rank = -1;
 };
 
-/// @brief Every model, in ModelKind order.
+/// @brief The most models the registry holds (the five built in and those registered).
+inline constexpr std::size_t kMaxModels = 32;
+
+/// @brief Every model, in ModelKind order: the five built-in models, then the registered ones.
 const std::vector<ModelInfo>& model_registry();
+
+/// @brief The extension point: add a model to the registry. A new model is one header (its class,
+/// derived from StaticModel, with its `kCapabilities`), one source (its residual system, a
+/// ModelProblem, model_problem.hpp) and this one row; tests/test_model_extension.cpp builds one in the test
+/// tree. `info.kind` is ignored: the new row's kind is returned, and scene files, the CLI, sweeps
+/// and Python then name the model by `info.name` like a built-in one. Model selection (`auto`)
+/// considers it only with `cost_rank >= 0`.
+///
+/// Registration is not synchronised with solves in other threads: register at start-up.
+/// Throws InputError for a missing, reserved ("auto") or taken name, a missing factory, or a
+/// full registry (kMaxModels).
+ModelKind register_model(ModelInfo info);
 /// @brief The row of `kind`.
 const ModelInfo& model_info(ModelKind kind);
 /// @brief "cc, ccsub, prb, vc, vcref": the registry names, for messages and usage texts.

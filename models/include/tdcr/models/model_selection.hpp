@@ -9,6 +9,7 @@
 /// accurate than VC at small n without loads, but slower than VCref with loads.
 #pragma once
 
+#include <memory>
 #include <string>
 
 #include "tdcr/models/static_model.hpp"
@@ -32,6 +33,28 @@ double expected_model_error(ModelKind kind, int disks, bool loaded);
 /// fraction of the robot length, default 1 %). Throws InputError when no model can take the scene
 /// (tendon displacements together with external loads).
 ModelChoice choose_model(const Scene& scene, double tolerance = 0.01);
+
+/// @brief A scene's model, built once: the scene's front door (the CLI's solve and inverse, Python's
+/// solve_scene and tdcr::solve(scene) go through it).
+struct SceneModel {
+  std::unique_ptr<StaticModel> model;  ///< The model, built from the scene's robot and effects.
+  /// The model chosen: its kind always; for "auto" also the expected error and the reason.
+  ModelChoice choice;
+  bool automatic = false;  ///< The scene asked for "auto" (in any case).
+  /// "auto: <reason>" for an automatic choice, else empty (Solution::model_selection).
+  std::string selection() const { return automatic ? "auto: " + choice.reason : std::string(); }
+};
+
+/// @brief The front door: validates the scene (Scene::validate; the model name, a registry name
+/// or "auto" in any case; StaticModel::check_input of the scene's input), chooses the model for
+/// "auto" at `tolerance` (choose_model) and builds it. Throws InputError naming the field and
+/// value.
+SceneModel make_scene_model(const Scene& scene, double tolerance = 0.01);
+
+/// @brief Solve a scene through the front door with a fresh workspace: the scene's model (for
+/// "auto" the one chosen at `tolerance`; a warm start of another model is then ignored), its input
+/// and solver options; Solution::model_selection records an automatic choice and its reason.
+Solution solve_scene(const Scene& scene, double tolerance = 0.01, const Solution* warm_start = nullptr);
 
 /// @brief Choose a model (choose_model), build it and solve; the Solution's model_selection
 /// records the choice and its reason.

@@ -48,10 +48,36 @@ std::string to_string(ModelKind kind);
 /// @brief The model of a registry name (case-insensitive). Throws InputError with field `model`.
 ModelKind parse_model_kind(const std::string& name);
 
+/// @brief What a model can take and compute.
+struct ModelCapabilities {
+  bool tension_input = true;        ///< Actuation by tendon tensions.
+  bool displacement_input = false;  ///< Actuation by tendon displacements.
+  bool external_loads = true;       ///< Tip wrench and gravity.
+  bool backbone_wrench = false;     ///< Solutions carry internal force and moment samples.
+  /// Tendons act on the backbone at the disks only, along straight chords between holes
+  /// (Eq. 30-33); else along the backbone (fully constrained path, Eq. 24-29).
+  bool tendon_forces_at_disks = false;
+  /// Displacement input with statics: the tensions of the displacement-driven tendons are
+  /// unknowns (solve/displacement_input.hpp); mixed input and elastic tendons. Else a model
+  /// that takes displacements maps them kinematically (CC).
+  bool displacement_statics = false;
+  bool tendon_friction = false;  ///< Capstan tendon friction (Effects::tendon_friction).
+  /// Tendon routings other than straight (helical, polynomial): CC's closed form represents
+  /// straight routing only.
+  bool curved_routing = true;
+  /// The rod is integrated on SolverOptions' RK4 mesh (VC, VCref): the accuracy-driven mesh
+  /// (`solver.tip_tolerance`) and the coarse loading path apply. Else the model has no mesh.
+  bool rk4_mesh = false;
+  /// The automatic stability rule asks the model's problem whether a cold direct answer under
+  /// external loads is tested (ModelProblem::automatic_stability_under_loads). False
+  /// where the answer is always no and asking would cost a bind (VC).
+  bool stability_under_loads = true;
+};
+
 class StaticModel;
+class ModelProblem;
 
 namespace detail {
-class ModelProblem;
 class DisplacementProblem;
 
 /// The last warm-started solve of a workspace, for the secant predictor of the next warm start
@@ -92,7 +118,7 @@ class ModelWorkspace {
  private:
   friend Solution solve(const StaticModel&, ModelWorkspace&, const ModelInput&, const SolverOptions&,
                         const Solution*);
-  friend detail::ModelProblem& detail::bind_displacement_problem(const StaticModel&, ModelWorkspace&,
+  friend ModelProblem& detail::bind_displacement_problem(const StaticModel&, ModelWorkspace&,
                                                                  const ModelInput&, const SolverOptions&,
                                                                  const Solution*, const Solution*);
   // Made on the first displacement-input solve.
@@ -107,7 +133,7 @@ class ModelWorkspace {
 /// What a model adds to the robot is decided once, in its constructor (validated; throws
 /// InputError naming the field and value). Solving goes through tdcr::solve(), which owns the
 /// policy (guess, direct solve, loading from rest, continuation, final residual check, summary,
-/// timing); a model supplies its residual system, guesses and outputs (detail::ModelProblem).
+/// timing); a model supplies its residual system, guesses and outputs (ModelProblem, model_problem.hpp).
 class StaticModel {
  public:
   virtual ~StaticModel();
@@ -118,6 +144,9 @@ class StaticModel {
   virtual ModelKind kind() const = 0;
   /// @brief The registry name ("vc", ...).
   std::string name() const { return to_string(kind()); }
+  /// @brief What this model takes and how the solve policy treats it (its registry row holds the
+  /// same: each model class keeps them in one `kCapabilities`).
+  virtual ModelCapabilities capabilities() const = 0;
   /// @brief The robot (validated).
   const Robot& robot() const { return robot_; }
   /// @brief The effects it simulates.
@@ -143,12 +172,12 @@ class StaticModel {
   friend class ModelWorkspace;
   friend Solution solve(const StaticModel&, ModelWorkspace&, const ModelInput&, const SolverOptions&,
                         const Solution*);
-  friend detail::ModelProblem& detail::bind_displacement_problem(const StaticModel&, ModelWorkspace&,
+  friend ModelProblem& detail::bind_displacement_problem(const StaticModel&, ModelWorkspace&,
                                                                  const ModelInput&, const SolverOptions&,
                                                                  const Solution*, const Solution*);
   /// @brief Bind the workspace to one input and options: the problem the solve driver works on.
   /// `workspace` belongs to this model (checked by the caller).
-  virtual detail::ModelProblem& bind(ModelWorkspace& workspace, const ModelInput& input,
+  virtual ModelProblem& bind(ModelWorkspace& workspace, const ModelInput& input,
                                      const SolverOptions& options) const = 0;
 
   Robot robot_;

@@ -123,6 +123,19 @@ class VcModel final : public StaticModel {
   VcModel(const Robot& robot, const Effects& effects, VcOptions options = {});
   ~VcModel() override;
   ModelKind kind() const override { return ModelKind::VC; }
+  /// @brief What VC takes (a rod on an RK4 mesh with backbone wrenches; its direct answers under loads are not tested);
+  /// its registry row reads the same.
+  static constexpr ModelCapabilities kCapabilities = [] {
+    ModelCapabilities c;
+    c.displacement_input = true;
+    c.backbone_wrench = true;
+    c.displacement_statics = true;
+    c.tendon_friction = true;
+    c.rk4_mesh = true;
+    c.stability_under_loads = false;
+    return c;
+  }();
+  ModelCapabilities capabilities() const override { return kCapabilities; }
   /// @brief A fresh VcWorkspace.
   std::unique_ptr<ModelWorkspace> make_workspace() const override;
   /// @brief The options.
@@ -134,7 +147,7 @@ class VcModel final : public StaticModel {
   bool uses_multiple_shooting(const ModelInput& input) const;
 
  private:
-  detail::ModelProblem& bind(ModelWorkspace& workspace, const ModelInput& input,
+  ModelProblem& bind(ModelWorkspace& workspace, const ModelInput& input,
                              const SolverOptions& options) const override;
   bool multiple_shooting(double load_parameter) const;
   VcOptions options_;

@@ -98,6 +98,19 @@ class VcrefModel final : public StaticModel {
   VcrefModel(const Robot& robot, const Effects& effects, const VcrefOptions& options = VcrefOptions());
   ~VcrefModel() override;
   ModelKind kind() const override { return ModelKind::VCref; }
+  /// @brief What VCref takes (every capability);
+  /// its registry row reads the same.
+  static constexpr ModelCapabilities kCapabilities = [] {
+    ModelCapabilities c;
+    c.displacement_input = true;
+    c.backbone_wrench = true;
+    c.tendon_forces_at_disks = true;
+    c.displacement_statics = true;
+    c.tendon_friction = true;
+    c.rk4_mesh = true;
+    return c;
+  }();
+  ModelCapabilities capabilities() const override { return kCapabilities; }
   std::unique_ptr<ModelWorkspace> make_workspace() const override;
   /// @brief The model-specific settings it was built with.
   const VcrefOptions& options() const { return options_; }
@@ -130,7 +143,7 @@ class VcrefModel final : public StaticModel {
   struct Data;
 
  private:
-  detail::ModelProblem& bind(ModelWorkspace& workspace, const ModelInput& input,
+  ModelProblem& bind(ModelWorkspace& workspace, const ModelInput& input,
                              const SolverOptions& options) const override;
   VcrefOptions options_;
   std::shared_ptr<const Data> data_;

@@ -1,9 +1,13 @@
-// Private to models/: what a model gives the solve driver (solve_driver.cpp) for one solve.
-//
-// A model's bind() sets its workspace up for one input and options and returns the workspace's
-// ModelProblem. The driver owns the policy (which guess, direct solve or loading from rest,
-// continuation, final residual check, summary, timing); the problem owns the physics (the
-// residual system with the load factor as its parameter, the guesses, the outputs).
+/// @file model_problem.hpp
+/// @brief The extension point of the models: what a model gives the solve driver for one solve.
+///
+/// A model's StaticModel::bind() sets its workspace up for one input and options and returns the
+/// workspace's ModelProblem. The driver (tdcr::solve, models/solve/solve_driver.cpp) owns the
+/// policy (which guess, direct solve or loading from rest, continuation, final residual check,
+/// summary, timing); the problem owns the physics (the residual system with the load factor as
+/// its parameter, the guesses, the outputs). A new model implements the pure virtual members
+/// (system, newton, cold_guess, rest_state, warm_guess, extract); the others have defaults that
+/// keep a model correct and only cost time or features (tests/test_model_extension.cpp).
 #pragma once
 
 #include <string>
@@ -15,9 +19,9 @@
 #include "tdcr/bvp/newton_solver.hpp"
 #include "tdcr/core/solution.hpp"
 
-namespace tdcr::detail {
+namespace tdcr {
 
-/// How a cold solve starts.
+/// @brief How a cold solve starts.
 struct ColdStart {
   /// Load the robot from rest (continuation from load factor 0) instead of a direct solve:
   /// under large external loads a direct solve can land on another equilibrium.
@@ -31,7 +35,7 @@ struct ColdStart {
   int max_path_steps = 0;
 };
 
-/// One bound solve of a model: the residual system at the bound input and what surrounds it.
+/// @brief One bound solve of a model: the residual system at the bound input and what surrounds it.
 class ModelProblem {
  public:
   virtual ~ModelProblem() = default;
@@ -208,4 +212,10 @@ class ModelProblem {
   virtual void from_damping_formulation(const Eigen::VectorXd& y, Eigen::VectorXd& x) { x = y; }
 };
 
+}  // namespace tdcr
+
+namespace tdcr::detail {
+// The models' own spelling.
+using ModelProblem = tdcr::ModelProblem;
+using ColdStart = tdcr::ColdStart;
 }  // namespace tdcr::detail
