@@ -2,16 +2,9 @@
 // theorem (docs/models.md, "Differential kinematics").
 #pragma once
 
-#include <functional>
-
-#include "tdcr/models/model_problem.hpp"
-#include "tdcr/core/scene.hpp"
+#include "solve/rebind.hpp"
 
 namespace tdcr::detail {
-
-/// Binds the model's workspace to an input (StaticModel::bind) and returns its problem. The
-/// input must stay alive while the problem is used (a problem may keep a pointer to it).
-using Rebind = std::function<ModelProblem&(const ModelInput&)>;
 
 /// Fills solution.tip_jacobian (6 x m, d tip pose / d Actuation::values) and
 /// solution.tip_compliance (6 x 6, d tip pose / d tip wrench) at the converged unknowns x of the

@@ -15,6 +15,7 @@
 #include "tdcr/core/solution.hpp"
 #include "tdcr/core/solver_options.hpp"
 
+#include "solve/rebind.hpp"
 #include "tdcr/models/model_problem.hpp"
 
 namespace tdcr::detail {
@@ -41,9 +42,6 @@ bvp::ArclengthResult follow_loading_path(ModelProblem& P, const TendonRouting& r
                                          const bvp::NewtonOptions& newton_options, const SolverOptions& options,
                                          SolverSummary& sum, std::vector<PathEvent>& events, double first_step,
                                          const std::string& purpose);
-
-/// Binds the model's problem to another input (the same ModelProblem of the workspace).
-using Rebind = std::function<ModelProblem&(const ModelInput&)>;
 
 /// @brief A warm start's path (docs/models.md): from the input of the previous Solution
 /// (`from`: its tensions and loads) to `to` in steps of the input fraction t (inputs
