@@ -61,7 +61,7 @@ double interval_curvature(const Solution& sol, int j) {
   return std::acos(cosang) / (b.p - a.p).norm();
 }
 
-TEST(InfeasibleActuation, IssueCaseNamedByEveryModel) {
+TEST(InfeasibleActuation, SoftRobotPastItsTendonLimitNamedByEveryModel) {
   const Scene s = soft_robot(8.32995);
   const double fraction = limit_tension(s.robot) / 8.32995;
   for (ModelKind k : kStatic) {

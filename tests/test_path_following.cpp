@@ -48,7 +48,7 @@ Solution natural_path(const StaticModel& m, ModelWorkspace& ws, const Scene& sce
 
 // The scene two_branches: VC, CCsub and PRB used to land near (-29, 46, 58) mm, VCref at (56, -40,
 // -23) mm. The loading path (fine natural steps agree: docs/models.md) reaches VCref's.
-TEST(PathFollowing, IssueExampleAllStaticModelsOnOneBranch) {
+TEST(PathFollowing, TwoBranchesSceneAllStaticModelsOnOneBranch) {
   const Scene scene = scene_file("two_branches.json");
   const double length = 0.1;
   Vec3 ref = Vec3::Zero();
@@ -108,7 +108,7 @@ TEST(PathFollowing, SnapThroughMatchesAFineNaturalPath) {
 // (-11, 27, -10) mm. VCref meets a fold near 57 % and snaps (its first landing 1e-4 past the
 // fold does not converge: the snap lands further past it); it used to stop at the fold. Its
 // stability margin falls towards zero at the fold.
-TEST(PathFollowing, IssueExampleBAllStaticModelsOnOneStableBranch) {
+TEST(PathFollowing, FoldOnPathSceneAllStaticModelsOnOneStableBranch) {
   const Scene scene = scene_file("fold_on_path.json");
   const double length = 0.1;
   SolverOptions options = scene.solver;
