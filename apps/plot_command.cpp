@@ -42,18 +42,19 @@ std::string module_dir() {
 
 }  // namespace
 
-int run_plot(const std::vector<std::string>& args) {
+int run_python_command(const char* command, const char* module, const std::vector<std::string>& args) {
 #ifndef TDCR_PYTHON_BUILD_DIR
   (void)args;
-  std::fprintf(stderr, "error: tdcr plot needs the Python module, and this tdcr was built without it "
-                       "(configure with -DTDCR_BUILD_PYTHON=ON and pybind11 installed)\n");
+  (void)module;
+  std::fprintf(stderr, "error: tdcr %s needs the Python module, and this tdcr was built without it "
+                       "(configure with -DTDCR_BUILD_PYTHON=ON and pybind11 installed)\n", command);
   return kExitInternal;
 #else
   const std::string python = exists(TDCR_PYTHON_EXECUTABLE) ? TDCR_PYTHON_EXECUTABLE : "python3";
   std::string pythonpath = module_dir();
   if (const char* old = std::getenv("PYTHONPATH"); old && *old) pythonpath += std::string(":") + old;
 
-  std::vector<std::string> argv_s = {python, "-m", "tdcr.plot"};
+  std::vector<std::string> argv_s = {python, "-m", module};
   argv_s.insert(argv_s.end(), args.begin(), args.end());
   std::vector<char*> argv;
   for (std::string& a : argv_s) argv.push_back(a.data());
@@ -68,8 +69,8 @@ int run_plot(const std::vector<std::string>& args) {
   if (pid == 0) {
     ::setenv("PYTHONPATH", pythonpath.c_str(), 1);
     ::execvp(argv[0], argv.data());
-    std::fprintf(stderr, "error: tdcr plot needs python3 with matplotlib and numpy; cannot run '%s': %s\n",
-                 python.c_str(), std::strerror(errno));
+    std::fprintf(stderr, "error: tdcr %s needs python3 with numpy (and matplotlib for plots); cannot run '%s': %s\n",
+                 command, python.c_str(), std::strerror(errno));
     std::_Exit(kExitInternal);
   }
   int status = 0;
@@ -81,5 +82,9 @@ int run_plot(const std::vector<std::string>& args) {
   return kExitInternal;
 #endif
 }
+
+int run_plot(const std::vector<std::string>& args) { return run_python_command("plot", "tdcr.plot", args); }
+
+int run_view(const std::vector<std::string>& args) { return run_python_command("view", "tdcr.view", args); }
 
 }  // namespace tdcr_cli

@@ -55,6 +55,7 @@ std::string usage() {
          "       tdcr sweep SWEEP.json -o OUT.csv [--threads N] [--shard i/N]   (tdcr sweep --help)\n"
          "       tdcr sweep-merge OUT.csv SHARD.csv...\n"
          "       tdcr plot SCENE.json [--model NAME[,NAME...]] -o FILE.png|svg   (tdcr plot --help)\n"
+         "       tdcr view SCENE.json [--port P] [--open]   interactive viewer in the browser (tdcr view --help)\n"
          "       tdcr --help | --version\n"
          "\n"
          "Solve the static shape of a tendon-driven continuum robot described by a scene file\n"
@@ -314,6 +315,7 @@ int run(const std::vector<std::string>& args) {
   if (cmd == "sweep") return tdcr::sweep_command({args.begin() + 1, args.end()});
   if (cmd == "sweep-merge") return tdcr::sweep_merge_command({args.begin() + 1, args.end()});
   if (cmd == "plot") return tdcr_cli::run_plot(std::vector<std::string>(args.begin() + 1, args.end()));
+  if (cmd == "view") return tdcr_cli::run_view(std::vector<std::string>(args.begin() + 1, args.end()));
   if (!cmd.empty() && cmd[0] == '-') throw UsageError("unknown option '" + cmd + "'");
   throw UsageError("unknown command '" + cmd + "'");
 }
