@@ -14,13 +14,6 @@
 
 namespace tdcr::bvp {
 
-ArclengthOptions ArclengthOptions::from(const SolverOptions& options) {
-  ArclengthOptions a;
-  a.max_steps = options.max_continuation_steps;
-  if (!options.reuse_jacobian) a.corrector_freeze_jacobian_below = 0.0;  // no Jacobian history
-  return a;
-}
-
 void ArclengthOptions::validate() const {
   auto fail = [](const char* name, double v, const char* why) {
     throw InputError(std::string("arclength.") + name, format_value(v), why);
