@@ -192,16 +192,7 @@ tdcr::Scene load(const std::string& path) {
 
 void apply_overrides(const SolveArgs& args, tdcr::Scene& scene) {
   if (args.model) scene.model = *args.model;
-  if (args.integrator) {
-    if (*args.integrator == "rk4")
-      scene.solver.integrator = tdcr::IntegratorKind::AccuracyDrivenRK4;
-    else if (*args.integrator == "rk4_fixed")
-      scene.solver.integrator = tdcr::IntegratorKind::FixedStepRK4;
-    else if (*args.integrator == "cvode")
-      scene.solver.integrator = tdcr::IntegratorKind::Cvode;
-    else
-      throw tdcr::InputError("--integrator", *args.integrator, "must be rk4, rk4_fixed or cvode");
-  }
+  if (args.integrator) scene.solver.integrator = tdcr::parse_integrator_kind(*args.integrator, "--integrator");
   if (args.tip_tolerance) {
     scene.solver.tip_tolerance = *args.tip_tolerance;
     try {

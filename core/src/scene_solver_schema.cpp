@@ -11,9 +11,23 @@ namespace tdcr::detail {
 
 namespace {
 
-const Names<IntegratorKind> kIntegrators = {{"rk4", IntegratorKind::AccuracyDrivenRK4},
-                                            {"rk4_fixed", IntegratorKind::FixedStepRK4},
-                                            {"cvode", IntegratorKind::Cvode}};
+// `solver.integrator`: the names are SolverOptions' own (parse_integrator_kind, to_string), the
+// same as the CLI's --integrator and Python's.
+template <class T>
+Field<T> integrator_field(const char* key, IntegratorKind T::*m, KeyDoc doc) {
+  return {{key, "string", doc},
+          [m](const json& j, const std::string& p, T& v) {
+            if (!j.is_string()) {
+              std::vector<const char*> names;
+              for (const std::string& n : integrator_names()) names.push_back(n.c_str());
+              type_error(p, j, "one of " + quoted_names(names));
+            }
+            v.*m = parse_integrator_kind(j.get<std::string>(), p);
+          },
+          [m](const T& v) { return ojson(to_string(v.*m)); },
+          {}};
+}
+
 const Names<LinearSolverKind> kLinearSolvers = {
     {"auto", LinearSolverKind::Automatic}, {"dense", LinearSolverKind::Dense}, {"klu", LinearSolverKind::SparseKLU}};
 
@@ -79,7 +93,7 @@ const Schema<SolverOptions>& solver_schema() {
       "1 to " + std::to_string(S::kMaxContinuationSteps) +
       "; at most this many Newton solves (converged or failed steps)";
   static const Schema<S> s({
-      choice_field("integrator", &S::integrator, kIntegrators,
+      integrator_field("integrator", &S::integrator,
                    {"", nullptr,
                     "`\"rk4\"` (RK4 on a mesh refined until the estimated tip error is within `tip_tolerance`), "
                     "`\"rk4_fixed\"` (RK4 on the fixed mesh of `rk4_steps` and `rk4_max_step`) or `\"cvode\"` "
