@@ -6,9 +6,9 @@
 #include <cmath>
 #include <cstdio>
 
-#include "solve/bvp_options.hpp"
 #include "solve/model_problem.hpp"
 #include "solve/stability_mesh.hpp"
+#include "solve/bvp_options.hpp"
 #include "tdcr/bvp/integrator.hpp"
 #include "tdcr/core/error.hpp"
 #include "tdcr/core/lie.hpp"
