@@ -19,6 +19,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "inverse_command.hpp"
 #include "plot_command.hpp"
 #include "tdcr/core/error.hpp"
@@ -193,16 +195,7 @@ tdcr::Scene load(const std::string& path) {
 
 void apply_overrides(const SolveArgs& args, tdcr::Scene& scene) {
   if (args.model) scene.model = *args.model;
-  if (args.integrator) {
-    if (*args.integrator == "rk4")
-      scene.solver.integrator = tdcr::IntegratorKind::AccuracyDrivenRK4;
-    else if (*args.integrator == "rk4_fixed")
-      scene.solver.integrator = tdcr::IntegratorKind::FixedStepRK4;
-    else if (*args.integrator == "cvode")
-      scene.solver.integrator = tdcr::IntegratorKind::Cvode;
-    else
-      throw tdcr::InputError("--integrator", *args.integrator, "must be rk4, rk4_fixed or cvode");
-  }
+  if (args.integrator) scene.solver.integrator = tdcr::parse_integrator_kind(*args.integrator, "--integrator");
   if (args.tip_tolerance) {
     scene.solver.tip_tolerance = *args.tip_tolerance;
     try {
@@ -241,6 +234,11 @@ Timed solve_timed(const tdcr::StaticModel& model, const tdcr::Scene& scene, int 
   return out;
 }
 
+/// The `timing` member of the JSON output: the solves of --repeat, which only the CLI runs.
+std::string timing_json(const Timed& t, int repeat) {
+  return nlohmann::ordered_json{{"repeat", repeat}, {"median_us", t.median_us}, {"min_us", t.min_us}}.dump();
+}
+
 void print_human(const Timed& t, int repeat) {
   const tdcr::Solution& s = t.solution;
   std::printf("model:  %s\n", s.model.c_str());
@@ -274,9 +272,7 @@ int run_solve(const std::vector<std::string>& argv) {
   t.solution.model_selection = chosen.selection();
   if (args.json) {
     tdcr::SolutionJsonOptions o;
-    o.repeat = args.repeat;
-    o.median_us = t.median_us;
-    o.min_us = t.min_us;
+    o.extra.push_back({"timing", timing_json(t, args.repeat)});
     std::printf("%s\n", tdcr::solution_to_json(t.solution, o).c_str());
   } else {
     print_human(t, args.repeat);

@@ -11,6 +11,7 @@
 #include <Eigen/Dense>
 
 #include "bvp_test_systems.hpp"
+#include "solve/bvp_options.hpp"
 #include "tdcr/bvp/arclength.hpp"
 #include "tdcr/core/error.hpp"
 
@@ -355,7 +356,7 @@ TEST(BvpArclength, CoupledTwoUnknownFold) {
     SCOPED_TRACE(variant);
     FnSystem sys(2, coupled(), variant > 0 ? Jacobian(coupled_jacobian) : Jacobian(), variant == 2);
     NewtonOptions no;
-    if (variant == 2) no.linear_solver = tdcr::LinearSolverKind::SparseKLU;
+    if (variant == 2) no.linear_solver = tdcr::bvp::LinearSolverKind::SparseKLU;
     Vec x(2);
     x << (s0 + d0) / 2, (s0 - d0) / 2;
     const ArclengthResult r = follow(sys, x, o, no);
@@ -537,8 +538,8 @@ TEST(BvpArclength, FrozenCorrectorJacobiansFindTheSamePathWithFewerJacobians) {
   EXPECT_THROW(bad.validate(), tdcr::InputError);
   tdcr::SolverOptions no_reuse;
   no_reuse.reuse_jacobian = false;
-  EXPECT_EQ(ArclengthOptions::from(no_reuse).corrector_freeze_jacobian_below, 0.0);
-  EXPECT_GT(ArclengthOptions::from(tdcr::SolverOptions()).corrector_freeze_jacobian_below, 0.0);
+  EXPECT_EQ(tdcr::detail::arclength_options(no_reuse).corrector_freeze_jacobian_below, 0.0);
+  EXPECT_GT(tdcr::detail::arclength_options(tdcr::SolverOptions()).corrector_freeze_jacobian_below, 0.0);
 }
 
 namespace {

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <vector>
 
+#include "solve/bvp_options.hpp"
 #include "tdcr/bvp/continuation.hpp"
 #include "tdcr/core/error.hpp"
 
@@ -214,6 +215,6 @@ TEST(BvpContinuation, RejectsBadOptions) {
   bad([](ContinuationOptions& o) { o.max_steps = 0; });
   tdcr::SolverOptions so;
   so.max_continuation_steps = 7;
-  EXPECT_EQ(ContinuationOptions::from(so).max_steps, 7);
+  EXPECT_EQ(tdcr::detail::continuation_options(so).max_steps, 7);
   EXPECT_EQ(tdcr::bvp::to_string(ContinuationStatus::StepLimit), "step_limit");
 }

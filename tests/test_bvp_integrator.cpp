@@ -8,6 +8,7 @@
 #include <new>
 
 #include "allocation_counter.hpp"
+#include "solve/bvp_options.hpp"
 #include "tdcr/bvp/integrator.hpp"
 #include "tdcr/core/error.hpp"
 
@@ -201,11 +202,11 @@ TEST(BvpIntegrator, MakeIntegratorFollowsOptions) {
   tdcr::SolverOptions o;
   o.integrator = tdcr::IntegratorKind::FixedStepRK4;
   o.rk4_steps = 12;
-  auto a = tdcr::bvp::make_integrator(o);
+  auto a = tdcr::bvp::make_integrator(tdcr::detail::integrator_options(o));
   EXPECT_EQ(a->name(), "rk4");
   EXPECT_EQ(dynamic_cast<Rk4Integrator&>(*a).steps(), 12);
   o.integrator = tdcr::IntegratorKind::Cvode;
-  auto b = tdcr::bvp::make_integrator(o);
+  auto b = tdcr::bvp::make_integrator(tdcr::detail::integrator_options(o));
   EXPECT_EQ(b->name(), "cvode");
   Oscillator osc(2.0);
   double y[2] = {1.0, 0.0};

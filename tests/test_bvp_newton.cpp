@@ -12,10 +12,11 @@
 
 #include "bvp_test_systems.hpp"
 #include "allocation_counter.hpp"
+#include "solve/bvp_options.hpp"
 #include "tdcr/bvp/newton_solver.hpp"
 #include "tdcr/core/error.hpp"
 
-using tdcr::LinearSolverKind;
+using tdcr::bvp::LinearSolverKind;
 using tdcr::TerminationType;
 using tdcr::bvp::NewtonOptions;
 using tdcr::bvp::NewtonSolver;
@@ -427,8 +428,8 @@ TEST(BvpNewton, OptionsFromSolverOptionsAndValidation) {
   so.function_tolerance = 1e-8;
   so.step_tolerance = 1e-12;
   so.max_iterations = 17;
-  so.linear_solver = LinearSolverKind::SparseKLU;
-  const auto o = NewtonOptions::from(so);
+  so.linear_solver = tdcr::LinearSolverKind::SparseKLU;
+  const auto o = tdcr::detail::newton_options(so);
   EXPECT_EQ(o.function_tolerance, 1e-8);
   EXPECT_EQ(o.step_tolerance, 1e-12);
   EXPECT_EQ(o.max_iterations, 17);

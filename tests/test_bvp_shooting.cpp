@@ -7,7 +7,7 @@
 #include "tdcr/bvp/newton_solver.hpp"
 #include "tdcr/bvp/shooting.hpp"
 
-using tdcr::LinearSolverKind;
+using tdcr::bvp::LinearSolverKind;
 using tdcr::bvp::NewtonOptions;
 using tdcr::bvp::NewtonSolver;
 using tdcr::bvp::ShootingNodes;

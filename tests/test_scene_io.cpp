@@ -10,6 +10,7 @@
 #include <functional>
 #include <limits>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -566,9 +567,7 @@ tdcr::Solution sample_solution() {
 
 TEST(SolutionJson, HasEveryContractKey) {
   tdcr::SolutionJsonOptions o;
-  o.repeat = 7;
-  o.median_us = 12.5;
-  o.min_us = 11.0;
+  o.extra.push_back({"timing", R"({"repeat": 7, "median_us": 12.5, "min_us": 11.0})"});
   const json j = json::parse(tdcr::solution_to_json(sample_solution(), o));
   for (const char* k : {"model", "status", "reason", "iterations", "residual_norm", "tip", "disks",
                         "tendon_displacements", "timing", "summary"})
@@ -589,6 +588,31 @@ TEST(SolutionJson, HasEveryContractKey) {
                         "continuation_steps", "linear_solver", "integrator", "solve_time_s"})
     EXPECT_TRUE(j["summary"].contains(k)) << k;
   EXPECT_EQ(j["summary"]["linear_solver"], "dense");
+}
+
+// A caller's own members (SolutionJsonOptions::extra, the CLI's `timing`) follow the geometry and
+// actuation in their order, before the diagnostics; core writes none of its own beside the contract.
+TEST(SolutionJson, ExtraMembersFollowTheActuationInTheirOrder) {
+  const tdcr::Solution s = sample_solution();
+  const nlohmann::ordered_json plain = nlohmann::ordered_json::parse(tdcr::solution_to_json(s));
+  EXPECT_FALSE(plain.contains("timing"));
+  tdcr::SolutionJsonOptions o;
+  o.extra = {{"timing", R"({"repeat": 2})"}, {"note", R"("from a test")"}};
+  const nlohmann::ordered_json j = nlohmann::ordered_json::parse(tdcr::solution_to_json(s, o));
+  std::vector<std::string> keys;
+  for (const auto& item : j.items()) keys.push_back(item.key());
+  const auto at = [&](const char* k) { return std::find(keys.begin(), keys.end(), k) - keys.begin(); };
+  EXPECT_EQ(at("timing"), at("tensions") + 1);
+  EXPECT_EQ(at("note"), at("timing") + 1);
+  EXPECT_EQ(at("stability"), at("note") + 1);
+  EXPECT_EQ(j["timing"]["repeat"], 2);
+  EXPECT_EQ(j["note"], "from a test");
+  o.extra = {{"summary", "{}"}};
+  EXPECT_THROW(tdcr::solution_to_json(s, o), std::invalid_argument);
+  o.extra = {{"timing", "{"}};
+  EXPECT_THROW(tdcr::solution_to_json(s, o), std::invalid_argument);
+  o.extra = {{"timing", "1"}, {"timing", "2"}};
+  EXPECT_THROW(tdcr::solution_to_json(s, o), std::invalid_argument);
 }
 
 TEST(SolutionJson, FailedSolveWithNonFiniteValuesIsValidJson) {

@@ -8,12 +8,6 @@
 
 namespace tdcr::bvp {
 
-ContinuationOptions ContinuationOptions::from(const SolverOptions& options) {
-  ContinuationOptions c;
-  c.max_steps = options.max_continuation_steps;
-  return c;
-}
-
 void ContinuationOptions::validate() const {
   auto fail = [](const char* name, double v, const char* why) {
     throw InputError(std::string("continuation.") + name, format_value(v), why);

@@ -284,11 +284,11 @@ bool CvodeIntegrator::integrate(const OdeSystem& system, double s0, double s1, d
   return true;
 }
 
-std::unique_ptr<Integrator> make_integrator(const SolverOptions& options) {
-  switch (options.integrator) {
-    case IntegratorKind::Cvode:
+std::unique_ptr<Integrator> make_integrator(const IntegratorOptions& options) {
+  switch (options.method) {
+    case IntegratorMethod::Cvode:
       return std::make_unique<CvodeIntegrator>(options.cvode_rtol, options.cvode_atol);
-    default:  // both RK4s: the accuracy-driven one hands each of its solves a fixed mesh
+    default:
       return std::make_unique<Rk4Integrator>(options.rk4_steps, options.rk4_max_step);
   }
 }

@@ -1,5 +1,5 @@
 /// @file newton_options.cpp
-/// @brief NewtonOptions: the Newton fields of SolverOptions and their validation.
+/// @brief NewtonOptions::validate(): the bounds of the Newton settings.
 #include <cmath>
 #include <string>
 
@@ -7,15 +7,6 @@
 #include "tdcr/core/error.hpp"
 
 namespace tdcr::bvp {
-
-NewtonOptions NewtonOptions::from(const SolverOptions& options) {
-  NewtonOptions o;
-  o.function_tolerance = options.function_tolerance;
-  o.step_tolerance = options.step_tolerance;
-  o.max_iterations = options.max_iterations;
-  o.linear_solver = options.linear_solver;
-  return o;
-}
 
 void NewtonOptions::validate() const {
   auto positive = [](double v, const char* field) {

@@ -1,6 +1,7 @@
 /// @file newton_solver.cpp
-/// @brief KINSOL driver: workspace lifetime, callbacks, and the translation of KINSOL's return
-/// flags into TerminationType.
+/// @brief KINSOL driver: workspace lifetime, callbacks, and one solve. The translation of
+/// KINSOL's return flags is in newton_flags.cpp, the exact-then-frozen policy of
+/// NewtonOptions::freeze_jacobian_below in newton_frozen_jacobian.cpp.
 #include "tdcr/bvp/newton_solver.hpp"
 
 #include <kinsol/kinsol.h>
@@ -9,8 +10,8 @@
 #include <sunmatrix/sunmatrix_dense.h>
 #include <sunmatrix/sunmatrix_sparse.h>
 
+#include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <exception>
 #include <limits>
 #include <stdexcept>
@@ -18,54 +19,15 @@
 
 #include "dense_linear_solver.hpp"
 #include "klu_linear_solver.hpp"
+#include "newton_flags.hpp"
+#include "newton_frozen_jacobian.hpp"
 #include "tdcr/bvp/sparse_lu.hpp"
 #include "tdcr/core/error.hpp"
 
 namespace tdcr::bvp {
 
-namespace {
-
-/// KINSOL's flag names, without KINGetReturnFlagName (which returns malloc'd memory).
-const char* kinsol_flag_name(int flag) {
-#define TDCR_KIN_FLAG(f) \
-  case f: return #f;
-  switch (flag) {
-    TDCR_KIN_FLAG(KIN_SUCCESS) TDCR_KIN_FLAG(KIN_INITIAL_GUESS_OK) TDCR_KIN_FLAG(KIN_STEP_LT_STPTOL)
-    TDCR_KIN_FLAG(KIN_WARNING) TDCR_KIN_FLAG(KIN_MEM_NULL) TDCR_KIN_FLAG(KIN_ILL_INPUT)
-    TDCR_KIN_FLAG(KIN_NO_MALLOC) TDCR_KIN_FLAG(KIN_MEM_FAIL) TDCR_KIN_FLAG(KIN_LINESEARCH_NONCONV)
-    TDCR_KIN_FLAG(KIN_MAXITER_REACHED) TDCR_KIN_FLAG(KIN_MXNEWT_5X_EXCEEDED)
-    TDCR_KIN_FLAG(KIN_LINESEARCH_BCFAIL) TDCR_KIN_FLAG(KIN_LINSOLV_NO_RECOVERY)
-    TDCR_KIN_FLAG(KIN_LINIT_FAIL) TDCR_KIN_FLAG(KIN_LSETUP_FAIL) TDCR_KIN_FLAG(KIN_LSOLVE_FAIL)
-    TDCR_KIN_FLAG(KIN_SYSFUNC_FAIL) TDCR_KIN_FLAG(KIN_FIRST_SYSFUNC_ERR)
-    TDCR_KIN_FLAG(KIN_REPTD_SYSFUNC_ERR) TDCR_KIN_FLAG(KIN_VECTOROP_ERR)
-    TDCR_KIN_FLAG(KIN_CONTEXT_ERR)
-    default: return "KIN_UNKNOWN_FLAG";
-  }
-#undef TDCR_KIN_FLAG
-}
-
-/// Why the most recent evaluation inside a callback failed.
-enum class EvalFailure { None, NotEvaluated, NonFinite };
-
-TerminationType termination_of(EvalFailure e) {
-  // residual() returning false is, in tdcr, an integrator that gave up (shooting models); a
-  // finite-but-wrong F is impossible to detect here, so those are the only two kinds.
-  switch (e) {
-    case EvalFailure::NotEvaluated: return TerminationType::IntegrationFailed;
-    case EvalFailure::NonFinite: return TerminationType::NonFiniteResidual;
-    default: return TerminationType::NoConvergence;
-  }
-}
-
-const char* describe(EvalFailure e) {
-  switch (e) {
-    case EvalFailure::NotEvaluated: return "residual could not be evaluated";
-    case EvalFailure::NonFinite: return "residual is not finite";
-    default: return "";
-  }
-}
-
-}  // namespace
+using detail::EvalFailure;
+using detail::kinsol_flag_name;
 
 struct NewtonSolver::Impl {
   // SUNDIALS objects, destroyed in reverse order of creation.
@@ -318,62 +280,8 @@ SparseLu& NewtonSolver::tangent_lu() { return impl_->tangent_lu; }
 NewtonResult NewtonSolver::solve(ResidualSystem& system, Eigen::VectorXd& x,
                                  const NewtonOptions& options) {
   options.validate();
-  if (options.freeze_jacobian_below > 0.0 && !options.reuse_jacobian) {
-    // Exact Newton to the freezing threshold, then modified Newton from its last Jacobian.
-    NewtonOptions exact = options;
-    exact.freeze_jacobian_below = 0.0;
-    exact.function_tolerance = options.freeze_jacobian_below;
-    exact.max_setup_calls = 1;
-    NewtonResult first = solve(system, x, exact);
-    // Done if it met the full tolerance as KINSOL judges it: after an iteration, or at the
-    // initial guess with KINSOL's margin of 0.01.
-    const double done = first.iterations > 0 ? options.function_tolerance : 0.01 * options.function_tolerance;
-    if (!first.converged() || first.residual_norm <= done) return first;
-    if (first.iterations >= options.max_iterations) {
-      // Converged only to the freezing threshold when the budget ran out: not the solve's
-      // tolerance (a cold CCsub attempt capped at 30 iterations was returned as converged at
-      // |F| = 5e-4, and its caller never tried the loading path).
-      first.termination = TerminationType::MaxIterations;
-      first.message += " (the iteration budget ended at the Jacobian-freezing threshold, above function_tolerance)";
-      return first;
-    }
-    // Modified Newton converges linearly and stops just below its tolerance, where exact
-    // Newton's last step lands far below it: ask it for kFrozenTighter times more, and accept
-    // function_tolerance if round-off stops it first.
-    constexpr double kFrozenTighter = 1e-2;
-    constexpr int kFrozenMaxIterations = 30;
-    NewtonOptions frozen = options;
-    frozen.freeze_jacobian_below = 0.0;
-    frozen.reuse_jacobian = true;
-    frozen.max_setup_calls = 10;
-    frozen.function_tolerance = options.function_tolerance * kFrozenTighter;
-    frozen.max_iterations = std::min(kFrozenMaxIterations, options.max_iterations - first.iterations);
-    const Eigen::VectorXd x_first = x;
-    NewtonResult r = solve(system, x, frozen);
-    const auto add = [](NewtonResult& to, const NewtonResult& from) {
-      to.iterations += from.iterations;
-      to.residual_evaluations += from.residual_evaluations;
-      to.jacobian_evaluations += from.jacobian_evaluations;
-      to.fd_residual_evaluations += from.fd_residual_evaluations;
-    };
-    add(r, first);
-    if (r.converged()) return r;
-    if (std::isfinite(r.residual_norm) && r.residual_norm <= options.function_tolerance && x.allFinite()) {
-      r.termination = TerminationType::Converged;
-      r.message += " (within function_tolerance; the tighter target of the modified Newton iterations was not reached)";
-      return r;
-    }
-    // The frozen Jacobian contracted too slowly: exact Newton finishes, from the better point.
-    if (!(std::isfinite(r.residual_norm) && r.residual_norm <= first.residual_norm && x.allFinite())) x = x_first;
-    NewtonOptions rest = exact;
-    rest.function_tolerance = options.function_tolerance;
-    rest.max_iterations = std::max(1, options.max_iterations - r.iterations);
-    NewtonResult last = solve(system, x, rest);
-    add(last, r);
-    last.message += " (exact Newton after " + std::to_string(frozen.max_iterations) +
-                    " modified Newton iterations did not converge)";
-    return last;
-  }
+  if (options.freeze_jacobian_below > 0.0 && !options.reuse_jacobian)
+    return detail::solve_exact_then_frozen(*this, system, x, options);
   Impl& s = *impl_;
   const int n = system.size();
   if (n < 0) throw std::invalid_argument("NewtonSolver::solve: negative system size");
@@ -510,66 +418,9 @@ NewtonResult NewtonSolver::solve(ResidualSystem& system, Eigen::VectorXd& x,
   const bool small = final_failure == EvalFailure::None &&
                      result.residual_norm <= options.function_tolerance;
 
-  std::string why;
-  if (final_failure != EvalFailure::None) {
-    result.termination = termination_of(final_failure);
-    why = std::string(describe(final_failure)) + " at the returned point";
-  } else if ((flag == KIN_SUCCESS || flag == KIN_INITIAL_GUESS_OK || flag == KIN_STEP_LT_STPTOL) &&
-             small) {
-    result.termination = TerminationType::Converged;
-  } else {
-    switch (flag) {
-      case KIN_SUCCESS:
-      case KIN_INITIAL_GUESS_OK:
-        result.termination = TerminationType::NoConvergence;
-        why = "residual above tolerance at the returned point";
-        break;
-      case KIN_STEP_LT_STPTOL:
-        result.termination = TerminationType::NoConvergence;
-        why = "step below step_tolerance but residual above function_tolerance";
-        break;
-      case KIN_LINESEARCH_NONCONV:
-      case KIN_LINESEARCH_BCFAIL:
-        result.termination = TerminationType::LineSearchFailed;
-        break;
-      case KIN_MAXITER_REACHED:
-        result.termination = TerminationType::MaxIterations;
-        break;
-      case KIN_MXNEWT_5X_EXCEEDED:
-        result.termination = TerminationType::NoConvergence;
-        why = "five consecutive steps of maximum length: diverging or no root";
-        break;
-      case KIN_LINSOLV_NO_RECOVERY:
-      case KIN_LINIT_FAIL:
-      case KIN_LSETUP_FAIL:
-      case KIN_LSOLVE_FAIL:
-        if (s.jac_failure != EvalFailure::None) {
-          result.termination = termination_of(s.jac_failure);
-          why = std::string("Jacobian: ") + describe(s.jac_failure);
-        } else {
-          result.termination = TerminationType::LinearSolverFailed;
-          why = "singular or failed Jacobian factorisation";
-        }
-        break;
-      case KIN_SYSFUNC_FAIL:
-      case KIN_FIRST_SYSFUNC_ERR:
-      case KIN_REPTD_SYSFUNC_ERR:
-        result.termination = termination_of(s.last_failure);
-        why = describe(s.last_failure);
-        break;
-      default:
-        result.termination = TerminationType::NoConvergence;
-        break;
-    }
-  }
-
-  char head[160];
-  std::snprintf(head, sizeof head, "%s: %d iterations, |F|=%.3g", kinsol_flag_name(flag),
-                result.iterations, result.residual_norm);
-  result.message = head;
-  if (!why.empty()) result.message += "; " + why;
-  if (!s.kinsol_message.empty() && result.termination != TerminationType::Converged)
-    result.message += " (" + s.kinsol_message + ")";
+  const detail::Verdict verdict = detail::judge(flag, final_failure, small, s.jac_failure, s.last_failure);
+  result.termination = verdict.termination;
+  result.message = detail::newton_message(flag, result.iterations, result.residual_norm, verdict, s.kinsol_message);
   return result;
 }
 

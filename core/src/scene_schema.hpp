@@ -1,7 +1,7 @@
 // The scene-file field table (private to tdcr_core): one Field per key, holding how it is read,
 // how it is written and what the reference (docs/scene-file.md) says about it. parse_scene,
-// scene_to_json and scene_key_reference all walk the same table (scene_schema.cpp), so a key
-// is spelled once.
+// scene_to_json and scene_key_reference all walk the same table (scene_schema.cpp, its `solver`
+// object in scene_solver_schema.cpp), so a key is spelled once.
 #pragma once
 
 #include <algorithm>
@@ -261,5 +261,8 @@ Field<T> objects_field(const char* key, std::vector<C> T::*m, const Schema<C>& s
 
 /// The scene's table (scene_schema.cpp).
 const Schema<Scene>& scene_schema();
+
+/// The table of the scene's `solver` object, SolverOptions (scene_solver_schema.cpp).
+const Schema<SolverOptions>& solver_schema();
 
 }  // namespace tdcr::detail

@@ -1,6 +1,7 @@
 // The CLI's JSON contract for a solution (solution_to_json, scene_io.hpp; docs/scene-file.md).
 #include <cinttypes>
 #include <cstdio>
+#include <stdexcept>
 
 #include "json_writer.hpp"
 #include "tdcr/core/scene_io.hpp"
@@ -69,6 +70,26 @@ ojson matrix_json(const Eigen::MatrixXd& M) {
   return rows;
 }
 
+// Every key solution_to_json writes itself: a caller's extra member may not take one.
+constexpr const char* kContractKeys[] = {
+    "model", "model_fingerprint", "status", "reason", "iterations", "residual_norm", "tip", "disks",
+    "tendon_displacements", "tensions", "tendon_end_tensions", "tendon_slack", "backbone", "stability",
+    "path_events", "geometry_warnings", "tip_jacobian", "tip_compliance", "summary", "model_selection"};
+
+/// Adds the caller's member to j (SolutionJsonOptions::extra), its text parsed so that it is
+/// printed like the contract's own values.
+void add_extra(const JsonMember& m, ojson& j) {
+  for (const char* k : kContractKeys)
+    if (m.key == k)
+      throw std::invalid_argument("solution_to_json: extra member \"" + m.key + "\" is a key of the contract");
+  if (j.contains(m.key)) throw std::invalid_argument("solution_to_json: extra member \"" + m.key + "\" given twice");
+  try {
+    j[m.key] = ojson::parse(m.json);
+  } catch (const ojson::parse_error& e) {
+    throw std::invalid_argument("solution_to_json: extra member \"" + m.key + "\" is not JSON: " + e.what());
+  }
+}
+
 /// 16 lower-case hex digits: JSON numbers cannot carry 64 bits exactly.
 std::string hex64(std::uint64_t v) {
   char buf[17];
@@ -108,9 +129,7 @@ std::string solution_to_json(const Solution& solution, const SolutionJsonOptions
     j["tendon_slack"] = slack;
   }
   if (options.include_backbone) j["backbone"] = backbone_json(solution.backbone);
-  j["timing"] = {{"repeat", options.repeat},
-                 {"median_us", number(options.median_us)},
-                 {"min_us", number(options.min_us)}};
+  for (const JsonMember& m : options.extra) add_extra(m, j);
   j["stability"] = {{"status", to_string(solution.stability.status)},
                     {"margin", number(solution.stability.margin)},
                     {"method", solution.stability.method}};

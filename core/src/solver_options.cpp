@@ -3,12 +3,17 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include "tdcr/core/error.hpp"
 
 namespace tdcr {
 
 namespace {
+
+// Every integrator, in the order of IntegratorKind; to_string() names them.
+constexpr IntegratorKind kIntegrators[] = {IntegratorKind::AccuracyDrivenRK4, IntegratorKind::FixedStepRK4,
+                                           IntegratorKind::Cvode};
 
 /// "from 1e-15 to 0.01"
 std::string range_text(double lo, double hi) { return "from " + format_value(lo) + " to " + format_value(hi); }
@@ -80,6 +85,23 @@ std::string to_string(IntegratorKind k) {
     case IntegratorKind::FixedStepRK4: return "rk4_fixed";
     default: return "rk4";
   }
+}
+
+const std::vector<std::string>& integrator_names() {
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> v;
+    for (IntegratorKind k : kIntegrators) v.push_back(to_string(k));
+    return v;
+  }();
+  return names;
+}
+
+IntegratorKind parse_integrator_kind(const std::string& name, const std::string& field) {
+  for (IntegratorKind k : kIntegrators)
+    if (name == to_string(k)) return k;
+  std::string choices;
+  for (const std::string& n : integrator_names()) choices += (choices.empty() ? "\"" : ", \"") + n + "\"";
+  throw InputError(field, "\"" + name + "\"", "must be one of " + choices);
 }
 
 std::string to_string(LinearSolverKind k) {

@@ -98,7 +98,7 @@ void LumpedProblem::bind(const ModelInput& input) {
 }
 
 void LumpedProblem::adjust(bvp::NewtonOptions& options) const {
-  options.linear_solver = banded_ ? LinearSolverKind::SparseKLU : LinearSolverKind::Dense;
+  options.linear_solver = banded_ ? bvp::LinearSolverKind::SparseKLU : bvp::LinearSolverKind::Dense;
 }
 
 void LumpedProblem::adjust_warm(bvp::NewtonOptions& options, bool same_input) const {

@@ -340,7 +340,8 @@ bool DisplacementProblem::recenter(Eigen::Ref<Eigen::VectorXd> y) { return sys_-
 
 void DisplacementProblem::adjust(bvp::NewtonOptions& options) const {
   inner_->adjust(options);
-  if (!sparse_ && options.linear_solver == LinearSolverKind::SparseKLU) options.linear_solver = LinearSolverKind::Dense;
+  if (!sparse_ && options.linear_solver == bvp::LinearSolverKind::SparseKLU)
+    options.linear_solver = bvp::LinearSolverKind::Dense;
 }
 
 void DisplacementProblem::adjust_warm(bvp::NewtonOptions& options, bool same_input) const {

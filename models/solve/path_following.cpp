@@ -6,6 +6,7 @@
 #include <cstdio>
 
 #include "physics/least_stable_mode.hpp"
+#include "solve/bvp_options.hpp"
 #include "solve/load_continuation.hpp"
 #include "tdcr/models/model_problem.hpp"
 #include "physics/geometry_check.hpp"
@@ -37,7 +38,7 @@ PathEvent::Type event_type(bvp::ArclengthEventType t) {
 bvp::ArclengthResult run_path(ModelProblem& P, const TendonRouting& routing, bvp::ParameterizedSystem& system,
                               Eigen::VectorXd& x, const bvp::NewtonOptions& newton_options,
                               const SolverOptions& options, double first_step) {
-  bvp::ArclengthOptions a = bvp::ArclengthOptions::from(options);
+  bvp::ArclengthOptions a = detail::arclength_options(options);
   a.start = 0.0;
   a.target = 1.0;
   a.at_fold = bvp::FoldAction::Snap;
@@ -238,7 +239,7 @@ bvp::ArclengthResult follow_loading_path(ModelProblem& P, const TendonRouting& r
   ModelProblem* D = !r.converged() && r.unlanded_snap ? P.damping_formulation() : nullptr;
   if (D && D->system()) {
     bvp::ParameterizedSystem& ds = *D->system();
-    bvp::NewtonOptions dn = bvp::NewtonOptions::from(options);
+    bvp::NewtonOptions dn = detail::newton_options(options);
     D->adjust(dn);
     Eigen::VectorXd y;
     bvp::ArclengthResult rd = run_path(*D, routing, ds, y, dn, options, first_step);

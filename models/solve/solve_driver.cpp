@@ -8,6 +8,7 @@
 #include <limits>
 #include <optional>
 
+#include "solve/bvp_options.hpp"
 #include "solve/differential_kinematics.hpp"
 #include "solve/displacement_input.hpp"
 #include "solve/load_continuation.hpp"
@@ -713,7 +714,7 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
       P.extract(Eigen::VectorXd(), true, sol);
     } else {
       sum.unknowns = sys->size();
-      bvp::NewtonOptions nopt = bvp::NewtonOptions::from(options);
+      bvp::NewtonOptions nopt = detail::newton_options(options);
       P.adjust(nopt);
       sys->set_parameter(1.0);
       const bool warm = warm_start && P.warm_guess(*warm_start, x);

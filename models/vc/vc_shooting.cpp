@@ -8,6 +8,7 @@
 
 #include <Eigen/LU>
 
+#include "solve/bvp_options.hpp"
 #include "solve/stability_mesh.hpp"
 #include "physics/geometry_check.hpp"
 #include "physics/tendon_path.hpp"
@@ -146,9 +147,9 @@ void bind_input(VcWorkspace::Impl& W, const VcModel& model, const ModelInput& in
   if (W.shot_integrator) W.retired_rhs += W.shot_integrator->rhs_evaluations();
   if (W.final_integrator) W.retired_rhs += W.final_integrator->rhs_evaluations();
   W.integration = options;
-  W.shot_integrator = bvp::make_integrator(options);
+  W.shot_integrator = bvp::make_integrator(detail::integrator_options(options));
   const bool lengths_in_shots = options.integrator == IntegratorKind::Cvode;
-  W.final_integrator = lengths_in_shots ? nullptr : bvp::make_integrator(options);
+  W.final_integrator = lengths_in_shots ? nullptr : bvp::make_integrator(detail::integrator_options(options));
   W.shot_rod = std::make_unique<TendonRod>(W.section, W.segments[0], W.tendon_count, lengths_in_shots);
   W.final_rod = std::make_unique<TendonRod>(W.section, W.segments[0], W.tendon_count, true);
   W.final_rod->watch(&W.degeneracy);

@@ -8,6 +8,7 @@
 
 #include "tdcr/models/model_problem.hpp"
 #include "solve/stability_mesh.hpp"
+#include "solve/bvp_options.hpp"
 #include "tdcr/bvp/integrator.hpp"
 #include "tdcr/core/error.hpp"
 #include "tdcr/core/lie.hpp"
@@ -83,13 +84,13 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
       : ModelWorkspace(owner),
         d_(d),
         problem_(d),
-        integrator_(bvp::make_integrator(integrator_options_)),
+        integrator_(bvp::make_integrator(detail::integrator_options(integrator_options_))),
         shooting_(problem_, *integrator_, d.structure),
         system_(problem_, shooting_) {}
 
   void bind(const ModelInput& input, const SolverOptions& options, const VcrefOptions& vo) {
     if (!same_integrator(options, integrator_options_)) {
-      integrator_ = bvp::make_integrator(options);
+      integrator_ = bvp::make_integrator(detail::integrator_options(options));
       integrator_options_ = options;
       shooting_.set_integrator(*integrator_);
     }

@@ -38,9 +38,6 @@ const Names<tdcr::DiskNormalForce> kDiskNormalForce = {{"removed", tdcr::DiskNor
                                                        {"kept", tdcr::DiskNormalForce::Kept}};
 const Names<tdcr::TendonPath> kTendonPath = {{"fully_constrained", tdcr::TendonPath::FullyConstrained},
                                              {"partially_constrained", tdcr::TendonPath::PartiallyConstrained}};
-const Names<tdcr::IntegratorKind> kIntegrator = {{"rk4", tdcr::IntegratorKind::AccuracyDrivenRK4},
-                                                 {"rk4_fixed", tdcr::IntegratorKind::FixedStepRK4},
-                                                 {"cvode", tdcr::IntegratorKind::Cvode}};
 const Names<tdcr::TendonRoutingSpec::Type> kRoutingType = {{"straight", tdcr::TendonRoutingSpec::Type::Straight},
                                                            {"helical", tdcr::TendonRoutingSpec::Type::Helical},
                                                            {"points", tdcr::TendonRoutingSpec::Type::Points}};
@@ -407,8 +404,13 @@ void bind_effects(py::module_& m) {
       .def_readwrite("reuse_jacobian", &tdcr::SolverOptions::reuse_jacobian)
       .def_readwrite("extrapolate_warm_starts", &tdcr::SolverOptions::extrapolate_warm_starts)
       .def("validate", &tdcr::SolverOptions::validate);
-  enum_property(opt, "integrator", &tdcr::SolverOptions::integrator, kIntegrator, "solver.integrator",
-                "'rk4' or 'cvode'");
+  // Integrator names are core's (tdcr::parse_integrator_kind), as in scene files and the CLI.
+  opt.def_property(
+      "integrator", [](const tdcr::SolverOptions& o) { return tdcr::to_string(o.integrator); },
+      [](tdcr::SolverOptions& o, const std::string& v) {
+        o.integrator = tdcr::parse_integrator_kind(v, "solver.integrator");
+      },
+      "'rk4', 'rk4_fixed' or 'cvode'");
   enum_property(opt, "linear_solver", &tdcr::SolverOptions::linear_solver, kLinearSolver, "solver.linear_solver",
                 "'auto', 'dense' or 'klu'");
 }

@@ -54,58 +54,67 @@ enum class FoldAction {
 };
 
 /// @brief Step control and event handling of arclength_continuation(). Steps are in scaled
-/// arclength (see the file comment): 1 is the length of a path that moves lambda from start to
-/// target and nothing else.
+/// arclength (dimensionless, see the file comment): 1 is the length of a path that moves lambda
+/// from start to target and nothing else. The parameter lambda has the units of whatever it
+/// scales (for the models, a load factor from 0 to 1). Counts are Newton solves or iterations.
 struct ArclengthOptions {
-  double start = 0.0;           ///< Parameter at which the initial x is (about) a solution.
-  double target = 1.0;          ///< Parameter to reach.
-  double initial_step = 0.05;   ///< First step (scaled arclength).
-  double min_step = 1e-6;       ///< A failed step that would shrink below this stalls.
-  double max_step = 0.25;       ///< Largest step.
-  double growth = 1.5;          ///< Step factor after an easy corrector (>= 1).
-  double shrink = 0.5;          ///< Step factor after a rejected step (in (0, 1)).
-  /// A corrector with at most this many Newton iterations is "easy" and grows the next step.
+  double start = 0.0;           ///< Parameter at which the initial x is (about) a solution. Default 0.
+  double target = 1.0;          ///< Parameter to reach (finite, != start). Default 1.
+  double initial_step = 0.05;   ///< First step (scaled arclength). Default 0.05.
+  double min_step = 1e-6;       ///< A failed step that would shrink below this stalls. Default 1e-6.
+  double max_step = 0.25;       ///< Largest step (scaled arclength). Default 0.25.
+  double growth = 1.5;          ///< Step factor after an easy corrector (>= 1). Default 1.5.
+  double shrink = 0.5;          ///< Step factor after a rejected step, in (0, 1). Default 0.5.
+  /// A corrector with at most this many Newton iterations is "easy" and grows the next step
+  /// (>= 0). Default 4.
   int easy_iterations = 4;
-  /// Largest angle (radians) between consecutive unit tangents; a step turning more is
-  /// rejected (it may have jumped to another branch). A step whose corrector moves farther from
-  /// the predictor than the step itself is rejected for the same reason.
+  /// Largest angle (radians, in (0, pi]) between consecutive unit tangents; a step turning more
+  /// is rejected (it may have jumped to another branch). A step whose corrector moves farther
+  /// from the predictor than the step itself is rejected for the same reason. Default 1.
   double max_turn = 1.0;
-  /// Bound on corrector solves of the path (accepted or not), so total work is bounded. Event
-  /// refinement, snaps and the final solve at the target have their own bounds below.
+  /// Most corrector solves of the path (accepted or not; >= 1), so total work is bounded. Event
+  /// refinement, snaps and the final solve at the target have their own bounds below. Default
+  /// 400.
   int max_steps = 400;
-  /// Newton iteration limit of a corrector (capped by the Newton options' own limit). A step too
-  /// long for its corrector is rejected and shortened; near a singular point such a corrector
-  /// can otherwise run 150 iterations before it fails (VC at a tendon's geometric limit).
+  /// Newton iteration limit of a corrector (>= 1; capped by the Newton options' own limit). A
+  /// step too long for its corrector is rejected and shortened; near a singular point such a
+  /// corrector can otherwise run 150 iterations before it fails (VC at a tendon's geometric
+  /// limit). Default 30.
   int corrector_max_iterations = 30;
-  /// Correctors freeze their Jacobian below this scaled residual (NewtonOptions::
+  /// Scaled residual (dimensionless) below which correctors freeze their Jacobian (NewtonOptions::
   /// freeze_jacobian_below; 0 or not above the function tolerance: exact Newton). A corrector
   /// starting below it reuses the last corrector's Jacobian. Soft robots under tip forces
-  /// (bench_soft, docs/design-notes/arclength.md): PRB's median solve 86 -> 39 ms.
-  /// ArclengthOptions::from() sets 0 when SolverOptions::reuse_jacobian is false.
+  /// (bench_soft, docs/design-notes/arclength.md): PRB's median solve 86 -> 39 ms. Default 1e-3;
+  /// the models layer sets 0 when its options forbid reusing Jacobians (no Jacobian history).
   double corrector_freeze_jacobian_below = 1e-3;
-  /// The path stops (stalled) when lambda leaves [start - window (target - start),
-  /// target + window (target - start)] (for start < target; mirrored otherwise): a curve that
-  /// turned back for good would otherwise run until max_steps.
+  /// Parameter window (fraction of |target - start|, >= 0): the path stops (stalled) when lambda
+  /// leaves [start - window (target - start), target + window (target - start)] (for start <
+  /// target; mirrored otherwise): a curve that turned back for good would otherwise run until
+  /// max_steps. Default 1.
   double window = 1.0;
-  bool detect_bifurcations = true;  ///< Watch the sign of the augmented determinant.
-  /// Events are located by regula falsi (Illinois) on their test function (the lambda
-  /// component of the unit tangent for folds, the normalised determinant for bifurcations)
-  /// until it is below this fraction of its value at the bracket's ends. For a fold, lambda is
-  /// then accurate to about tolerance^2 / curvature.
+  /// Watch the sign of the augmented determinant for bifurcations. Default true.
+  bool detect_bifurcations = true;
+  /// Relative tolerance of event location, in (0, 1): events are located by regula falsi
+  /// (Illinois) on their test function (the lambda component of the unit tangent for folds, the
+  /// normalised determinant for bifurcations) until it is below this fraction of its value at
+  /// the bracket's ends. For a fold, lambda is then accurate to about tolerance^2 / curvature.
+  /// Default 1e-8.
   double event_tolerance = 1e-8;
-  int max_refine_iterations = 40;  ///< Corrector solves per event refinement.
-  FoldAction at_fold = FoldAction::Continue;  ///< See FoldAction.
+  int max_refine_iterations = 40;  ///< Corrector solves per event refinement (>= 1). Default 40.
+  FoldAction at_fold = FoldAction::Continue;  ///< See FoldAction. Default FoldAction::Continue.
   /// Snap: landing parameter lambda_fold + snap_overshoot (target - start) (capped at target);
-  /// if no attempt lands there, 10, 100, ... times further, up to 0.1 (target - start).
+  /// if no attempt lands there, 10, 100, ... times further, up to 0.1 (target - start). A
+  /// fraction of |target - start|, in (0, 1). Default 1e-4.
   double snap_overshoot = 1e-4;
-  /// Snap: first perturbation amplitude along the unit null vector (scaled units); doubled
-  /// after every pair of failed attempts (one per direction), snap_tries times.
+  /// Snap: first perturbation amplitude along the unit null vector (scaled units, > 0); doubled
+  /// after every pair of failed attempts (one per direction), snap_tries times. Default 0.05.
   double snap_perturbation = 0.05;
-  int snap_tries = 8;  ///< Snap: number of amplitudes tried.
-  /// Snap: Newton iteration limit of each attempt (capped by the Newton options' own limit); an
-  /// attempt that starts in the basin of the vanished equilibrium only creeps, so cut it short.
+  int snap_tries = 8;  ///< Snap: number of amplitudes tried (>= 1). Default 8.
+  /// Snap: Newton iteration limit of each attempt (>= 1; capped by the Newton options' own
+  /// limit); an attempt that starts in the basin of the vanished equilibrium only creeps, so cut
+  /// it short. Default 30.
   int snap_max_iterations = 30;
-  /// Snap: when no Newton attempt lands, at most this many implicit Euler steps of the
+  /// Snap: when no Newton attempt lands, at most this many implicit Euler steps (>= 0) of the
   /// overdamped motion (ParameterizedSystem::set_damping) from the fold state at the first
   /// landing parameter, each a Newton solve of corrector_max_iterations at most. The pseudo-time
   /// step starts at 1 / damped_landing_rate and follows the motion: multiplied by
@@ -118,37 +127,40 @@ struct ArclengthOptions {
   /// past 1e6 the motion has come to rest and a natural Newton solve finishes; a landing that
   /// accept_landing rejects (a saddle, to which long implicit Euler steps are drawn) damps on
   /// with the pseudo-time step bounded, 4 times shorter after each rejection (at most 4). 0: no
-  /// damped landing.
+  /// damped landing. Default 300.
   int damped_landing_steps = 300;
-  /// Snap: first damping rate of the damped landing (scaled units: 1 / pseudo-time step).
+  /// Snap: first damping rate of the damped landing (scaled units: 1 / pseudo-time step; > 0).
+  /// Default 1.
   double damped_landing_rate = 1.0;
-  /// Snap: scaled move per step of the damped landing that keeps its pseudo-time step.
+  /// Snap: scaled move per step of the damped landing that keeps its pseudo-time step (> 0).
+  /// Default 0.02.
   double damped_landing_move = 0.02;
   /// Snap: a test of the fold point (x, lambda), called before any snap is tried. A non-empty
   /// return names a limit of the system there (no other branch is sought: the run stalls at the
   /// fold with that reason, instead of spending up to 8 x 2 x 4 attempts of snap_max_iterations
-  /// each). Empty function: every fold is snapped.
+  /// each). Empty function (default): every fold is snapped.
   std::function<std::string(const Eigen::VectorXd&, double)> fold_limit;
   /// Snap: a test of each landing (x, lambda) a snap attempt converged to. A non-empty return
   /// rejects it with that reason (e.g. "unstable": a Newton attempt converges to whichever root
   /// is nearest, which past a fold can be a saddle the structure would not stay at); the next
   /// attempt is tried, and a damped landing that comes to rest at a rejected point damps on from
-  /// it. Empty function: every converged attempt lands.
+  /// it. Empty function (default): every converged attempt lands.
   std::function<std::string(const Eigen::VectorXd&, double)> accept_landing;
-  /// The scalar stored per path point, from (x, lambda); empty = the 2-norm of x.
+  /// The scalar stored per path point (ArclengthPoint::value), from (x, lambda); empty
+  /// (default): the 2-norm of x.
   std::function<double(const Eigen::VectorXd&, double)> output;
   /// Outputs stored per event (ArclengthEvent::output), from (x, lambda) at the event point,
   /// evaluated during the run while the unknowns keep the parameterisation of the path (before
-  /// the final accept_step()); e.g. a position whose jump across a snap is wanted. Empty: none.
+  /// the final accept_step()); e.g. a position whose jump across a snap is wanted. Empty
+  /// (default): none.
   std::function<Eigen::VectorXd(const Eigen::VectorXd&, double)> event_output;
 
-  /// @brief Defaults with max_steps = options.max_continuation_steps.
-  static ArclengthOptions from(const SolverOptions& options);
   /// @brief Throws InputError (field `arclength.<name>`) on inconsistent values: start ==
   /// target, non-finite values, steps not positive or min_step > initial_step > max_step,
-  /// growth < 1, shrink outside (0, 1), max_turn outside (0, pi], counts < 1 (snap_max_iterations included), negative window,
-  /// event_tolerance outside (0, 1), snap_overshoot outside (0, 1), snap_perturbation <= 0,
-  /// damped_landing_steps < 0, damped_landing_rate or damped_landing_move <= 0.
+  /// growth < 1, shrink outside (0, 1), max_turn outside (0, pi], counts < 1 (snap_max_iterations
+  /// included), negative window, event_tolerance outside (0, 1), snap_overshoot outside (0, 1),
+  /// snap_perturbation <= 0, damped_landing_steps < 0, damped_landing_rate or
+  /// damped_landing_move <= 0.
   void validate() const;
 };
 

@@ -15,7 +15,6 @@
 
 #include "tdcr/bvp/newton_solver.hpp"
 #include "tdcr/bvp/residual_system.hpp"
-#include "tdcr/core/solver_options.hpp"
 
 namespace tdcr::bvp {
 
@@ -58,24 +57,28 @@ class ParameterizedSystem : public ResidualSystem {
   }
 };
 
-/// @brief Step control of continuation().
+/// @brief Step control of continuation(). Steps are fractions of |target - start|
+/// (dimensionless); the parameter itself has the units of whatever it scales (for the models, a
+/// load factor from 0 to 1).
 struct ContinuationOptions {
-  double start = 0.0;         ///< Parameter at which the initial x is a solution.
-  double target = 1.0;        ///< Parameter to reach.
-  /// First step, as a fraction of |target - start|.
+  /// Parameter at which the initial x is a solution. Default 0.
+  double start = 0.0;
+  /// Parameter to reach (finite, != start). Default 1.
+  double target = 1.0;
+  /// First step, as a fraction of |target - start|, in (0, 1]. Default 0.25.
   double initial_step = 0.25;
-  /// Smallest step (fraction of |target - start|): a failure at a step that would halve below
-  /// this stops the continuation ("stalled").
+  /// Smallest step, as a fraction of |target - start|, in (0, 1]: a failure at a step that
+  /// would halve below this stops the continuation ("stalled"). Default 1/4096.
   double min_step = 1.0 / 4096.0;
-  /// Largest step (fraction of |target - start|).
+  /// Largest step, as a fraction of |target - start|, in (0, 1]. Default 1.
   double max_step = 1.0;
-  double growth = 2.0;        ///< Step factor after a converged step (>= 1).
-  double shrink = 0.5;        ///< Step factor after a failed step (in (0, 1)).
-  /// Bound on the number of Newton solves (converged or not), so total work is bounded.
+  /// Step factor after a converged step (>= 1). Default 2.
+  double growth = 2.0;
+  /// Step factor after a failed step, in (0, 1). Default 0.5.
+  double shrink = 0.5;
+  /// Most Newton solves (converged or not; count, >= 1), so total work is bounded. Default 64.
   int max_steps = 64;
 
-  /// @brief Defaults with max_steps = options.max_continuation_steps.
-  static ContinuationOptions from(const SolverOptions& options);
   /// @brief Throws InputError (field `continuation.<name>`) on inconsistent values: start ==
   /// target, non-finite values, steps outside (0, 1], growth < 1, shrink outside (0, 1),
   /// max_steps < 1.

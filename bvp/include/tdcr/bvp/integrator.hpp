@@ -8,8 +8,6 @@
 #include <string>
 #include <vector>
 
-#include "tdcr/core/solver_options.hpp"
-
 namespace tdcr::bvp {
 
 /// @brief A first-order ODE system dy/ds = f(s, y) of fixed dimension.
@@ -63,7 +61,7 @@ class Integrator {
 /// and never a step longer than `max_step`, so that long intervals (one disk per segment) are as
 /// accurate as short ones. Stage buffers are sized on the first call for a given dimension and
 /// reused, so integrate() allocates nothing once warm. No error control: choose the settings from
-/// a convergence study (SolverOptions::rk4_steps, SolverOptions::rk4_max_step).
+/// a convergence study (IntegratorOptions::rk4_steps, IntegratorOptions::rk4_max_step).
 class Rk4Integrator : public Integrator {
  public:
   /// @param steps Minimum steps per integrate() call (>= 1; throws InputError otherwise).
@@ -122,8 +120,32 @@ class CvodeIntegrator : public Integrator {
   std::unique_ptr<Impl> impl_;
 };
 
-/// @brief The integrator selected by options.integrator: Rk4Integrator(options.rk4_steps) or
-/// CvodeIntegrator(options.cvode_rtol, options.cvode_atol).
-std::unique_ptr<Integrator> make_integrator(const SolverOptions& options);
+/// @brief Which Integrator make_integrator() builds.
+enum class IntegratorMethod {
+  Rk4,   ///< Rk4Integrator: fixed steps, allocation free.
+  Cvode  ///< CvodeIntegrator: Adams, error controlled.
+};
+
+/// @brief Settings of make_integrator(): the method and the settings of each method (those of
+/// the other method are ignored). The defaults are tdcr's (the models layer fills them from its
+/// solver options).
+struct IntegratorOptions {
+  /// The integrator to build. Default IntegratorMethod::Rk4.
+  IntegratorMethod method = IntegratorMethod::Rk4;
+  /// RK4: minimum steps per integrate() call (count, >= 1). Default 8.
+  int rk4_steps = 8;
+  /// RK4: longest step (units of the independent variable, m in tdcr; > 0, infinity: exactly
+  /// rk4_steps steps). Default 1e-3.
+  double rk4_max_step = 1e-3;
+  /// CVODE: relative tolerance (dimensionless, > 0). Default 1e-8.
+  double cvode_rtol = 1e-8;
+  /// CVODE: absolute tolerance (units of the state, > 0). Default 1e-10.
+  double cvode_atol = 1e-10;
+};
+
+/// @brief The integrator selected by options.method: Rk4Integrator(options.rk4_steps,
+/// options.rk4_max_step) or CvodeIntegrator(options.cvode_rtol, options.cvode_atol). Throws
+/// InputError on settings of the selected method out of range.
+std::unique_ptr<Integrator> make_integrator(const IntegratorOptions& options);
 
 }  // namespace tdcr::bvp

@@ -10,52 +10,70 @@
 
 #include "tdcr/bvp/residual_system.hpp"
 #include "tdcr/core/solution.hpp"
-#include "tdcr/core/solver_options.hpp"
 
 namespace tdcr::bvp {
 
 class SparseLu;
 
-/// @brief Settings of one Newton solve (a subset of SolverOptions plus KINSOL details).
+/// @brief Linear solver inside KINSOL's Newton iteration (NewtonOptions::linear_solver).
+enum class LinearSolverKind {
+  /// Dense LU up to NewtonOptions::dense_size_limit unknowns; above it KLU if the system declares
+  /// a sparsity pattern (ResidualSystem::sparsity), dense LU otherwise.
+  Automatic,
+  Dense,     ///< SUNDIALS dense LU.
+  SparseKLU  ///< SUNDIALS KLU on a compressed-sparse-column Jacobian (a dense pattern if the
+             ///< system declares none).
+};
+
+/// @brief Settings of one Newton solve (NewtonSolver::solve). Plain numbers: the models layer
+/// fills the tolerances, iteration limit and linear solver from its own options; the rest are
+/// KINSOL details that the models adjust per problem. Residual norms are scaled max-norms,
+/// max_i |s_i F_i| with s = ResidualSystem::residual_scale, so tolerances are dimensionless.
 struct NewtonOptions {
-  /// Stop when max_i |s_i F_i| <= this, s = ResidualSystem::residual_scale (KINSOL fnormtol).
+  /// Residual tolerance (dimensionless, scaled max-norm; KINSOL fnormtol): the solve has
+  /// converged when max_i |s_i F_i| <= this. Default 1e-10.
   double function_tolerance = 1e-10;
-  /// KINSOL scsteptol: stop when the scaled Newton step is below this. Such a stop is reported
-  /// as converged only if the residual tolerance also holds.
+  /// Scaled step tolerance (dimensionless; KINSOL scsteptol): KINSOL stops when the scaled Newton
+  /// step is below this. Such a stop is reported as converged only if function_tolerance also
+  /// holds. Default 1e-14.
   double step_tolerance = 1e-14;
-  /// Maximum Newton iterations per solve.
+  /// Most Newton iterations per solve (count, >= 1). Default 200.
   int max_iterations = 200;
-  /// Maximum scaled length of a Newton step (KINSOL mxnewtstep); 0 = automatic:
-  /// 1000 * max(|D_u x0|_2, sqrt(n)). KINSOL's own default, 1000 |D_u x0|_2, is zero for a zero
-  /// initial guess and would stall the very first step.
+  /// Longest scaled Newton step (dimensionless, KINSOL mxnewtstep; >= 0). 0 (default):
+  /// automatic, 1000 * max(|D_u x0|_2, sqrt(n)) with D_u = ResidualSystem::unknown_scale.
+  /// KINSOL's own default, 1000 |D_u x0|_2, is zero for a zero initial guess and would stall the
+  /// very first step.
   double max_newton_step = 0.0;
-  /// Newton iterations between Jacobian evaluations; 1 = exact Newton (KINSOL's default of 10
-  /// trades robustness for Jacobian cost, a bad deal when Jacobians are cheap FD or analytic).
+  /// Newton iterations between Jacobian evaluations (count, >= 1). Default 1: exact Newton
+  /// (KINSOL's default of 10 trades robustness for Jacobian cost, a bad deal when Jacobians are
+  /// cheap finite differences or analytic).
   int max_setup_calls = 1;
   /// Start from the Jacobian of this solver's previous solve, if it had one of the same system
   /// (KINSOL's KINSetNoInitSetup): for a sequence of nearby solves such as a warm-started
   /// trajectory. KINSOL evaluates a fresh Jacobian after max_setup_calls iterations, when the
   /// residual stops decreasing fast enough with the old one, or when a line search fails with it.
+  /// Default false.
   bool reuse_jacobian = false;
-  /// Exact Newton until the scaled residual max-norm falls below this, then modified Newton
-  /// from the last Jacobian (reuse_jacobian, max_setup_calls 10) down to function_tolerance;
-  /// 0 = off (also off when reuse_jacobian is set). The iterates far from the solution, which
-  /// decide the branch it lands on, are exact Newton's; the last ones cost a residual each
-  /// instead of a Jacobian. Must be 0 or above function_tolerance.
+  /// Scaled residual (dimensionless) below which the Jacobian is frozen: exact Newton down to
+  /// this, then modified Newton from the last Jacobian (reuse_jacobian, max_setup_calls 10) down
+  /// to function_tolerance. The iterates far from the solution, which decide the branch it lands
+  /// on, are exact Newton's; the last ones cost a residual each instead of a Jacobian. 0
+  /// (default): off; also off when reuse_jacobian is set. Must be 0 or above
+  /// function_tolerance.
   double freeze_jacobian_below = 0.0;
-  /// Backtracking line search (KIN_LINESEARCH); false = full Newton steps (KIN_NONE).
+  /// Backtracking line search (KIN_LINESEARCH); false: full Newton steps (KIN_NONE). Default
+  /// true.
   bool line_search = true;
-  /// Linear solver inside Newton.
+  /// Linear solver inside Newton. Default LinearSolverKind::Automatic.
   LinearSolverKind linear_solver = LinearSolverKind::Automatic;
-  /// Automatic choice: dense LU up to this many unknowns, KLU above if the system declares a
-  /// sparsity pattern (KLU's overhead does not pay off on small systems).
+  /// LinearSolverKind::Automatic: dense LU up to this many unknowns (count, >= 0), KLU above if
+  /// the system declares a sparsity pattern (KLU's overhead does not pay off on small systems).
+  /// Default 200.
   int dense_size_limit = 200;
 
-  /// @brief The Newton-relevant fields of a model's SolverOptions (tolerances, iteration limit,
-  /// linear solver); the rest keeps its defaults.
-  static NewtonOptions from(const SolverOptions& options);
   /// @brief Throws InputError (field `newton.<name>`) on a non-positive tolerance, iteration
-  /// limit, setup interval or size limit, or a negative max_newton_step.
+  /// limit, setup interval or a negative size limit, a negative max_newton_step, or a
+  /// freeze_jacobian_below that is neither 0 nor above function_tolerance.
   void validate() const;
 };
 

@@ -44,13 +44,21 @@ Scene load_scene(const std::string& path);
 /// @brief Serialise a scene back to JSON (round-trips through parse_scene).
 std::string scene_to_json(const Scene& scene);
 
+/// @brief A member that a caller of solution_to_json adds to the object it writes, such as the
+/// CLI's `timing`: core writes what a Solution holds, the caller what it knows besides.
+struct JsonMember {
+  std::string key;   ///< Its key; not one of the contract's own keys (solution_to_json).
+  std::string json;  ///< Its value as JSON text, e.g. `{"repeat": 3}` (printed like the rest).
+};
+
 /// @brief Options for solution_to_json.
 struct SolutionJsonOptions {
-  bool include_disks = true;     ///< Include every disk frame.
-  bool include_backbone = false; ///< Include dense backbone samples.
-  int repeat = 1;                ///< Number of timed solves (for the "timing" object).
-  double median_us = 0.0;        ///< Median solve time (us).
-  double min_us = 0.0;           ///< Minimum solve time (us).
+  bool include_disks = true;     ///< Include every disk frame. Default true.
+  bool include_backbone = false; ///< Include dense backbone samples. Default false.
+  /// The caller's own members, written in this order after the solution's geometry and actuation
+  /// (`tensions` ... `backbone`) and before its diagnostics (`stability` ...). `tdcr solve` adds
+  /// `timing` here. Default: none.
+  std::vector<JsonMember> extra;
 };
 
 /// @brief The CLI's JSON contract, keys in this order:
@@ -62,12 +70,17 @@ struct SolutionJsonOptions {
 /// - `disks`: [{`position`, `rotation`}, ...] from the base disk to the tip (if include_disks);
 /// - `tendon_displacements`: [m per tendon], `tensions`: [N per tendon];
 /// - `backbone`: [{`s`, `position`, `rotation`, `n`, `m`}, ...] (only if include_backbone);
-/// - `timing`: {`repeat`, `median_us`, `min_us`};
+/// - the members of SolutionJsonOptions::extra, in their order (`tdcr solve` writes `timing`:
+///   {`repeat`, `median_us`, `min_us`} here);
+/// - `stability`, `path_events`, `geometry_warnings`, `tip_jacobian` and `tip_compliance` (when
+///   computed);
 /// - `summary`: every SolverSummary field (`termination`, `message`, `solver_flag`, `iterations`,
 ///   `residual_evaluations`, `jacobian_evaluations`, `residual_norm`, `physical_residual`,
 ///   `unknowns`, `continuation_steps`, `linear_solver`, `integrator`, `solve_time_s`);
 /// - `model_selection` (string): only if Solution::model_selection is not empty (model "auto").
-/// Non-finite numbers are written as null: the text is always valid JSON.
+/// Non-finite numbers are written as null: the text is always valid JSON. Throws
+/// std::invalid_argument if an extra member's key is one of the keys above or another extra
+/// member's, or its text is not JSON.
 std::string solution_to_json(const Solution& solution, const SolutionJsonOptions& options = {});
 
 /// @brief One table of the scene-file key reference.

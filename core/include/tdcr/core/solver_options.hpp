@@ -4,6 +4,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 namespace tdcr {
 
@@ -241,6 +242,14 @@ struct SolverOptions {
 
 /// @brief Name of an integrator as used in scene files ("rk4", "rk4_fixed", "cvode").
 std::string to_string(IntegratorKind k);
+/// @brief The integrator named `name`: one of integrator_names(), as to_string() writes them. The
+/// one parser of integrator names (scene files, the CLI's `--integrator`, Python).
+/// @param name The name, e.g. "cvode".
+/// @param field Where it was given, for the error: `solver.integrator`, `--integrator`, ...
+/// @throws InputError naming `field` and the quoted `name`, listing the accepted names.
+IntegratorKind parse_integrator_kind(const std::string& name, const std::string& field);
+/// @brief The integrator names parse_integrator_kind() accepts, in the order of IntegratorKind.
+const std::vector<std::string>& integrator_names();
 /// @brief Why a fixed-mesh setting (rk4_steps, rk4_max_step) is refused with `integrator`.
 std::string fixed_mesh_only(IntegratorKind integrator);
 /// @brief Name of a linear solver as used in scene files ("auto", "dense", "klu").
