@@ -61,9 +61,10 @@ struct CalibrationSample {
   std::optional<Vec3> tip;  ///< Measured tip position (m), base frame.
   /// Measured tip orientation as a rotation vector (rad, base frame: R = exp([rotation])).
   std::optional<Vec3> rotation;
-  /// Standard deviations of tip (m) and rotation (rad) per coordinate; NaN: the options' default.
+  /// Standard deviation of the tip position (m) per coordinate; NaN: the options' default.
   Vec3 tip_std = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
-  Vec3 rotation_std = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());  ///< @copydoc tip_std
+  /// Standard deviation of the rotation (rad) per coordinate; NaN: the options' default.
+  Vec3 rotation_std = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
   std::vector<MeasuredPoint> points;  ///< Measured backbone points.
 };
 
