@@ -160,6 +160,7 @@ void CalibrationOptions::validate() const {
   positive("gradient_tolerance", gradient_tolerance);
   positive("difference_step", difference_step);
   positive("rank_tolerance", rank_tolerance);
+  positive("max_relative_std", max_relative_std);
   if (difference_step >= 0.1) throw InputError("calibration.difference_step", format_value(difference_step), "must be below 0.1");
   if (rank_tolerance >= 1.0) throw InputError("calibration.rank_tolerance", format_value(rank_tolerance), "must be below 1");
   if (max_iterations < 1) throw InputError("calibration.max_iterations", std::to_string(max_iterations), "must be at least 1");

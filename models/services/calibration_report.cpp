@@ -1,5 +1,6 @@
 // The calibration report: covariance and standard errors, correlation, and the parameters the data
 // cannot identify, all from the SVD of the final Jacobian scaled by the parameters' scales.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -30,7 +31,9 @@ void fill_report(const Evaluator& evaluator, const Eigen::VectorXd& values, cons
   out.singular_values.head(S.size()) = S;
   const double smax = S.size() ? S[0] : 0.0;
   int rank = 0;
-  for (Eigen::Index i = 0; i < S.size(); ++i) rank += S[i] > options.rank_tolerance * smax && S[i] > 0.0;
+  // Numerically zero, or too weak for the measurements' standard deviations.
+  const double floor = std::max(options.rank_tolerance * smax, 1.0 / options.max_relative_std);
+  for (Eigen::Index i = 0; i < S.size(); ++i) rank += S[i] > floor && S[i] > 0.0;
 
   // Null directions: the columns of V past the rank (a Jacobian with fewer rows than parameters
   // has them too).
@@ -89,13 +92,15 @@ void fill_report(const Evaluator& evaluator, const Eigen::VectorXd& values, cons
       std::snprintf(buf, sizeof buf, "%s%+.3g %s", dir.empty() ? "" : " ", v[q], params[static_cast<std::size_t>(q)].name.c_str());
       dir += buf;
     }
-    char ratio[64];
-    std::snprintf(ratio, sizeof ratio, "%.2g", smax > 0.0 ? S[S.size() - 1] / smax : 0.0);
-    out.warning = "not identifiable from these data: " + names +
-                  " (the scaled Jacobian has rank " + std::to_string(rank) + " of " + std::to_string(np) +
-                  ", smallest singular value " + ratio + " of the largest; the fit does not change along" + dir +
-                  " (relative changes), so their values are not determined by the data: fix some of them or add "
-                  "measurements that separate them)";
+    char weakest[96];
+    const double sk = S.size() == np ? S[np - 1] : 0.0;
+    std::snprintf(weakest, sizeof weakest, "%.2g of the largest, relative standard error %.2g", smax > 0.0 ? sk / smax : 0.0,
+                  sk > 0.0 ? 1.0 / sk : kInf);
+    out.warning = "not identifiable from these data: " + names + " (the standardised Jacobian in relative parameter "
+                  "changes has " + std::to_string(np - rank) + " of " + std::to_string(np) +
+                  " directions without support: its smallest singular value is " + weakest + "; the fit barely "
+                  "changes along " + dir + ", so their values are not determined by the data: fix some of them or "
+                  "add measurements that separate them)";
   }
 }
 

@@ -171,6 +171,11 @@ struct CalibrationOptions {
   /// Singular values of the scaled Jacobian below this times the largest are zero: their
   /// directions are not identifiable from the data.
   double rank_tolerance = 1e-7;
+  /// A direction of the scaled parameters (relative changes) is not identifiable either if its
+  /// standard error from the data's standard deviations, 1 / singular value of the standardised
+  /// scaled Jacobian, exceeds this: with 1 (default), a 100 % change of that combination of
+  /// parameters moves the fit by less than one standard deviation of the measurements.
+  double max_relative_std = 1.0;
   CovarianceScaling covariance = CovarianceScaling::Automatic;  ///< How standard errors are scaled.
   /// Newton tolerance of the forward solves (scaled residual): tight, as the differences need it.
   double solve_function_tolerance = 1e-12;
