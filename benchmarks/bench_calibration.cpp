@@ -127,7 +127,7 @@ CalibrationData noisy_data(const std::vector<Measured>& train, std::mt19937& rng
 }
 
 int accuracy(const Args& a) {
-  const std::vector<int> ns = a.quick ? std::vector<int>{5} : std::vector<int>{5, 10, 20};
+  const std::vector<int> ns = a.quick ? std::vector<int>{5} : std::vector<int>{5, 10};
   const int n_train = a.quick ? 12 : 40;
   bench::Csv csv(a.out + "/calibration.csv",
                  "scenario,n,model,fit,n_train,n_test,e_p_before_pct,e_p_after_pct,max_before_mm,max_after_mm,"
@@ -191,7 +191,7 @@ int accuracy(const Args& a) {
 int speed(const Args& a) {
   const int n = 10, count = a.quick ? 20 : 100;
   bench::Csv csv(a.out + "/calibration_speed.csv",
-                 "n,model,measurements,fit,iterations,solves,time_s,e_rel_error,converged");
+                 "n,model,measurements,fit,warm_start,iterations,solves,time_s,cpu_s,e_rel_error,converged");
   int bad = 0;
   const Scene truth = paper::scene(n, 1, "vc");
   const double tm = paper::max_tension(truth.robot);
@@ -214,17 +214,23 @@ int speed(const Args& a) {
     start.robot.backbone.youngs_modulus *= 1.3;
     for (Segment& seg : start.robot.segments)
       for (TendonSpec& t : seg.tendons) t.y *= 0.7;
-    CalibrationOptions o;
-    o.model = kind;
-    o.parameters = parse_calibration_parameters("youngs_modulus,segment_offset_scale");
-    o.position_std = kNoise;
-    const CalibrationResult r = calibrate(start, data, o);
-    const double e_rel = r.parameters[0].value / truth.robot.backbone.youngs_modulus - 1.0;
-    csv.row(n, to_string(kind), data.samples.size(), "\"youngs_modulus,segment_offset_scale\"", r.summary.iterations,
-            r.summary.forward_solves, r.summary.time_s, e_rel, r.converged() ? 1 : 0);
-    std::printf("%-6s n = %d, %zu measurements: %s\n", to_string(kind).c_str(), n, data.samples.size(),
-                r.summary.brief_report().c_str());
-    bad += !r.converged();
+    for (bool warm : {true, false}) {
+      CalibrationOptions o;
+      o.model = kind;
+      o.parameters = parse_calibration_parameters("youngs_modulus,segment_offset_scale");
+      o.position_std = kNoise;
+      o.warm_start = warm;
+      CalibrationResult r;
+      const double cpu0 = bench::thread_cpu_us();
+      r = calibrate(start, data, o);
+      const double cpu_s = 1e-6 * (bench::thread_cpu_us() - cpu0);
+      const double e_rel = r.parameters[0].value / truth.robot.backbone.youngs_modulus - 1.0;
+      csv.row(n, to_string(kind), data.samples.size(), "\"youngs_modulus,segment_offset_scale\"", warm ? 1 : 0,
+              r.summary.iterations, r.summary.forward_solves, r.summary.time_s, cpu_s, e_rel, r.converged() ? 1 : 0);
+      std::printf("%-6s n = %d, %zu measurements, %s: %s, CPU %.3g s\n", to_string(kind).c_str(), n,
+                  data.samples.size(), warm ? "warm differences" : "cold differences", r.summary.brief_report().c_str(), cpu_s);
+      bad += !r.converged();
+    }
   }
   bench::progress("calibration speed", 1, 1);
   return bad;

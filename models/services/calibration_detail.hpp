@@ -42,6 +42,7 @@ Frame base_frame(const std::vector<Parameter>& params, const Eigen::VectorXd& va
 struct Prediction {
   bool solved = false;
   std::vector<Frame> frames;
+  Solution solution;  // the converged answer (a warm start at nearby parameters)
 };
 
 /// All measurements' solves, residuals and the structured-difference Jacobian.
@@ -60,8 +61,9 @@ class Evaluator {
   int forward_solves() const { return solves_; }
   int failed_solves() const { return failed_; }
 
-  /// Every measurement solved with the model parameters of `values` (parameter units).
-  std::vector<Prediction> predict(const Eigen::VectorXd& values);
+  /// Every measurement solved with the model parameters of `values` (parameter units), each
+  /// warm-started from its answer in `warm` (at other parameters) where there is one, else cold.
+  std::vector<Prediction> predict(const Eigen::VectorXd& values, const std::vector<Prediction>* warm = nullptr);
   /// The standardised residuals of the predictions with the base frame of `values` (a failed
   /// measurement's entries are 0 and `ok[i]` is false).
   Eigen::VectorXd residuals(const std::vector<Prediction>& p, const Eigen::VectorXd& values, std::vector<bool>* ok) const;
@@ -80,7 +82,6 @@ class Evaluator {
   std::vector<Parameter> params_;
   CalibrationOptions options_;
   SolverOptions solver_;
-  std::vector<int> order_;    // solve order (neighbours close)
   std::vector<int> offsets_;  // residual offsets, size samples + 1
   int solves_ = 0;
   int failed_ = 0;

@@ -1,7 +1,7 @@
-// The calibration's evaluator: every measurement solved by one model per parameter vector, each
-// solve warm-started from the previous measurement's answer of the same model (the measurements
-// in neighbour order); standardised residuals; the Jacobian by structured forward differences
-// (one model rebuild per model parameter), the base frame's by differences of the transform.
+// The calibration's evaluator: every measurement solved by one model per parameter vector;
+// standardised residuals; the Jacobian by structured forward differences (one model rebuild per
+// model parameter, every measurement warm-started from its answer at the unperturbed parameters,
+// tdcr::warm_start_from_other_robot), the base frame's by differences of the transform.
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -17,47 +17,6 @@ namespace tdcr::calibration_detail {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-// The input of a measurement as one vector (actuation values, tip force, tip moment, gravity).
-Eigen::VectorXd input_vector(const ModelInput& in) {
-  const Eigen::Index m = static_cast<Eigen::Index>(in.actuation.values.size());
-  Eigen::VectorXd v(m + 9);
-  for (Eigen::Index k = 0; k < m; ++k) v[k] = in.actuation.values[static_cast<std::size_t>(k)];
-  v.segment<3>(m) = in.loads.tip_force;
-  v.segment<3>(m + 3) = in.loads.tip_moment;
-  v.segment<3>(m + 6) = in.loads.gravity;
-  return v;
-}
-
-// Neighbour order: from the measurement nearest the unloaded robot, always on to the nearest one
-// not yet solved (inputs normalised per component by their range over the data).
-std::vector<int> neighbour_order(const CalibrationData& data) {
-  const int n = static_cast<int>(data.samples.size());
-  std::vector<Eigen::VectorXd> x;
-  for (const CalibrationSample& s : data.samples) x.push_back(input_vector(s.input));
-  Eigen::VectorXd range = Eigen::VectorXd::Zero(x[0].size());
-  for (const auto& v : x) range = range.cwiseMax(v.cwiseAbs());
-  for (Eigen::Index k = 0; k < range.size(); ++k) range[k] = range[k] > 0.0 ? 1.0 / range[k] : 0.0;
-  for (auto& v : x) v = v.cwiseProduct(range);
-  std::vector<int> order;
-  std::vector<bool> done(static_cast<std::size_t>(n), false);
-  int cur = 0;
-  for (int i = 1; i < n; ++i)
-    if (x[static_cast<std::size_t>(i)].norm() < x[static_cast<std::size_t>(cur)].norm()) cur = i;
-  for (int step = 0; step < n; ++step) {
-    order.push_back(cur);
-    done[static_cast<std::size_t>(cur)] = true;
-    int next = -1;
-    double best = std::numeric_limits<double>::infinity();
-    for (int i = 0; i < n; ++i) {
-      if (done[static_cast<std::size_t>(i)]) continue;
-      const double d = (x[static_cast<std::size_t>(i)] - x[static_cast<std::size_t>(cur)]).squaredNorm();
-      if (d < best) best = d, next = i;
-    }
-    cur = next;
-  }
-  return order;
-}
 
 // The frame at arc length s from the disk frames: a disk's own frame, or between two disks the
 // screw motion between them (exact on a constant-curvature-and-twist arc).
@@ -83,19 +42,38 @@ Evaluator::Evaluator(const Scene& scene, const CalibrationData& data, std::vecto
     : scene_(scene), data_(data), params_(std::move(params)), options_(options) {
   solver_ = scene.solver;
   solver_.function_tolerance = options.solve_function_tolerance;
-  // A mesh that does not move with the parameters: the differences see the model, not a remesh.
-  if (solver_.integrator == IntegratorKind::AccuracyDrivenRK4) solver_.integrator = IntegratorKind::FixedStepRK4;
   solver_.stability = StabilityCheck::Never;
   solver_.differential_kinematics = false;
-  order_ = options.warm_start ? neighbour_order(data) : std::vector<int>();
-  if (!options.warm_start)
-    for (int i = 0; i < samples(); ++i) order_.push_back(i);
+  // Exact Newton from a fresh Jacobian in every solve: an answer that depends on the workspace's
+  // last solve (within the tolerance) would put that history into the differences.
+  solver_.reuse_jacobian = false;
+  solver_.extrapolate_warm_starts = false;
+  // A mesh that does not move with the parameters (the differences see the model, not a remesh):
+  // the finest mesh the accuracy-driven integrator chooses for the measurements at the start.
+  if (solver_.integrator == IntegratorKind::AccuracyDrivenRK4 &&
+      (options.model == ModelKind::VC || options.model == ModelKind::VCref)) {
+    int halvings = 0;
+    const auto model = make_model(options.model, scene);
+    const auto ws = model->make_workspace();
+    SolverOptions probe = solver_;
+    probe.function_tolerance = scene.solver.function_tolerance;
+    for (const CalibrationSample& m : data.samples) {
+      const Solution s = solve(*model, *ws, m.input, probe);
+      ++solves_;
+      if (s.converged()) halvings = std::max(halvings, s.summary.rk4_halvings);
+    }
+    solver_.integrator = IntegratorKind::FixedStepRK4;
+    solver_.rk4_steps = SolverOptions::kFirstMeshRk4Steps << halvings;
+    solver_.rk4_max_step = SolverOptions::kFirstMeshRk4MaxStep / static_cast<double>(1 << halvings);
+  } else if (solver_.integrator == IntegratorKind::AccuracyDrivenRK4) {
+    solver_.integrator = IntegratorKind::FixedStepRK4;
+  }
   offsets_.push_back(0);
   for (const CalibrationSample& s : data.samples)
     offsets_.push_back(offsets_.back() + (s.tip ? 3 : 0) + (s.rotation ? 3 : 0) + 3 * static_cast<int>(s.points.size()));
 }
 
-std::vector<Prediction> Evaluator::predict(const Eigen::VectorXd& values) {
+std::vector<Prediction> Evaluator::predict(const Eigen::VectorXd& values, const std::vector<Prediction>* warm) {
   std::vector<Prediction> out(data_.samples.size());
   const Scene scene = apply_parameters(scene_, params_, values);
   std::unique_ptr<StaticModel> model;
@@ -107,27 +85,29 @@ std::vector<Prediction> Evaluator::predict(const Eigen::VectorXd& values) {
   }
   auto ws = model->make_workspace();
   const std::vector<double>& disk_s = model->routing().disk_s;
-  Solution previous;
-  bool warm = false;
-  for (int i : order_) {
-    const CalibrationSample& m = data_.samples[static_cast<std::size_t>(i)];
-    Solution s = solve(*model, *ws, m.input, solver_, warm && options_.warm_start ? &previous : nullptr);
-    ++solves_;
-    if (!s.converged() && warm) {
+  for (int i = 0; i < samples(); ++i) {
+    const auto u = static_cast<std::size_t>(i);
+    const CalibrationSample& m = data_.samples[u];
+    const bool from = options_.warm_start && warm && (*warm)[u].solved;
+    Solution s;
+    if (from) {
+      const Solution start = warm_start_from_other_robot(*model, (*warm)[u].solution);
+      s = solve(*model, *ws, m.input, solver_, &start);
+      ++solves_;
+    }
+    if (!from || !s.converged()) {
       s = solve(*model, *ws, m.input, solver_);
       ++solves_;
     }
-    Prediction& p = out[static_cast<std::size_t>(i)];
+    Prediction& p = out[u];
     p.solved = s.converged() && !s.disk_frames.empty();
     if (!p.solved) {
       ++failed_;
-      warm = false;
       continue;
     }
     p.frames.push_back(s.tip());
     for (const MeasuredPoint& q : m.points) p.frames.push_back(frame_at(s.disk_frames, disk_s, q.s));
-    previous = std::move(s);
-    warm = true;
+    p.solution = std::move(s);
   }
   return out;
 }
@@ -187,7 +167,7 @@ void Evaluator::jacobian_at(const Eigen::VectorXd& values, const std::vector<Pre
     Eigen::VectorXd shifted = values;
     shifted[q] += dir * h;
     std::vector<bool> ok1;
-    const Eigen::VectorXd r1 = residuals(predict(shifted), shifted, &ok1);
+    const Eigen::VectorXd r1 = residuals(predict(shifted, &p), shifted, &ok1);
     std::vector<bool> ok2;
     Eigen::VectorXd r2;
     bool other_way = false;
@@ -195,7 +175,7 @@ void Evaluator::jacobian_at(const Eigen::VectorXd& values, const std::vector<Pre
     if (other_way) {
       Eigen::VectorXd back = values;
       back[q] -= dir * h;
-      r2 = residuals(predict(back), back, &ok2);
+      r2 = residuals(predict(back, &p), back, &ok2);
     }
     for (int i = 0; i < samples(); ++i) {
       const auto u = static_cast<std::size_t>(i);

@@ -161,9 +161,9 @@ struct CalibrationOptions {
   double position_std = 1e-4;  ///< Standard deviation of a position where the data give none (m).
   double rotation_std = 1e-3;  ///< Standard deviation of a rotation where the data give none (rad).
   int max_iterations = 100;    ///< Levenberg-Marquardt iterations (Ceres).
-  double function_tolerance = 1e-14;   ///< Ceres: relative decrease of the cost below which it stops.
-  double parameter_tolerance = 1e-12;  ///< Ceres: relative step below which it stops.
-  double gradient_tolerance = 1e-16;   ///< Ceres: gradient max-norm below which it stops.
+  double function_tolerance = 1e-10;   ///< Ceres: relative decrease of the cost below which it stops.
+  double parameter_tolerance = 1e-8;   ///< Ceres: relative step (of the scaled parameters) below which it stops.
+  double gradient_tolerance = 1e-12;   ///< Ceres: gradient max-norm below which it stops.
   /// Forward-difference step relative to each parameter's scale (its starting magnitude, or a
   /// typical size for a start at 0: 1 % of the robot's length for base_offset, 0.01 rad for
   /// base_rotation, 0.1 for friction, 1 g for a disk mass).
