@@ -110,6 +110,42 @@ TEST_P(SameModelRecovery, RecoversYoungsModulusOffsetsAndBaseOffset) {
   EXPECT_EQ(r.scene.model, tdcr::to_string(GetParam()));
 }
 
+// The other parameter groups, from noise-free CCsub data with transverse gravity and capstan
+// friction: a segment length, a disk mass and the friction coefficient back from 30 % off.
+TEST(Calibration, RecoversLengthDiskMassAndFriction) {
+  Scene truth = paper_scene(5);
+  truth.robot.segments[1].disk_mass = 0.004;
+  truth.robot.segments[0].disk_mass = 0.004;
+  truth.effects.tendon_friction.coefficient = 0.1;
+  const tdcr::Frame identity;
+  CalibrationData data = make_data(truth, ModelKind::CCsub, 12, 0.05, identity);
+  // Gravity across the robot for every measurement (re-solved: make_data solved without it).
+  {
+    auto model = tdcr::make_model(ModelKind::CCsub, truth);
+    auto ws = model->make_workspace();
+    for (tdcr::CalibrationSample& m : data.samples) {
+      m.input.loads.gravity = Vec3(-9.81, 0.0, 0.0);
+      const tdcr::Solution s = tdcr::solve(*model, *ws, m.input, data_solver(truth));
+      ASSERT_TRUE(s.converged());
+      m.tip = s.tip().p;
+      m.rotation = tdcr::lie::log_so3(s.tip().R);
+    }
+  }
+  Scene start = truth;
+  start.robot.segments[1].length *= 1.3;
+  start.robot.segments[1].disk_mass *= 0.7;
+  start.effects.tendon_friction.coefficient = 0.07;
+  CalibrationOptions o;
+  o.model = ModelKind::CCsub;
+  o.parameters = tdcr::parse_calibration_parameters("segment_length[1],disk_mass[1],friction_coefficient");
+  const CalibrationResult r = tdcr::calibrate(start, data, o);
+  EXPECT_TRUE(r.converged()) << r.summary.brief_report();
+  EXPECT_NEAR(param(r, "segment_length[1]").value / 0.05, 1.0, 1e-6);
+  EXPECT_NEAR(param(r, "disk_mass[1]").value / 0.004, 1.0, 1e-6);
+  EXPECT_NEAR(param(r, "friction_coefficient").value / 0.1, 1.0, 1e-6);
+  EXPECT_TRUE(r.non_identifiable.empty()) << r.warning;
+}
+
 INSTANTIATE_TEST_SUITE_P(Models, SameModelRecovery, ::testing::Values(ModelKind::CCsub, ModelKind::PRB, ModelKind::VC),
                          [](const auto& info) { return tdcr::to_string(info.param); });
 

@@ -12,11 +12,11 @@
 ///
 /// The fit is a Ceres Solver problem with one residual block per measurement (its model solve,
 /// each standardised by its standard deviation) under a robust loss. All measurements are solved
-/// by one model per parameter vector, each solve warm-started from the previous measurement's
-/// answer of the same model (the measurements are ordered so that neighbours are close). The
-/// Jacobian is by structured forward differences: one model rebuild per parameter, all
-/// measurements solved warm again; a base-frame offset is applied to the answers and costs no
-/// solve.
+/// by one model per parameter vector. The Jacobian is by structured forward differences: one
+/// model rebuild per parameter, every measurement solved again warm-started from its answer at
+/// the unperturbed parameters (tdcr::warm_start_from_other_robot); a base-frame offset is
+/// applied to the answers and costs no solve. The residuals themselves are cold solves (the
+/// model's own loading path), so that the cost is one function of the parameters.
 ///
 /// @code
 /// tdcr::Scene scene = tdcr::load_scene("robot.json");
@@ -179,8 +179,8 @@ struct CalibrationOptions {
   CovarianceScaling covariance = CovarianceScaling::Automatic;  ///< How standard errors are scaled.
   /// Newton tolerance of the forward solves (scaled residual): tight, as the differences need it.
   double solve_function_tolerance = 1e-12;
-  /// Warm-start each measurement's solve from the previous measurement's answer of the same model
-  /// (false: every solve cold, for comparison).
+  /// Warm-start the differences' solves from the unperturbed answers (false: every solve cold,
+  /// for comparison; bench_calibration measures both).
   bool warm_start = true;
 
   /// @brief Throws InputError (field `calibration.<name>`) naming the value: no parameter, a
@@ -264,9 +264,11 @@ struct CalibrationResult {
 /// @brief Fit the parameters of options.model of `scene`'s robot to `data`.
 ///
 /// Starts from the scene's values (scales from 1, base offsets from 0). Forward solves use
-/// scene.solver with Newton's tolerance options.solve_function_tolerance, RK4 on a fixed mesh
-/// (the accuracy-driven mesh would change with the parameters and break the differences), no
-/// stability test and no differential kinematics. Throws InputError on invalid options, a
+/// scene.solver with Newton's tolerance options.solve_function_tolerance, exact Newton from a
+/// fresh Jacobian (SolverOptions::reuse_jacobian off: no workspace history in the answers), RK4
+/// on a fixed mesh (VC, VCref with the accuracy-driven integrator: the finest mesh it chooses for
+/// the measurements at the start; a mesh that changed with the parameters would break the
+/// differences), no stability test and no differential kinematics. Throws InputError on invalid options, a
 /// parameter the scene cannot take (a tendon stiffness that is not set, E with direct
 /// stiffnesses, an index out of range, bounds that exclude the start), or a model that fails at
 /// the starting parameters for some measurement (named by its line).
