@@ -146,6 +146,49 @@ TEST(Calibration, RecoversLengthDiskMassAndFriction) {
   EXPECT_TRUE(r.non_identifiable.empty()) << r.warning;
 }
 
+// Backbone points instead of the tip: E back from the positions of the disks at s = 0.03 m and
+// s = 0.05 m (disks 3 and 5 of segment 1, n = 5) of noise-free CCsub shapes, and a point between
+// two disks compared on the screw motion between them.
+TEST(Calibration, RecoversFromBackbonePoints) {
+  const Scene truth = paper_scene(5);
+  CalibrationData data = make_data(truth, ModelKind::CCsub, 8, 0.1, tdcr::Frame{});
+  auto model = tdcr::make_model(ModelKind::CCsub, truth);
+  auto ws = model->make_workspace();
+  for (tdcr::CalibrationSample& m : data.samples) {
+    const tdcr::Solution s = tdcr::solve(*model, *ws, m.input, data_solver(truth));
+    m.tip.reset();
+    m.rotation.reset();
+    for (int disk : {3, 5}) {
+      tdcr::MeasuredPoint p;
+      p.s = 0.01 * disk;
+      p.position = s.disk_frames[static_cast<std::size_t>(disk)].p;
+      m.points.push_back(p);
+    }
+  }
+  CalibrationOptions o;
+  o.model = ModelKind::CCsub;
+  o.parameters = tdcr::parse_calibration_parameters("youngs_modulus");
+  const CalibrationResult r = tdcr::calibrate(perturbed(truth, 1.3, 1.0), data, o);
+  EXPECT_TRUE(r.converged()) << r.summary.brief_report();
+  EXPECT_NEAR(r.parameters[0].value / truth.robot.backbone.youngs_modulus, 1.0, 1e-6);
+  EXPECT_LT(r.summary.after.max_position, 1e-9);
+  EXPECT_GT(r.residuals_before[0].point_error, 1e-4);
+  // A point half-way between disks 3 and 4 is on the arc between them: off the chord's midpoint
+  // by the arc's sagitta (c / 2) tan(theta / 4), chord c, bending angle theta.
+  data.samples.resize(1);
+  const tdcr::Solution s = tdcr::solve(*model, *ws, data.samples[0].input, data_solver(truth));
+  tdcr::MeasuredPoint mid;
+  mid.s = 0.035;
+  mid.position = 0.5 * (s.disk_frames[3].p + s.disk_frames[4].p);
+  data.samples[0].points = {mid};
+  const CalibrationResult m = tdcr::calibrate(truth, data, o);
+  const double c = (s.disk_frames[4].p - s.disk_frames[3].p).norm();
+  const double theta = tdcr::lie::rotation_angle(s.disk_frames[3].R, s.disk_frames[4].R);
+  const double sagitta = 0.5 * c * std::tan(0.25 * theta);
+  EXPECT_GT(sagitta, 1e-5);
+  EXPECT_NEAR(m.residuals_before[0].point_error, sagitta, 0.02 * sagitta);
+}
+
 INSTANTIATE_TEST_SUITE_P(Models, SameModelRecovery, ::testing::Values(ModelKind::CCsub, ModelKind::PRB, ModelKind::VC),
                          [](const auto& info) { return tdcr::to_string(info.param); });
 
