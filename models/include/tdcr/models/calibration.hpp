@@ -26,7 +26,7 @@
 /// options.parameters = tdcr::parse_calibration_parameters("youngs_modulus,segment_offset_scale");
 /// tdcr::CalibrationResult r = tdcr::calibrate(scene, data, options);
 /// std::cout << r.summary.brief_report() << "\n";
-/// tdcr::save(tdcr::scene_to_json(r.scene));  // the calibrated scene
+/// std::ofstream("calibrated.json") << tdcr::scene_to_json(r.scene);  // the calibrated scene
 /// @endcode
 #pragma once
 
@@ -215,8 +215,10 @@ struct SampleResidual {
 
 /// @brief Errors of a fit over all measurements (positions in m, rotations in rad).
 struct ResidualStatistics {
-  double rms_position = 0.0;  ///< RMS over tip and point position errors (m).
-  double max_position = 0.0;  ///< Largest position error (m).
+  /// Root mean square over the measurements of each one's position error (m): the root of its
+  /// tip error squared plus its largest point error squared.
+  double rms_position = 0.0;
+  double max_position = 0.0;  ///< Largest tip or point error (m).
   double rms_rotation = 0.0;  ///< RMS of the rotation errors (rad), 0 without rotations.
   double max_rotation = 0.0;  ///< Largest rotation error (rad).
   double rms_standardised = 0.0;  ///< RMS of the standardised residual components.
@@ -235,7 +237,8 @@ struct CalibrationSummary {
   ResidualStatistics before; ///< At the start.
   ResidualStatistics after;  ///< At the fitted parameters.
   double time_s = 0.0;       ///< Wall time (s).
-  /// @brief One line: "converged: 9 iterations, 3640 solves, tip RMS 1.2e-03 -> 9.6e-05 m, 0.41 s".
+  /// @brief One line: "converged: 5 iterations, 3200 solves, position RMS 0.00652 -> 0.00018 m
+  /// (max 0.0151 -> 0.000367 m), 0.367 s".
   std::string brief_report() const;
 };
 
