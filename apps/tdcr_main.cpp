@@ -21,6 +21,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "calibrate_command.hpp"
 #include "inverse_command.hpp"
 #include "plot_command.hpp"
 #include "tdcr/core/error.hpp"
@@ -53,7 +54,7 @@ std::string usage() {
   return "usage: tdcr solve SCENE.json [--model NAME] [--accuracy FRACTION] [--json] [--repeat N]\n"
          "                             [--integrator rk4|rk4_fixed|cvode] [--tip-tolerance M] [--continuation]\n"
          "                             [--jacobian]\n"
-         + tdcr::cli::inverse_usage() +
+         + tdcr::cli::inverse_usage() + tdcr::cli::calibrate_usage() +
          "       tdcr sweep SWEEP.json -o OUT.csv [--threads N] [--shard i/N]   (tdcr sweep --help)\n"
          "       tdcr sweep-merge OUT.csv SHARD.csv...\n"
          "       tdcr plot SCENE.json [--model NAME[,NAME...]] -o FILE.png|svg   (tdcr plot --help)\n"
@@ -83,6 +84,13 @@ std::string usage() {
          "  frame), starting from the scene's tensions; prints the report line and the tensions,\n"
          "  or with --json the solution and an \"inverse\" object (status, target, tensions,\n"
          "  errors, iterations); exit status 1 if the target was not reached (closest pose printed)\n"
+         "\n"
+         "tdcr calibrate: fit the model's parameters (--fit youngs_modulus,shear_modulus,\n"
+         "  segment_offset_scale,tendon_offset_scale,segment_length,disk_mass,tendon_stiffness,\n"
+         "  friction_coefficient,base_offset,base_rotation; NAME[i] one of a group, NAME:LO:HI bounds)\n"
+         "  to measured shapes (DATA.csv in the sweep CSV's columns); prints the fitted values,\n"
+         "  standard errors, correlations and residuals, writes the calibrated scene with -o;\n"
+         "  exit status 1 if the fit did not converge\n"
          "\n"
          "models:\n" + models +
          "  auto    the cheapest model expected to meet --accuracy\n"
@@ -307,6 +315,14 @@ int run(const std::vector<std::string>& args) {
       return 0;
     }
     return tdcr::cli::run_inverse(rest);
+  }
+  if (cmd == "calibrate") {
+    const std::vector<std::string> rest(args.begin() + 1, args.end());
+    if (std::find(rest.begin(), rest.end(), "--help") != rest.end()) {
+      std::printf("%s", usage().c_str());
+      return 0;
+    }
+    return tdcr::cli::run_calibrate(rest);
   }
   if (cmd == "sweep") return tdcr::sweep_command({args.begin() + 1, args.end()});
   if (cmd == "sweep-merge") return tdcr::sweep_merge_command({args.begin() + 1, args.end()});

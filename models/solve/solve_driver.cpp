@@ -819,4 +819,14 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
   return sol;
 }
 
+Solution warm_start_from_other_robot(const StaticModel& model, const Solution& previous) {
+  if (previous.model != model.name())
+    throw InputError("warm_start", "a Solution of model \"" + previous.model + "\"",
+                     "a warm start must come from the same model (" + model.name() + ")");
+  if (!previous.converged()) throw InputError("warm_start", "a Solution that did not converge", "a warm start must be converged");
+  Solution s = previous;
+  s.model_fingerprint = model.fingerprint();
+  return s;
+}
+
 }  // namespace tdcr

@@ -20,6 +20,8 @@ void bind_scene(pybind11::module_& m);
 void bind_solve(pybind11::module_& m);
 /// InverseTarget, InverseOptions, InverseResult and inverse_solve (after bind_solve: uses Solution).
 void bind_inverse(pybind11::module_& m);
+/// Calibration data, options and result, read_calibration_data, _calibrate (after bind_solve).
+void bind_calibration(pybind11::module_& m);
 /// json.loads(text): a Python object from JSON text.
 pybind11::object json_loads(const std::string& text);
 

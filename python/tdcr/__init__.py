@@ -15,6 +15,9 @@ Units are SI (m, N, N m); arrays are numpy. Bad input raises tdcr.InputError (a 
 
 from ._tdcr import (  # noqa: F401
     Actuation,
+    CalibrationData,
+    CalibrationResult,
+    FittedParameter,
     Backbone,
     BackboneStiffness,
     Effects,
@@ -46,17 +49,20 @@ from ._tdcr import (  # noqa: F401
     load_scene,
     make_model,
     model_names,
+    parse_calibration_data,
     parse_scene,
+    read_calibration_data,
     scene_to_json,
     solution_to_json,
     solve_with,
     validate_scene,
 )
 from ._tdcr import solve_scene as _solve_scene
+from ._tdcr import _calibrate
 
 import os as _os
 
-__all__ = [name for name in dir() if not name.startswith("_")] + ["solve", "scene_from"]
+__all__ = [name for name in dir() if not name.startswith("_")] + ["solve", "scene_from", "calibrate"]
 
 
 def _input_error(field, value, reason):
@@ -94,3 +100,31 @@ def solve(scene, model=None, warm_start=None, accuracy=0.01):
     if model is not None:
         s.model = model.lower() if model.lower() == "auto" else model
     return _solve_scene(s, accuracy, warm_start)
+
+
+def calibrate(scene, data, model=None, fit="youngs_modulus", loss="huber", loss_scale=3.0, position_std=1e-4,
+              rotation_std=1e-3, max_iterations=100, warm_start=True):
+    """Fit a model's parameters to measured shapes, as `tdcr calibrate SCENE DATA --model M --fit ...`
+    (docs/calibration.md).
+
+    scene: a Scene, a dict or a path. data: the path of a data file (CSV in the sweep CSV's columns)
+    or a CalibrationData. model: a model name (None keeps scene.model). fit: parameter names
+    separated by commas (or a list), each optionally with bounds as name:LOWER:UPPER, e.g.
+    "youngs_modulus,segment_offset_scale,base_offset". loss: "huber", "cauchy" or "none", with
+    loss_scale in standard deviations. position_std (m) and rotation_std (rad): standard
+    deviations where the data give none. Returns a CalibrationResult (fitted values with standard
+    errors, correlation, residuals before and after, the calibrated scene); bad input (a bad row,
+    an unknown parameter, a negative bound) raises InputError naming the line and column or the
+    entry.
+    """
+    s = scene_from(scene)
+    if model is not None:
+        s.model = model
+    if not isinstance(fit, str):
+        fit = ",".join(fit)
+    if not isinstance(data, CalibrationData):
+        if not isinstance(data, (str, bytes, _os.PathLike)):
+            raise _input_error("data", repr(data)[:80], "must be the path of a data file or a CalibrationData")
+        data = read_calibration_data(_os.fsdecode(data), s)
+    return _calibrate(s, data, s.model, fit, loss, float(loss_scale), float(position_std), float(rotation_std),
+                      int(max_iterations), bool(warm_start))

@@ -203,6 +203,13 @@ class StaticModel {
 Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelInput& input,
                const SolverOptions& options = SolverOptions(), const Solution* warm_start = nullptr);
 
+/// @brief `previous`, a converged Solution of a model of the same kind as `model` but possibly of
+/// another robot or other effects (a parameter study, a calibration: the robot changes slightly
+/// between solves), stamped as a warm start of `model`: tdcr::solve(model, ..., &result) starts
+/// from its unknowns (a model whose unknowns do not fit them starts cold). Throws InputError
+/// (field `warm_start`) if `previous` is of another model kind or did not converge.
+Solution warm_start_from_other_robot(const StaticModel& model, const Solution& previous);
+
 /// @brief Build the model `kind` of a robot with the given effects (InputError on bad input).
 std::unique_ptr<StaticModel> make_model(ModelKind kind, const Robot& robot, const Effects& effects = Effects());
 /// @brief Build the model `kind` of a scene's robot and effects (the scene's input is not used).

@@ -1,0 +1,93 @@
+// Private pieces of the calibration service (calibration.hpp): the resolved parameters and how
+// they change a scene (calibration_parameters.cpp), and the evaluator of all measurements' model
+// solves, residuals and structured-difference Jacobian (calibration_evaluator.cpp).
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "tdcr/models/calibration.hpp"
+
+namespace tdcr::calibration_detail {
+
+/// One scalar parameter of the fit.
+struct Parameter {
+  std::string name;  // e.g. "segment_offset_scale[1]"
+  std::string unit;
+  CalibrationParameterKind kind = CalibrationParameterKind::YoungsModulus;
+  int index = 0;        // segment, tendon or component
+  double initial = 0.0; // start (parameter units)
+  double lower = 0.0, upper = 0.0;  // bounds (parameter units; +-inf if none)
+  double scale = 1.0;   // typical size: the fit works on value / scale
+};
+
+/// True for the base-frame parameters (applied to the answers, no model rebuild).
+bool is_base_parameter(CalibrationParameterKind kind);
+
+/// The scalar parameters of `specs` for `scene`, with their starting values, bounds and scales.
+/// Throws InputError (field `--fit`) on a parameter the scene cannot take.
+std::vector<Parameter> resolve_parameters(const Scene& scene, const std::vector<CalibrationParameterSpec>& specs);
+
+/// `scene` with the model parameters set to `values` (parameter units, one per parameter; the
+/// base-frame ones are ignored here).
+Scene apply_parameters(const Scene& scene, const std::vector<Parameter>& params, const Eigen::VectorXd& values);
+
+/// The base frame of `values` (identity unless base parameters are fitted).
+Frame base_frame(const std::vector<Parameter>& params, const Eigen::VectorXd& values);
+
+/// The model's frames a measurement needs: the tip, then each measured point's frame.
+struct Prediction {
+  bool solved = false;
+  std::vector<Frame> frames;
+  Solution solution;  // the converged answer (a warm start at nearby parameters)
+};
+
+/// All measurements' solves, residuals and the structured-difference Jacobian.
+class Evaluator {
+ public:
+  Evaluator(const Scene& scene, const CalibrationData& data, std::vector<Parameter> params,
+            const CalibrationOptions& options);
+
+  int samples() const { return static_cast<int>(data_.samples.size()); }
+  int parameters() const { return static_cast<int>(params_.size()); }
+  const std::vector<Parameter>& parameter_list() const { return params_; }
+  /// Offset of measurement i's residuals in the stacked vector, and their count.
+  int offset(int i) const { return offsets_[static_cast<std::size_t>(i)]; }
+  int size(int i) const { return offsets_[static_cast<std::size_t>(i) + 1] - offsets_[static_cast<std::size_t>(i)]; }
+  int residual_count() const { return offsets_.back(); }
+  int forward_solves() const { return solves_; }
+  int failed_solves() const { return failed_; }
+
+  /// Every measurement solved with the model parameters of `values` (parameter units), each
+  /// warm-started from its answer in `warm` (at other parameters) where there is one, else cold.
+  std::vector<Prediction> predict(const Eigen::VectorXd& values, const std::vector<Prediction>* warm = nullptr);
+  /// The standardised residuals of the predictions with the base frame of `values` (a failed
+  /// measurement's entries are 0 and `ok[i]` is false).
+  Eigen::VectorXd residuals(const std::vector<Prediction>& p, const Eigen::VectorXd& values, std::vector<bool>* ok) const;
+  /// Given the predictions `p` and residuals `r` at `values`, the residuals' derivative with respect to the scaled
+  /// parameters (values / scale), by forward differences: one model rebuild per model parameter
+  /// (all measurements solved warm), base-frame parameters by central differences of the
+  /// transform. `ok[i]` false where measurement i could not be solved (also in a difference).
+  void jacobian_at(const Eigen::VectorXd& values, const std::vector<Prediction>& p, const Eigen::VectorXd& r,
+                   std::vector<bool>& ok, Eigen::MatrixXd* jacobian);
+  /// Per-measurement errors of predictions with the base frame of `values`.
+  std::vector<SampleResidual> sample_residuals(const std::vector<Prediction>& p, const Eigen::VectorXd& values) const;
+
+ private:
+  Scene scene_;
+  const CalibrationData& data_;
+  std::vector<Parameter> params_;
+  CalibrationOptions options_;
+  SolverOptions solver_;
+  std::vector<int> offsets_;  // residual offsets, size samples + 1
+  int solves_ = 0;
+  int failed_ = 0;
+};
+
+/// The statistics of per-measurement residuals.
+ResidualStatistics statistics(const std::vector<SampleResidual>& r, const Eigen::VectorXd& standardised);
+
+}  // namespace tdcr::calibration_detail
