@@ -27,6 +27,7 @@ cp "$out/machine.txt" "$out/helical_machine.txt"  # the stamp of bench_helical's
 "$build/bin/bench_loaded" $quick --out "$out"
 "$build/bin/bench_soft" $quick --out "$out" | tee "$out/bench_soft.txt"
 "$build/bin/bench_soft" $quick --out "$out" --rk4-tip-tol 1e-8 | tee "$out/bench_soft_tol.txt"
+"$build/bin/bench_calibration" $quick --out "$out" | tee "$out/bench_calibration.txt"
 "$py" benchmarks/plot_results.py "$out" "$out"
 if [ "$out" = docs/benchmark-results ]; then
   "$py" benchmarks/make_report.py "$out" benchmarks/report_template.md docs/benchmarks.md --readme README.md
