@@ -334,6 +334,8 @@ INSTANTIATE_TEST_SUITE_P(
         BadData{"no_measurement", "actuation.tensions[0]\n1\n", "no measurement column"},
         BadData{"negative_std", "tip_x,tip_y,tip_z,tip_x_std,tip_y_std,tip_z_std\n0,0,0.1,-1,1,1\n", "d.csv line 2, column tip_x_std: a standard deviation must be positive"},
         BadData{"point_beyond_tip", "point_x@0.2,point_y@0.2,point_z@0.2\n", "arc length"},
+        BadData{"two_models", "model,tip_x,tip_y,tip_z\nvc,0,0,0.1\nvcref,0,0,0.1\n",
+                "d.csv line 3, column model: the data mix models (line 2 is vc)"},
         BadData{"empty", "# only a comment\n", "no header line"},
         BadData{"no_rows", "tip_x,tip_y,tip_z\n", "no data rows"}),
     [](const auto& info) { return std::string(info.param.name); });

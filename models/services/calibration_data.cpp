@@ -258,6 +258,11 @@ CalibrationData parse_calibration_data(const std::string& csv_text, const Scene&
   std::string line;
   int number = 0;
   bool have_header = false;
+  // A sweep of several models writes one row per model and sample: measurements of one robot are
+  // the rows of one model, so a second model in the `model` column is an error, not more data.
+  std::size_t model_column = std::string::npos;
+  std::string first_model;
+  int first_model_line = 0;
   while (std::getline(in, line)) {
     ++number;
     if (!line.empty() && line.back() == '\r') line.pop_back();
@@ -268,11 +273,23 @@ CalibrationData parse_calibration_data(const std::string& csv_text, const Scene&
     if (!have_header) {
       p.header(fields, number);
       have_header = true;
+      for (std::size_t i = 0; i < p.columns.size(); ++i)
+        if (p.columns[i].name == "model") model_column = i;
       continue;
     }
     if (fields.size() != p.columns.size())
       throw InputError(source + " line " + std::to_string(number), std::to_string(fields.size()) + " fields",
                        "expected " + std::to_string(p.columns.size()) + " fields, one per header column");
+    if (model_column != std::string::npos) {
+      const std::string m = trim(fields[model_column]);
+      if (first_model_line == 0) {
+        first_model = m, first_model_line = number;
+      } else if (m != first_model) {
+        throw InputError(p.where(number, "model"), m,
+                         "the data mix models (line " + std::to_string(first_model_line) + " is " + first_model +
+                             "): keep the rows of one model (a sweep of several models writes a row for each)");
+      }
+    }
     CalibrationSample s = p.row(fields, number);
     try {
       s.input.validate(scene.robot);
