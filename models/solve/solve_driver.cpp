@@ -9,6 +9,7 @@
 
 #include "solve/differential_kinematics.hpp"
 #include "solve/rk4_refinement.hpp"
+#include "solve/secant_predictor.hpp"
 #include "solve/displacement_input.hpp"
 #include "solve/load_continuation.hpp"
 #include "tdcr/models/model_problem.hpp"
@@ -201,48 +202,6 @@ double solve_on_loading_path(const StaticModel& model, const ModelInput& input, 
   return detail::follow_loading_path(P, model.routing(), sys, x, nopt, options, sum, sol.path_events, cold.first_step, why).parameter;
 }
 
-// --- The secant predictor of warm starts (SolverOptions::extrapolate_warm_starts). ---
-
-// An input as one vector: actuation values, tip force, tip moment, gravity.
-void input_vector(const std::vector<double>& values, const Loads& loads, Eigen::VectorXd& u) {
-  const auto m = static_cast<Eigen::Index>(values.size());
-  u.resize(m + 9);
-  for (Eigen::Index i = 0; i < m; ++i) u[i] = values[static_cast<std::size_t>(i)];
-  u.segment<3>(m) = loads.tip_force;
-  u.segment<3>(m + 3) = loads.tip_moment;
-  u.segment<3>(m + 6) = loads.gravity;
-}
-
-// The last solve went from the input h.from (its warm start's) to h.input, its Newton from the
-// model's warm guess h.guess to the answer h.unknowns. If this solve starts from that answer
-// (`from` = h.input) and its input u moves on along the same line, u - h.input = alpha (h.input
-// - h.from) + e with 0 < alpha <= 2 and |e| <= 0.1 |u - h.input|, the correction Newton made
-// last time, scaled by alpha, is added to this solve's warm guess x: x + alpha (h.unknowns -
-// h.guess). Where the warm guess is the previous answer itself (CCsub, PRB) that is the secant
-// x1 + alpha (x1 - x0); VC's warm guess re-balances the base wrench for the new input, VCref's
-// re-centres the disk rotations on the previous frames, and the last correction predicts what
-// those guesses miss. x is the model's warm guess; true if it was changed (else left as is).
-bool extrapolate(const detail::SolveHistory& h, const Eigen::VectorXd& from, const Eigen::VectorXd& u,
-                 Eigen::VectorXd& x) {
-  if (!h.valid || x.size() == 0 || h.from.size() != u.size() || h.input.size() != u.size() ||
-      from.size() != u.size() || x.size() != h.unknowns.size() || x.size() != h.guess.size() || from != h.input)
-    return false;
-  double d11 = 0.0, d12 = 0.0, d22 = 0.0;
-  for (Eigen::Index i = 0; i < u.size(); ++i) {
-    const double a = h.input[i] - h.from[i], b = u[i] - h.input[i];
-    d11 += a * a;
-    d12 += a * b;
-    d22 += b * b;
-  }
-  if (!(d11 > 0.0 && d22 > 0.0)) return false;
-  const double alpha = d12 / d11;
-  const double off_line = d22 - d12 * d12 / d11;  // |e|^2
-  if (!(alpha > 0.0 && alpha <= 2.0 && off_line <= 0.01 * d22)) return false;
-  if (!(alpha * (h.unknowns - h.guess)).allFinite()) return false;
-  x += alpha * (h.unknowns - h.guess);
-  return true;
-}
-
 // Solution::tip_jacobian and tip_compliance of a converged answer at unknowns x.
 void add_differential_kinematics(const StaticModel& model, const detail::Rebind& rebind, const ModelInput& input,
                                  double tolerance, const Eigen::VectorXd& x, Solution& sol) {
@@ -401,11 +360,11 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
       Eigen::VectorXd u, from, unpredicted;
       bool predicted = false;
       if (warm) {
-        input_vector(input.actuation.values, input.loads, u);
-        input_vector(warm_start->tensions, warm_start->loads, from);
+        detail::input_vector(input.actuation.values, input.loads, u);
+        detail::input_vector(warm_start->tensions, warm_start->loads, from);
         if (options.reuse_jacobian) P.adjust_warm(nopt, from == u);
         unpredicted = x;
-        if (options.extrapolate_warm_starts && !displacement) predicted = extrapolate(history, from, u, x);
+        if (options.extrapolate_warm_starts && !displacement) predicted = detail::extrapolate(history, from, u, x);
       }
       if (sys->size() == 0) {
         x.resize(0);
