@@ -223,6 +223,7 @@ TEST(ModelExtension, WarmStartFromItsOwnAnswerNeedsNoIteration) {
 }
 
 TEST(ModelExtension, CapabilitiesDecideItsInputChecks) {
+  arc_statics();
   Scene scene = two_segment_scene("arc_statics");
   scene.loads.tip_force = Vec3(0.0, 0.0, -0.1);
   try {
