@@ -1,5 +1,5 @@
 // Accuracy-driven RK4 (the default integrator "rk4" and SolverOptions::tip_tolerance,
-// models/solve/solve_driver.cpp): VC and VCref refine the RK4 mesh until the Richardson estimate
+// models/solve/rk4_refinement.cpp): VC and VCref refine the RK4 mesh until the Richardson estimate
 // of the tip error is within the tolerance. Checked against CVODE at rtol 1e-12: the answer's tip is within the tolerance, the
 // estimate is a true estimate of the error (RK4's h^4 law), the refined solve reuses the coarse
 // solve's Jacobian, an unreachable tolerance is a failure that says so, bad values are rejected.

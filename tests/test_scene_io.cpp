@@ -192,7 +192,7 @@ TEST(SceneIo, SolverOptionsAtTheirBoundsAreValid) {
   };
   for (const json& solver : valid) EXPECT_NO_THROW(tdcr::parse_scene(with("/solver", solver))) << solver.dump();
 
-  S finest;  // as the refinement makes it (solve_driver.cpp, solve_refined)
+  S finest;  // as the refinement makes it (rk4_refinement.cpp, solve_refined)
   finest.integrator = tdcr::IntegratorKind::FixedStepRK4;
   finest.rk4_steps = S::kFirstMeshRk4Steps << S::kMaxRk4Halvings;
   finest.rk4_max_step = S::kFirstMeshRk4MaxStep / (1 << S::kMaxRk4Halvings);

@@ -174,6 +174,8 @@ class DisplacementProblem final : public ModelProblem, public bvp::Parameterized
   // the start's pull to delta.
   double target(int i) const { return base_[i] + lambda_ * (delta_[i] - base_[i]); }
   double tolerance_ = 1e-10;         // SolverOptions::function_tolerance: the complementarity's slack
+  // The homotopy compliance a cold solve starts with (bind), which complete() takes to zero.
+  static constexpr double kStartCompliance = 1e-2;
   double compliance_ = 0.0;          // the homotopy compliance c of the taut rows (driven_rows)
   Eigen::VectorXd T_, applied_;      // tensions to apply, last applied
   bool applied_valid_ = false;

@@ -1,4 +1,5 @@
-// Private to models/: copy a bvp::NewtonResult into a Solution's summary (one place for it).
+// Private to models/: a solve's summary kept in one place each: a bvp::NewtonResult copied into
+// it, and the work of another solve added to it.
 #pragma once
 
 #include "tdcr/bvp/newton_solver.hpp"
@@ -16,6 +17,14 @@ inline void copy_newton_result(const bvp::NewtonResult& r, SolverSummary& s) {
   s.residual_norm = r.residual_norm;
   s.physical_residual = r.physical_residual;
   s.linear_solver = r.linear_solver;
+}
+
+// The work counts of `from` (another solve on the way to the same answer) added to `to`.
+inline void add_work(const SolverSummary& from, SolverSummary& to) {
+  to.iterations += from.iterations;
+  to.residual_evaluations += from.residual_evaluations;
+  to.jacobian_evaluations += from.jacobian_evaluations;
+  to.continuation_steps += from.continuation_steps;
 }
 
 }  // namespace tdcr::detail

@@ -6,14 +6,16 @@
 #include <cstdio>
 #include <cmath>
 #include <limits>
-#include <optional>
 
 #include "solve/bvp_options.hpp"
 #include "solve/differential_kinematics.hpp"
+#include "solve/rk4_refinement.hpp"
+#include "solve/secant_predictor.hpp"
 #include "solve/displacement_input.hpp"
 #include "solve/load_continuation.hpp"
 #include "tdcr/models/model_problem.hpp"
 #include "solve/newton_summary.hpp"
+#include "solve/stability_rule.hpp"
 #include "physics/geometry_check.hpp"
 #include "physics/load_case.hpp"
 #include "tdcr/core/error.hpp"
@@ -31,37 +33,6 @@ void check_warm_start(const StaticModel& model, const Solution& warm) {
   if (warm.model_fingerprint != model.fingerprint())
     throw InputError("warm_start", "a Solution of another robot or other effects",
                      "a warm start must come from the same model of the same robot (StaticModel::fingerprint)");
-}
-
-// --- Which answers get their stability tested (SolverOptions::stability). ---
-
-// External loads: a tip force or moment, or gravity.
-bool externally_loaded(const Loads& loads) {
-  return !loads.tip_force.isZero(0.0) || !loads.tip_moment.isZero(0.0) || !loads.gravity.isZero(0.0);
-}
-
-// Whether an answer reached by a loading path or not (`by_path`) is tested: the automatic rule
-// tests the answers of loading paths (from rest, snaps, a warm start's input path) and, where
-// the model's test is cheap (`loads_count`: ModelProblem::automatic_stability_under_loads, for a
-// cold solve), of loaded scenes; not plain unloaded direct solves nor warm steps.
-bool wants_stability(StabilityCheck check, const ModelInput& input, bool by_path, bool loads_count) {
-  switch (check) {
-    case StabilityCheck::Always: return true;
-    case StabilityCheck::Never: return false;
-    default: return by_path || (loads_count && externally_loaded(input.loads));
-  }
-}
-
-// Whether a Solution's answer was reached along a path: continuation steps (the loading path
-// from rest, a warm start's input path) or path events (folds, snaps).
-bool reached_by_path(const Solution& sol) {
-  return sol.summary.continuation_steps > 0 || !sol.path_events.empty();
-}
-
-// The rule resolved for a solve whose answer another solve's path reached (`by_path`): Always or
-// Never, so that the solve from that answer (a direct warm solve) keeps the verdict's rule.
-StabilityCheck resolved_stability(StabilityCheck check, const ModelInput& input, bool by_path, bool loads_count) {
-  return wants_stability(check, input, by_path, loads_count) ? StabilityCheck::Always : StabilityCheck::Never;
 }
 
 // Direct Newton solve from x, with one retry from the problem's alternative cold guess. A cold
@@ -232,345 +203,12 @@ double solve_on_loading_path(const StaticModel& model, const ModelInput& input, 
   return detail::follow_loading_path(P, model.routing(), sys, x, nopt, options, sum, sol.path_events, cold.first_step, why).parameter;
 }
 
-// --- The secant predictor of warm starts (SolverOptions::extrapolate_warm_starts). ---
-
-// An input as one vector: actuation values, tip force, tip moment, gravity.
-void input_vector(const std::vector<double>& values, const Loads& loads, Eigen::VectorXd& u) {
-  const auto m = static_cast<Eigen::Index>(values.size());
-  u.resize(m + 9);
-  for (Eigen::Index i = 0; i < m; ++i) u[i] = values[static_cast<std::size_t>(i)];
-  u.segment<3>(m) = loads.tip_force;
-  u.segment<3>(m + 3) = loads.tip_moment;
-  u.segment<3>(m + 6) = loads.gravity;
-}
-
-// The last solve went from the input h.from (its warm start's) to h.input, its Newton from the
-// model's warm guess h.guess to the answer h.unknowns. If this solve starts from that answer
-// (`from` = h.input) and its input u moves on along the same line, u - h.input = alpha (h.input
-// - h.from) + e with 0 < alpha <= 2 and |e| <= 0.1 |u - h.input|, the correction Newton made
-// last time, scaled by alpha, is added to this solve's warm guess x: x + alpha (h.unknowns -
-// h.guess). Where the warm guess is the previous answer itself (CCsub, PRB) that is the secant
-// x1 + alpha (x1 - x0); VC's warm guess re-balances the base wrench for the new input, VCref's
-// re-centres the disk rotations on the previous frames, and the last correction predicts what
-// those guesses miss. x is the model's warm guess; true if it was changed (else left as is).
-bool extrapolate(const detail::SolveHistory& h, const Eigen::VectorXd& from, const Eigen::VectorXd& u,
-                 Eigen::VectorXd& x) {
-  if (!h.valid || x.size() == 0 || h.from.size() != u.size() || h.input.size() != u.size() ||
-      from.size() != u.size() || x.size() != h.unknowns.size() || x.size() != h.guess.size() || from != h.input)
-    return false;
-  double d11 = 0.0, d12 = 0.0, d22 = 0.0;
-  for (Eigen::Index i = 0; i < u.size(); ++i) {
-    const double a = h.input[i] - h.from[i], b = u[i] - h.input[i];
-    d11 += a * a;
-    d12 += a * b;
-    d22 += b * b;
-  }
-  if (!(d11 > 0.0 && d22 > 0.0)) return false;
-  const double alpha = d12 / d11;
-  const double off_line = d22 - d12 * d12 / d11;  // |e|^2
-  if (!(alpha > 0.0 && alpha <= 2.0 && off_line <= 0.01 * d22)) return false;
-  if (!(alpha * (h.unknowns - h.guess)).allFinite()) return false;
-  x += alpha * (h.unknowns - h.guess);
-  return true;
-}
-
 // Solution::tip_jacobian and tip_compliance of a converged answer at unknowns x.
 void add_differential_kinematics(const StaticModel& model, const detail::Rebind& rebind, const ModelInput& input,
                                  double tolerance, const Eigen::VectorXd& x, Solution& sol) {
   physics::LoadCase load;
   load.bind(model.robot(), model.routing(), input);
   detail::differential_kinematics(rebind, input, load.force_scale(), load.moment_scale(), tolerance, x, sol);
-}
-
-// --- Accuracy-driven RK4 (IntegratorKind::AccuracyDrivenRK4, SolverOptions::tip_tolerance). ---
-
-// RK4 steps of one integration over `length` (bvp::Rk4Integrator's rule).
-int rk4_steps_over(double length, int steps, double max_step) {
-  if (!std::isfinite(max_step)) return steps;
-  return std::max(steps, static_cast<int>(std::ceil(length / max_step - 1e-9)));
-}
-
-// The smallest ratio of steps per disk interval between the mesh (f steps, max_step / f) and
-// (steps, max_step), f = 2^halvings: ceil() makes it less than f on some intervals (1.5 for
-// f = 2 at worst), and the Richardson factor must use the worst one.
-double refinement_ratio(const Robot& robot, int steps, double max_step, int factor) {
-  double r = factor;
-  for (const Segment& seg : robot.segments) {
-    const double len = seg.length / seg.disks;
-    r = std::min(r, static_cast<double>(rk4_steps_over(len, factor * steps, max_step / factor)) /
-                        rk4_steps_over(len, steps, max_step));
-  }
-  return r;
-}
-
-// The largest ratio of steps per disk interval between the meshes of `fine` and `coarse`
-// halvings of the first mesh (coarse <= fine): RK4's tip error on the coarse mesh is at most its
-// fourth power times the fine mesh's, interval by interval.
-double coarsening_ratio(const Robot& robot, int coarse, int fine) {
-  double r = 1.0;
-  for (const Segment& seg : robot.segments) {
-    const double len = seg.length / seg.disks;
-    const int sc = rk4_steps_over(len, SolverOptions::kFirstMeshRk4Steps << coarse,
-                                  SolverOptions::kFirstMeshRk4MaxStep / (1 << coarse));
-    const int sf = rk4_steps_over(len, SolverOptions::kFirstMeshRk4Steps << fine,
-                                  SolverOptions::kFirstMeshRk4MaxStep / (1 << fine));
-    r = std::max(r, static_cast<double>(sf) / sc);
-  }
-  return r;
-}
-
-void add_work(const SolverSummary& from, SolverSummary& to) {
-  to.iterations += from.iterations;
-  to.residual_evaluations += from.residual_evaluations;
-  to.jacobian_evaluations += from.jacobian_evaluations;
-  to.continuation_steps += from.continuation_steps;
-}
-
-// Cold solves that follow their loading path from rest follow it on the mesh of the fixed mesh's
-// coarse loading path (2 steps per disk interval, h <= 4 mm: one halving of the first mesh), and
-// if that fails on the fixed mesh's default (8 steps, h <= 1 mm: three halvings), as the fixed
-// mesh's cold rule does: on the first mesh, 1 step and 8 mm, curvature near a tendon's limit is
-// judged too coarsely (VC called a feasible loaded scene infeasible at 99 % of its load).
-constexpr int kPathHalvings = 1;
-constexpr int kFinePathHalvings = 3;
-static_assert((SolverOptions::kFirstMeshRk4Steps << kPathHalvings) == SolverOptions::kCoarsePathRk4Steps);
-
-// Solve on the first mesh, then on finer meshes, each warm-started from the last, until the
-// Richardson estimate of the tip error is within the tolerance. RK4's error goes like h^4, so
-// the finer answer's error is about |tip_fine - tip_coarse| / (r^4 - 1) for a step ratio r. The
-// first refinement halves the steps; later ones jump by as many halvings as the last estimate
-// says are needed (its error / 16 per halving), so that a tight tolerance does not solve every
-// mesh on the way. A warm-started solve solves on the mesh its warm start's estimate predicts
-// (below), and falls back to this refinement from one halving below the warm start's mesh.
-// Its answer's stability is not tested here: `test` says whether the rule asks for it (decided by
-// the first solve's path: the refined answers are direct warm solves), `last` gives the options
-// of the solve that returned it.
-// Runs a solve and leaves the workspace's warm-start history as it was before it.
-using KeepHistory = std::function<Solution(const std::function<Solution()>&)>;
-
-// `path`: a cold tension solve whose cold rule follows the loading path from rest.
-Solution solve_refined(const StaticModel& model, ModelWorkspace& workspace, const ModelInput& input,
-                       const SolverOptions& options, const Solution* warm_start, bool path,
-                       const KeepHistory& keep_history, SolverOptions& last_options, bool& test) {
-  const auto t0 = std::chrono::steady_clock::now();
-  const double tol = options.tip_tolerance;
-  SolverOptions o = options;
-  o.integrator = IntegratorKind::FixedStepRK4;
-  o.stability = StabilityCheck::Never;
-  test = false;
-  const auto set_mesh = [&](SolverOptions& opt, int h) {
-    opt.rk4_steps = SolverOptions::kFirstMeshRk4Steps << h;
-    opt.rk4_max_step = SolverOptions::kFirstMeshRk4MaxStep / (1 << h);
-  };
-  SolverSummary spent;  // work of solves whose answers are not the refinement's
-  // The refinement's last converged answer and the number of halvings of its mesh.
-  std::optional<Solution> last;
-  int halvings = 0, next = 1;
-  // A warm start with a measured or predicted estimate (a trajectory's last step): solve on the
-  // coarsest mesh its estimate predicts within a share of the tolerance (RK4's error scales with
-  // the fourth power of the step), from the warm start (its Jacobian and the secant predictor fit
-  // a neighbouring mesh as well). The prediction is the answer's estimate while it is fresh
-  // enough (SolverOptions::kMaxEstimateAge solves, a tip move below kMaxPredictedTipMove of the
-  // length per solve); otherwise the estimate is measured: one Newton step from the answer on the
-  // neighbouring mesh (the coarser one; from the first mesh the finer one), Newton's tolerance
-  // ten times looser there and the workspace's warm-start history left as the solve on the
-  // answer's mesh made it. Above the tolerance, the refinement goes on from the answer.
-  const SolverSummary* from = warm_start ? &warm_start->summary : nullptr;
-  if (from && from->integrator == "rk4" && std::isfinite(from->tip_error_estimate) &&
-      !warm_start->disk_frames.empty()) {
-    const int hw = std::clamp(from->rk4_halvings, 0, SolverOptions::kMaxRk4Halvings);
-    const double share = SolverOptions::kPredictedToleranceShare * tol;
-    const auto predicted = [&](int h) {
-      return from->tip_error_estimate * std::pow(coarsening_ratio(model.robot(), h, hw), 4);
-    };
-    int h = hw;
-    while (h > 0 && predicted(h - 1) <= share) --h;
-    set_mesh(o, h);
-    Solution answer = tdcr::solve(model, workspace, input, o, warm_start);
-    test = answer.converged() && wants_stability(options.stability, input, reached_by_path(answer), false);
-    last_options = o;
-    if (answer.converged() && answer.summary.integrator == "rk4" && !answer.disk_frames.empty()) {
-      SolverSummary& sum = answer.summary;
-      sum.rk4_halvings = h;
-      const auto finish = [&]() {
-        sum.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-        return answer;
-      };
-      const int age = from->tip_error_estimate_age + 1;
-      const double moved = (answer.tip().p - warm_start->tip().p).norm();
-      if (predicted(h) <= share && age <= SolverOptions::kMaxEstimateAge &&
-          moved <= SolverOptions::kMaxPredictedTipMove * model.robot().total_length()) {
-        sum.tip_error_estimate = predicted(h);
-        sum.tip_error_estimate_age = age;
-        return finish();
-      }
-      const bool finer = h == 0;
-      SolverOptions oc = o;
-      set_mesh(oc, finer ? 1 : h - 1);
-      oc.function_tolerance = std::min(10.0 * o.function_tolerance, SolverOptions::kMaxFunctionTolerance);
-      oc.stability = StabilityCheck::Never;
-      oc.differential_kinematics = false;
-      // One Newton step from the answer: the meshes' answers differ by the discretisation
-      // error, so the step lands on the other mesh's answer up to the square of it.
-      oc.max_iterations = 1;
-      oc.continuation = false;
-      const double r = finer ? refinement_ratio(model.robot(), o.rk4_steps, o.rk4_max_step, 2)
-                             : refinement_ratio(model.robot(), oc.rk4_steps, oc.rk4_max_step, 2);
-      const Solution c = keep_history([&]() { return tdcr::solve(model, workspace, input, oc, &answer); });
-      const bool stepped = c.converged() || (c.summary.termination == TerminationType::MaxIterations &&
-                                             !c.disk_frames.empty() && c.tip().p.allFinite());
-      if (stepped) {
-        add_work(c.summary, sum);
-        // Richardson: the finer answer's error is d / (r^4 - 1), the coarser one's r^4 times that.
-        const double r4 = std::pow(r, 4);
-        const double d = (answer.tip().p - c.tip().p).norm();
-        sum.tip_error_estimate = finer ? d * r4 / (r4 - 1.0) : d / (r4 - 1.0);
-        sum.tip_error_estimate_age = 0;
-        sum.rk4_refinements = 1;
-        if (sum.tip_error_estimate <= tol) return finish();
-        if (h >= SolverOptions::kMaxRk4Halvings) {
-          sum.termination = TerminationType::NoConvergence;
-          sum.message = "accuracy-driven RK4: tip error estimate " + format_value(sum.tip_error_estimate) +
-                        " m above solver.tip_tolerance " + format_value(tol) + " m on the finest mesh allowed";
-          return finish();
-        }
-        halvings = h;
-        next = static_cast<int>(std::ceil(std::log(sum.tip_error_estimate / tol) / std::log(16.0)));
-        next = std::clamp(next, 1, SolverOptions::kMaxRk4Halvings - halvings);
-        last = std::move(answer);
-      } else {
-        add_work(answer.summary, spent);
-        add_work(c.summary, spent);
-      }
-    } else {
-      add_work(answer.summary, spent);
-    }
-    // Otherwise the refinement from one halving below the warm start's mesh, as from a cold start.
-  }
-  if (!last) {
-    // The first solve's mesh, as halvings of the first mesh's steps.
-    halvings = path ? kPathHalvings : 0;
-    if (warm_start && warm_start->summary.rk4_halvings > 0)
-      halvings = std::min(warm_start->summary.rk4_halvings - 1, SolverOptions::kMaxRk4Halvings - 1);
-    set_mesh(o, halvings);
-    Solution first_answer = tdcr::solve(model, workspace, input, o, warm_start);
-    last_options = o;
-    add_work(spent, first_answer.summary);
-    if (path && !first_answer.converged()) {
-      // As the fixed mesh's cold rule does: the whole path again on the fine mesh.
-      const SolverSummary first = first_answer.summary;
-      halvings = kFinePathHalvings;
-      set_mesh(o, halvings);
-      o.coarse_loading_path = false;
-      first_answer = tdcr::solve(model, workspace, input, o, nullptr);
-      o.coarse_loading_path = options.coarse_loading_path;
-      add_work(first, first_answer.summary);
-      first_answer.summary.message += " (followed on a finer mesh, " + std::to_string(o.rk4_steps) +
-                                      " steps per disk interval at least, h <= " + format_value(o.rk4_max_step) +
-                                      " m, because on the coarse one: " + first.message + ")";
-    }
-    // (VC and VCref only: their tests count under loads alone.)
-    test = first_answer.converged() &&
-           wants_stability(options.stability, input, reached_by_path(first_answer), false);
-    if (!first_answer.converged() || first_answer.summary.integrator != "rk4" || first_answer.disk_frames.empty())
-      return first_answer;
-    last = std::move(first_answer);
-  }
-  Solution coarse = std::move(*last);
-  SolverSummary work = coarse.summary;
-  const std::vector<PathEvent> events = coarse.path_events;
-  int solves = coarse.summary.rk4_refinements;
-  for (;;) {
-    const int factor = 1 << next;
-    const double r = refinement_ratio(model.robot(), o.rk4_steps, o.rk4_max_step, factor);
-    o.rk4_steps *= factor;
-    o.rk4_max_step /= factor;
-    halvings += next;
-    ++solves;
-    Solution fine = tdcr::solve(model, workspace, input, o, &coarse);
-    last_options = o;
-    add_work(fine.summary, work);
-    SolverSummary& sum = fine.summary;
-    sum.iterations = work.iterations;
-    sum.residual_evaluations = work.residual_evaluations;
-    sum.jacobian_evaluations = work.jacobian_evaluations;
-    sum.continuation_steps = work.continuation_steps;
-    sum.rk4_refinements = solves;
-    sum.rk4_halvings = halvings;
-    if (fine.path_events.empty()) fine.path_events = events;
-    const auto finish = [&]() {
-      sum.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      return fine;
-    };
-    const std::string mesh = std::to_string(o.rk4_steps) + " steps per interval at least, h <= " +
-                             format_value(o.rk4_max_step) + " m";
-    if (!fine.converged()) {
-      sum.message = "accuracy-driven RK4: the solve on the refined mesh (" + mesh + ") failed: " + sum.message;
-      return finish();
-    }
-    sum.tip_error_estimate = (fine.tip().p - coarse.tip().p).norm() / (std::pow(r, 4) - 1.0);
-    if (sum.tip_error_estimate <= tol) return finish();
-    if (halvings >= SolverOptions::kMaxRk4Halvings) {
-      sum.termination = TerminationType::NoConvergence;
-      sum.message = "accuracy-driven RK4: tip error estimate " + format_value(sum.tip_error_estimate) +
-                    " m above solver.tip_tolerance " + format_value(tol) + " m on the finest mesh allowed (" +
-                    mesh + ", " + std::to_string(1 << halvings) + " times the first)";
-      return finish();
-    }
-    next = static_cast<int>(std::ceil(std::log(sum.tip_error_estimate / tol) / std::log(16.0)));
-    next = std::clamp(next, 1, SolverOptions::kMaxRk4Halvings - halvings);
-    coarse = std::move(fine);
-  }
-}
-
-// --- Coarse loading paths (SolverOptions::coarse_loading_path). ---
-
-// Whether a cold solve of VC or VCref on RK4 should follow its loading path on the coarse mesh:
-// the path is the model's cold rule here (reason non-empty) and the requested mesh is finer.
-bool wants_coarse_path(const StaticModel& model, const SolverOptions& options, const Solution* warm_start,
-                       const std::string& reason) {
-  return options.coarse_loading_path && !warm_start && options.continuation && !reason.empty() &&
-         options.integrator == IntegratorKind::FixedStepRK4 &&
-         model.capabilities().rk4_mesh &&
-         (options.rk4_steps > SolverOptions::kCoarsePathRk4Steps ||
-          options.rk4_max_step < SolverOptions::kCoarsePathRk4MaxStep);
-}
-
-// The loading path on the coarse mesh, then Newton on the requested mesh from its answer (a warm
-// start at the same input: a direct solve). If either fails the result is not converged, with
-// the reason in `failure`; the caller then follows the path on the requested mesh. Work counts
-// are those of both solves, path events the coarse path's.
-Solution solve_with_coarse_path(const StaticModel& model, ModelWorkspace& workspace, const ModelInput& input,
-                                const SolverOptions& options, std::string& failure) {
-  // The coarse mesh, never finer than the requested one in either of its two settings.
-  SolverOptions coarse_options = options;
-  coarse_options.rk4_steps = std::min(options.rk4_steps, SolverOptions::kCoarsePathRk4Steps);
-  coarse_options.rk4_max_step = std::max(options.rk4_max_step, SolverOptions::kCoarsePathRk4MaxStep);
-  coarse_options.coarse_loading_path = false;
-  coarse_options.stability = StabilityCheck::Never;
-  coarse_options.differential_kinematics = false;
-  const Solution coarse = tdcr::solve(model, workspace, input, coarse_options, nullptr);
-  if (!coarse.converged()) {
-    failure = "the loading path on the coarse mesh failed: " + coarse.summary.message;
-    return coarse;
-  }
-  SolverOptions fine_options = options;
-  fine_options.coarse_loading_path = false;
-  // The answer is the coarse path's: the warm solve from it tests it by the path's rule.
-  // (VC and VCref only: their tests count under loads alone.)
-  fine_options.stability = resolved_stability(options.stability, input, reached_by_path(coarse), true);
-  Solution fine = tdcr::solve(model, workspace, input, fine_options, &coarse);
-  if (!fine.converged()) {
-    failure = "the solve on the requested mesh from the coarse path's answer failed: " + fine.summary.message;
-    add_work(coarse.summary, fine.summary);
-    return fine;
-  }
-  add_work(coarse.summary, fine.summary);
-  fine.path_events = coarse.path_events;
-  fine.summary.message = "loading path on a coarse RK4 mesh (" + std::to_string(coarse_options.rk4_steps) +
-                         " per disk interval at least, h <= " + format_value(coarse_options.rk4_max_step) +
-                         " m): " + coarse.summary.message + "; then on the requested mesh: " + fine.summary.message;
-  return fine;
 }
 
 }  // namespace
@@ -598,7 +236,7 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
     const bool displacement = detail::needs_displacement_solve(model, input);
     // Cold solves only: a trajectory's warm step from a tested answer is not tested again (VCref's
     // test would add 92 % to a loaded trajectory's step); it is when its input path snaps.
-    const bool ask = options.stability == StabilityCheck::Automatic && externally_loaded(input.loads) &&
+    const bool ask = options.stability == StabilityCheck::Automatic && detail::externally_loaded(input.loads) &&
                      !displacement && model.capabilities().stability_under_loads && !warm_start;
     if ((!warm_start && options.continuation && !displacement) || ask) {
       SolverOptions first = options;
@@ -610,7 +248,7 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
       if (!warm_start && options.continuation && !displacement)
         path = P.system() && !path_reason(model, input, P.cold_start()).empty();
     }
-    const KeepHistory keep_history = [&workspace](const std::function<Solution()>& run) {
+    const detail::KeepHistory keep_history = [&workspace](const std::function<Solution()>& run) {
       detail::SolveHistory saved = workspace.history_;
       Solution s = run();
       workspace.history_ = std::move(saved);
@@ -618,7 +256,7 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
     };
     SolverOptions last;
     bool test = false;
-    Solution sol = solve_refined(model, workspace, input, options, warm_start, path, keep_history, last, test);
+    Solution sol = detail::solve_refined(model, workspace, input, options, warm_start, path, keep_history, last, test);
     // solve_refined decides by the path alone. A direct answer under loads the model tests
     // (VCref): the problem bound with the options of the solve that returned it (its mesh, not
     // the estimate's) and tested at the answer's unknowns as a warm start gives them (VCref: its
@@ -674,8 +312,8 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
     std::string coarse_failure;  // why a coarse loading path was not the answer ("" if none was tried)
     SolverSummary coarse_work;   // the work it took (counted in this solve's summary)
     if (bound->system() &&
-        wants_coarse_path(model, options, warm_start, path_reason(model, input, bound->cold_start()))) {
-      Solution answer = solve_with_coarse_path(model, workspace, input, options, coarse_failure);
+        detail::wants_coarse_path(model, options, warm_start, path_reason(model, input, bound->cold_start()))) {
+      Solution answer = detail::solve_with_coarse_path(model, workspace, input, options, coarse_failure);
       workspace.history_.valid = false;  // a cold solve leaves no warm-start history
       if (answer.converged()) {
         answer.summary.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -723,11 +361,11 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
       Eigen::VectorXd u, from, unpredicted;
       bool predicted = false;
       if (warm) {
-        input_vector(input.actuation.values, input.loads, u);
-        input_vector(warm_start->tensions, warm_start->loads, from);
+        detail::input_vector(input.actuation.values, input.loads, u);
+        detail::input_vector(warm_start->tensions, warm_start->loads, from);
         if (options.reuse_jacobian) P.adjust_warm(nopt, from == u);
         unpredicted = x;
-        if (options.extrapolate_warm_starts && !displacement) predicted = extrapolate(history, from, u, x);
+        if (options.extrapolate_warm_starts && !displacement) predicted = detail::extrapolate(history, from, u, x);
       }
       if (sys->size() == 0) {
         x.resize(0);
@@ -772,9 +410,9 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
       }
       // The answer reached along a path: this solve's (continuation steps, path events) or, for
       // displacement input, its tension start's.
-      const bool by_path = reached_by_path(sol) || (from_tensions && reached_by_path(*from_tensions));
+      const bool by_path = detail::reached_by_path(sol) || (from_tensions && detail::reached_by_path(*from_tensions));
       if (sum.converged() &&
-          wants_stability(options.stability, input, by_path, P.automatic_stability_under_loads() && !warm_start))
+          detail::wants_stability(options.stability, input, by_path, P.automatic_stability_under_loads() && !warm_start))
         // A direct answer tested for its loads alone: the model's cheaper test where it has one.
         sol.stability = options.stability == StabilityCheck::Automatic && !by_path ? P.direct_stability(x, 1.0)
                                                                                     : P.stability(x, 1.0);
@@ -793,7 +431,7 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
     physics::check_geometry(model.robot(), model.routing(), sol, P.max_curvature());
     if (!coarse_failure.empty()) {
       sum.message += " (followed on the requested mesh because " + coarse_failure + ")";
-      add_work(coarse_work, sum);
+      detail::add_work(coarse_work, sum);
     }
     return sol;
   };
@@ -801,15 +439,15 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
   Solution sol = solve_from(tension_start);
   if (tension_start && !sol.converged()) {  // from rest instead
     start_failure = "from the tension solve at the linear guess's tensions: " + sol.summary.message;
-    add_work(sol.summary, start_work);
+    detail::add_work(sol.summary, start_work);
     sol = solve_from(nullptr);
   }
   SolverSummary& sum = sol.summary;
   if (!start_failure.empty()) {
     sum.message += " (from rest because " + start_failure + ")";
-    add_work(start_work, sum);
+    detail::add_work(start_work, sum);
   } else if (displacement && start_work.termination != TerminationType::NotSolved) {
-    add_work(start_work, sum);
+    detail::add_work(start_work, sum);
     sum.message = "from the tension solve at the linear guess's tensions (" + start_work.brief_report() +
                   "): " + sum.message;
   }
