@@ -2,6 +2,8 @@
 // non-negative tensions that put the tip at a target (tdcr::inverse_solve).
 #include "inverse_command.hpp"
 
+#include "cli_option.hpp"
+
 #include <cctype>
 #include <cmath>
 #include <cstdio>
@@ -57,16 +59,9 @@ InverseArgs parse_args(const std::vector<std::string>& args) {
   InverseArgs out;
   bool have_scene = false;
   for (std::size_t i = 0; i < args.size(); ++i) {
-    std::string name = args[i];
-    std::optional<std::string> inline_value;
-    if (name.rfind("--", 0) == 0 && name.find('=') != std::string::npos) {
-      inline_value = name.substr(name.find('=') + 1);
-      name = name.substr(0, name.find('='));
-    }
-    auto value = [&]() -> std::string {
-      if (inline_value) return *inline_value;
-      if (i + 1 >= args.size()) throw InputError(name, "", "missing argument");
-      return args[++i];
+    const auto [name, inline_value] = tdcr_cli::split_option(args[i]);
+    auto value = [&, name = name, inline_value = inline_value] {
+      return tdcr_cli::option_value(args, i, name, inline_value);
     };
     if (name == "--target") {
       out.target = parse_target(value());

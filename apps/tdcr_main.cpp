@@ -22,6 +22,7 @@
 #include <nlohmann/json.hpp>
 
 #include "calibrate_command.hpp"
+#include "cli_option.hpp"
 #include "inverse_command.hpp"
 #include "plot_command.hpp"
 #include "tdcr/core/error.hpp"
@@ -143,18 +144,11 @@ int parse_repeat(const std::string& text) {
   return static_cast<int>(n);
 }
 
-/// Splits "--name=value" into name and value; a plain "--name" has no inline value.
-std::pair<std::string, std::optional<std::string>> split_option(const std::string& arg) {
-  const auto eq = arg.find('=');
-  if (arg.rfind("--", 0) != 0 || eq == std::string::npos) return {arg, std::nullopt};
-  return {arg.substr(0, eq), arg.substr(eq + 1)};
-}
-
 SolveArgs parse_solve_args(const std::vector<std::string>& args) {
   SolveArgs out;
   bool have_scene = false;
   for (std::size_t i = 0; i < args.size(); ++i) {
-    const auto [name, inline_value] = split_option(args[i]);
+    const auto [name, inline_value] = tdcr_cli::split_option(args[i]);
     auto value = [&, name = name, inline_value = inline_value]() -> std::string {
       if (inline_value) return *inline_value;
       if (i + 1 >= args.size()) throw UsageError(name + ": missing argument");

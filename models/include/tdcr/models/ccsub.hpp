@@ -49,17 +49,6 @@ class CcsubModel final : public LumpedModel {
   CcsubModel(const Robot& robot, const Effects& effects,
              LumpedFormulation formulation = LumpedFormulation::Automatic);
   ModelKind kind() const override { return ModelKind::CCsub; }
-  /// @brief What CCsub takes (statics of both inputs, tendon forces at the disks, friction);
-  /// its registry row reads the same.
-  static constexpr ModelCapabilities kCapabilities = [] {
-    ModelCapabilities c;
-    c.displacement_input = true;
-    c.tendon_forces_at_disks = true;
-    c.displacement_statics = true;
-    c.tendon_friction = true;
-    return c;
-  }();
-  ModelCapabilities capabilities() const override { return kCapabilities; }
 };
 
 }  // namespace tdcr

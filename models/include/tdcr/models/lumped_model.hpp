@@ -44,6 +44,18 @@ enum class LumpedFormulation { Automatic, Recursive, Banded };
 class LumpedModel : public StaticModel {
  public:
   ~LumpedModel() override;
+  /// @brief What CCsub and PRB take (statics of both inputs, tendon forces at the disks,
+  /// friction): one set for both, read by their registry rows as CcsubModel::kCapabilities and
+  /// PrbModel::kCapabilities.
+  static constexpr ModelCapabilities kCapabilities = [] {
+    ModelCapabilities c;
+    c.displacement_input = true;
+    c.tendon_forces_at_disks = true;
+    c.displacement_statics = true;
+    c.tendon_friction = true;
+    return c;
+  }();
+  ModelCapabilities capabilities() const override { return kCapabilities; }
   std::unique_ptr<ModelWorkspace> make_workspace() const override;
   /// @brief Unknowns per subsegment (3 for CCsub, 5 for PRB).
   int unknowns_per_subsegment() const;

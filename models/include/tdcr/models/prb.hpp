@@ -61,17 +61,6 @@ class PrbModel final : public LumpedModel {
   PrbModel(const Robot& robot, const Effects& effects,
              LumpedFormulation formulation = LumpedFormulation::Automatic);
   ModelKind kind() const override { return ModelKind::PRB; }
-  /// @brief What PRB takes (statics of both inputs, tendon forces at the disks, friction);
-  /// its registry row reads the same.
-  static constexpr ModelCapabilities kCapabilities = [] {
-    ModelCapabilities c;
-    c.displacement_input = true;
-    c.tendon_forces_at_disks = true;
-    c.displacement_statics = true;
-    c.tendon_friction = true;
-    return c;
-  }();
-  ModelCapabilities capabilities() const override { return kCapabilities; }
 
   /// @brief Joint centres and link ends of the rigid-link body, base frame: for every
   /// subsegment its 3 joint centres followed by the disk centre that ends it (4N points), for
