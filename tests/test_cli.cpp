@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include "bad_scene_inputs.hpp"
+#include "cli_run.hpp"
 
 namespace {
 
@@ -25,24 +26,9 @@ using json = nlohmann::json;
 const std::string kBinary = TDCR_BINARY_DIR "/bin/tdcr";
 const std::string kExamples = TDCR_EXAMPLES_DIR;
 
-struct CliRun {
-  int status = -1;  ///< Exit status, or -1 if the program did not exit normally (crash, signal).
-  std::string out;
-  std::string err;
-};
-
-std::string read_file(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-std::string quote(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
+using tdcr_test::CliRun;
+using tdcr_test::quote;
+using tdcr_test::read_file;
 
 /// A temporary directory, removed at the end of the test.
 class TempDir {
@@ -75,18 +61,7 @@ class TempDir {
 /// Runs `tdcr <args>` (arguments already quoted as needed) and captures everything.
 CliRun run_tdcr(const std::string& args) {
   TempDir tmp;
-  const fs::path err = tmp.path() / "stderr.txt";
-  const std::string cmd = quote(kBinary) + " " + args + " 2>" + quote(err.string());
-  CliRun r;
-  FILE* pipe = ::popen(cmd.c_str(), "r");
-  if (!pipe) return r;
-  char buf[4096];
-  std::size_t n;
-  while ((n = std::fread(buf, 1, sizeof buf, pipe)) > 0) r.out.append(buf, n);
-  const int st = ::pclose(pipe);
-  r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  r.err = read_file(err);
-  return r;
+  return tdcr_test::run_program(kBinary, args, tmp.path() / "stderr.txt");
 }
 
 std::string example(const std::string& name) { return quote(kExamples + "/" + name); }

@@ -13,6 +13,8 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "cli_run.hpp"
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -21,23 +23,9 @@ using json = nlohmann::json;
 const std::string kBinary = TDCR_BINARY_DIR "/bin/tdcr";
 const std::string kExamples = TDCR_EXAMPLES_DIR;
 
-struct CliRun {
-  int status = -1;
-  std::string out, err;
-};
-
-std::string read_file(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-std::string quote(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
+using tdcr_test::CliRun;
+using tdcr_test::quote;
+using tdcr_test::read_file;
 
 // A temporary directory for one test, with the paper robot's scene (E 30 % high: the start) and
 // data made by `tdcr sweep` of the true robot with CCsub.
@@ -72,18 +60,7 @@ class CalibrateCli : public ::testing::Test {
     return path(name);
   }
   CliRun run(const std::string& args) const {
-    const fs::path err = dir_ / "stderr.txt";
-    const std::string cmd = quote(kBinary) + " " + args + " 2>" + quote(err.string());
-    CliRun r;
-    FILE* pipe = ::popen(cmd.c_str(), "r");
-    if (!pipe) return r;
-    char buf[4096];
-    std::size_t n;
-    while ((n = std::fread(buf, 1, sizeof buf, pipe)) > 0) r.out.append(buf, n);
-    const int st = ::pclose(pipe);
-    r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-    r.err = read_file(err);
-    return r;
+    return tdcr_test::run_program(kBinary, args, dir_ / "stderr.txt");
   }
   fs::path dir_;
 };
