@@ -235,6 +235,8 @@ def make_handler(session):
                 self._json(HTTPStatus.OK, reply)
             except (tdcr.InputError, ValueError) as e:
                 self._json(HTTPStatus.BAD_REQUEST, {"error": str(e)})
+            except Exception as e:  # never a dropped connection: the page shows what failed
+                self._json(HTTPStatus.INTERNAL_SERVER_ERROR, {"error": f"internal error: {type(e).__name__}: {e}"})
 
     return Handler
 
