@@ -11,7 +11,9 @@
 //   y_t = (2 / h) (y_mid - y(i)), i.e. c0 = 2 / h, y_h = -c0 y(i); then y(i+1) = 2 y_mid - y(i).
 #include "vc/vc_dynamics.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "tdcr/bvp/newton_solver.hpp"
 #include "tdcr/core/error.hpp"
@@ -75,11 +77,15 @@ class StepSystem final : public bvp::ResidualSystem {
     return true;
   }
   void residual_scale(Eigen::Ref<Eigen::VectorXd> s) const override {
-    s.head<3>().setConstant(1.0 / W_.loads.force_scale());
-    s.tail<3>().setConstant(1.0 / W_.loads.moment_scale());
+    s.head<3>().setConstant(1.0 / force_scale);
+    s.tail<3>().setConstant(1.0 / moment_scale);
   }
   void unknown_scale(Eigen::Ref<Eigen::VectorXd> s) const override { residual_scale(s); }
   long shots = 0;
+  // The statics' scales of the input's loads, or the largest base wrench met so far if larger:
+  // a robot swinging after its load is removed has wrenches far above the (then tiny) load
+  // scales, and a tolerance relative to those would ask for digits below rounding.
+  double force_scale = 1.0, moment_scale = 1.0;
   dyn::Vec6 last_x = dyn::Vec6::Constant(NAN);  ///< The last shot's unknowns (its values are in d_.values).
   bool last_ok = false;
 
@@ -150,6 +156,10 @@ class VcDynamics final : public CosseratDynamics {
       for (int i = 0; i < mesh_.points; ++i) history_[i] = c1 * y1_[i] + c2 * y2_[i] + d1 * yt1_[i];
     }
     const dyn::Vec6 x_start = x_;
+    // Predictor: the unknowns extrapolated linearly from the last two steps. A single shot
+    // amplifies an error of the guess by up to exp(L (rho A c0^2 / EI)^(1/4)), so a guess of
+    // second order keeps the short steps' Newton in its linear range.
+    if (steps_ > 1) x_ = 2.0 * x_ - x_previous_;
     const bvp::NewtonResult r = solve(steps_ > 0);
     SimulationStep step;
     step.t = t_next;
@@ -172,6 +182,7 @@ class VcDynamics final : public CosseratDynamics {
         y1_[i] = values_[i];
       }
     }
+    x_previous_ = x_start;
     t_ = t_next;
     ++steps_;
     publish(y1_);
@@ -194,6 +205,7 @@ class VcDynamics final : public CosseratDynamics {
   double time() const override { return t_; }
   long shots() const override { return system_.shots; }
   int mesh_points() const override { return mesh_.points; }
+  const std::string& last_message() const override { return message_; }
 
  private:
   void bind(const ModelInput& input) {
@@ -235,11 +247,18 @@ class VcDynamics final : public CosseratDynamics {
     bvp::NewtonOptions o;
     o.function_tolerance = options_.function_tolerance;
     o.max_iterations = options_.max_iterations;
-    o.max_newton_step = 1.0;  // as VC's single shooting: scaled steps beyond 1 only overshoot
-    o.max_setup_calls = 10;   // modified Newton: the step's Jacobian changes little from step to step
+    // No bound on the step (unlike the statics' cold solves): a warm start is close, and the
+    // base wrench of a swinging robot changes by more than the load scales in one step.
+    o.max_newton_step = 0.0;
+    o.max_setup_calls = 10;  // modified Newton: the step's Jacobian changes little from step to step
     o.reuse_jacobian = reuse;
+    peak_force_ = std::max(peak_force_, x_.head<3>().norm());
+    peak_moment_ = std::max(peak_moment_, x_.tail<3>().norm());
+    system_.force_scale = std::max(W_.loads.force_scale(), peak_force_);
+    system_.moment_scale = std::max(W_.loads.moment_scale(), peak_moment_);
     Eigen::VectorXd x = x_;
     bvp::NewtonResult r = newton_.solve(system_, x, o);
+    message_ = r.message;
     if (!r.converged()) return r;
     const dyn::Vec6 xs = x;
     if (!(system_.last_ok && system_.last_x == xs)) {
@@ -275,11 +294,14 @@ class VcDynamics final : public CosseratDynamics {
   StepSystem system_;
   bvp::NewtonSolver newton_;
   dyn::Vec6 x_ = dyn::Vec6::Zero();
+  dyn::Vec6 x_previous_ = dyn::Vec6::Zero();  ///< The unknowns of the step before.
   double t_ = 0.0;
   long steps_ = 0;
   std::vector<Frame> frames_;
   std::vector<Vec3> point_positions_;
   double kinetic_ = 0.0, potential_ = 0.0;
+  double peak_force_ = 0.0, peak_moment_ = 0.0;  ///< Largest |n(0)|, |m(0)| so far.
+  std::string message_;
 };
 
 }  // namespace

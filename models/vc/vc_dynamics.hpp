@@ -8,6 +8,7 @@
 
 #include <limits>
 #include <memory>
+#include <string>
 
 #include "tdcr/models/dynamics.hpp"
 #include "tdcr/models/static_model.hpp"
@@ -56,6 +57,8 @@ class CosseratDynamics : public DynamicsIntegrator {
   virtual long shots() const = 0;
   /// @brief Evaluation points of the fixed mesh (history slots along the rod).
   virtual int mesh_points() const = 0;
+  /// @brief The last Newton solve's message (KINSOL flag, iterations, residual).
+  virtual const std::string& last_message() const = 0;
 };
 
 /// @brief The VC dynamics of `model`: `settings` validated here, `dt` the time step (s, > 0).
