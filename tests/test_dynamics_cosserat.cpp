@@ -157,8 +157,7 @@ TEST(DynamicsCosserat, CantileverBendingFrequenciesMatchEulerBernoulli) {
 // (tip deflection about 8 % of the length): midpoint conserves the quadratic energy of the
 // semi-discrete rod exactly, so what drifts is the shooting mesh's error, which falls with the
 // mesh as RK4's h^4 (rk4_steps 8 -> 16 at dt = 4e-4 s: 3.8e-7 -> 2.1e-8 of the energy over a
-// period). With
-// Kelvin-Voigt damping it falls, step after step.
+// period). With Kelvin-Voigt damping it falls, step after step.
 TEST(DynamicsCosserat, EnergyIsKeptWithoutDampingAndDecaysWithIt) {
   const Robot robot = steel_robot(5);
   const VcModel model(robot, Effects{});
@@ -185,7 +184,6 @@ TEST(DynamicsCosserat, EnergyIsKeptWithoutDampingAndDecaysWithIt) {
         return static_cast<double>(NAN);
       }
       const double e = s.kinetic_energy + s.potential_energy;
-      if (getenv("DBG")) printf("dt %g k %d it %d E %.9e KE %.3e tip %.6e %.6e | %s\n", dt, k, s.iterations, e, s.kinetic_energy, s.tip.p.x(), s.tip.p.z(), dyn->last_message().c_str());
       if (energy) energy->push_back(e);
       if (k == 1) e0 = e;
       worst = std::max(worst, std::abs(e - e0) / e0);
@@ -203,4 +201,42 @@ TEST(DynamicsCosserat, EnergyIsKeptWithoutDampingAndDecaysWithIt) {
   for (std::size_t k = 1; k < e.size(); ++k) rises += e[k] >= e[k - 1];
   EXPECT_EQ(rises, 0);
   EXPECT_LT(e.back(), 0.9 * e.front());
+}
+
+// A step whose Newton solve does not converge says so (never Converged), and leaves the state at
+// the last converged time; the inputs a Cosserat integrator cannot take are InputErrors naming
+// the field.
+TEST(DynamicsCosserat, FailedStepsAndBadInputsAreReported) {
+  const Robot robot = steel_robot(5);
+  const VcModel model(robot, Effects{});
+  const ModelInput rest = tensions(robot, {});
+  const ModelInput pulled = tensions(robot, {3.0, 0.0, 0.0, 0.0});
+  vc::CosseratDynamicsOptions o;
+  o.max_iterations = 1;  // one Newton iteration cannot take a 3 N step
+  auto dyn = vc::make_vc_dynamics(model, DynamicsSettings{}, 1.0 / 60.0, o);
+  dyn->initialize(static_answer(model, rest, o.rk4_steps), rest);
+  const SimulationStep s = dyn->advance_with_input(1.0 / 60.0, pulled);
+  EXPECT_NE(s.status, TerminationType::Converged);
+  EXPECT_EQ(dyn->time(), 0.0);
+  EXPECT_LT(dyn->shape().tip().p.head<2>().norm(), 1e-12);  // still the straight start
+
+  const auto field_of = [](const auto& make) -> std::string {
+    try {
+      make();
+    } catch (const InputError& e) {
+      return e.field();
+    }
+    return "(no error)";
+  };
+  const VcModel massless(paper::robot(5), Effects{});
+  EXPECT_EQ(field_of([&] { vc::make_vc_dynamics(massless, DynamicsSettings{}, 0.01); }), "robot.backbone.density");
+  DynamicsSettings bad;
+  bad.alpha = 0.5;
+  EXPECT_EQ(field_of([&] { vc::make_vc_dynamics(model, bad, 0.01); }), "dynamics.alpha");
+  EXPECT_EQ(field_of([&] { vc::make_vc_dynamics(model, DynamicsSettings{}, -1.0); }), "dt");
+  auto fresh = vc::make_vc_dynamics(model, DynamicsSettings{}, 0.01);
+  fresh->initialize(static_answer(model, rest, 2), rest);
+  ModelInput displaced = rest;
+  displaced.actuation.kind = Actuation::Kind::Displacements;
+  EXPECT_EQ(field_of([&] { fresh->advance_with_input(0.01, displaced); }), "actuation.kind");
 }
