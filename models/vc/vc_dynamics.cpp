@@ -17,6 +17,7 @@
 
 #include "tdcr/bvp/newton_solver.hpp"
 #include "tdcr/core/error.hpp"
+#include "tdcr/models/tendon_physics.hpp"
 #include "tdcr/models/vc.hpp"
 #include "vc/vc_dynamics_mesh.hpp"
 
@@ -97,8 +98,12 @@ class StepSystem final : public bvp::ResidualSystem {
 
 class VcDynamics final : public CosseratDynamics {
  public:
-  VcDynamics(const VcModel& model, const DynamicsSettings& settings, double dt, const CosseratDynamicsOptions& o)
-      : model_(model), settings_(settings), dt_(dt), options_(o), workspace_(model.make_workspace()),
+  /// `model` the VC rod of `original` (VC itself, or VCref's robot and effects as a VcModel, then
+  /// owned: `owned`); `chords`: VCref's tendons.
+  VcDynamics(const StaticModel& original, const VcModel& model, std::unique_ptr<VcModel> owned,
+             const DynamicsSettings& settings, double dt, const CosseratDynamicsOptions& o, bool chords)
+      : original_(original), owned_(std::move(owned)), model_(model), settings_(settings), dt_(dt), options_(o),
+        chords_(chords), multiple_(chords || o.multiple_shooting), workspace_(model.make_workspace()),
         W_(static_cast<VcWorkspace&>(*workspace_).impl()), system_(W_, shot_) {
     check_settings(settings, dt);
     options_.validate();
@@ -107,8 +112,8 @@ class VcDynamics final : public CosseratDynamics {
       throw InputError("robot.backbone.density", format_value(robot.backbone.density),
                        "dynamics needs the backbone's mass: give a density > 0 (or mass_per_length)");
     if (model.effects().tendon_friction.on())
-      throw InputError("effects.tendon_friction", "on", "VC's dynamics has no tendon friction");
-    shot_ = dyn::ShotData{&mesh_, &X_, &history_, &values_};
+      throw InputError("effects.tendon_friction", "on", "the Cosserat dynamics have no tendon friction");
+    shot_ = dyn::ShotData{&mesh_, &X_, &history_, &values_, !chords};
   }
 
   void initialize(const Solution& at_rest, const ModelInput& input) override {
@@ -126,9 +131,11 @@ class VcDynamics final : public CosseratDynamics {
     else if (!at_rest.backbone.empty())
       x << at_rest.backbone.front().n, at_rest.backbone.front().m;
     x_ = x;
+    if (multiple_) start_multiple(at_rest);
     bvp::NewtonResult r = solve(false);
     if (!r.converged())
-      throw std::runtime_error("VC dynamics: the static start on the dynamics' mesh did not converge: " + r.message);
+      throw std::runtime_error("Cosserat dynamics: the static start on the dynamics' mesh did not converge: " +
+                               r.message);
     y1_ = values_;
     y2_ = values_;
     yt1_.assign(mesh_.points, zero);
@@ -160,6 +167,8 @@ class VcDynamics final : public CosseratDynamics {
     // amplifies an error of the guess by up to exp(L (rho A c0^2 / EI)^(1/4)), so a guess of
     // second order keeps the short steps' Newton in its linear range.
     if (steps_ > 1) x_ = 2.0 * x_ - x_previous_;
+    const Eigen::VectorXd xm_start = xm_;
+    if (multiple_ && steps_ > 1) xm_ = 2.0 * xm_ - xm_previous_;
     const bvp::NewtonResult r = solve(steps_ > 0);
     SimulationStep step;
     step.t = t_next;
@@ -167,6 +176,7 @@ class VcDynamics final : public CosseratDynamics {
     step.iterations = r.iterations;
     if (!r.converged()) {
       x_ = x_start;  // the state stays at t_, so that a caller may retry with another step
+      xm_ = xm_start;
       step.tip = frames_.back();
       return step;
     }
@@ -183,6 +193,7 @@ class VcDynamics final : public CosseratDynamics {
       }
     }
     x_previous_ = x_start;
+    xm_previous_ = xm_start;
     t_ = t_next;
     ++steps_;
     publish(y1_);
@@ -194,8 +205,8 @@ class VcDynamics final : public CosseratDynamics {
 
   Solution shape() const override {
     Solution s;
-    s.model = "vc";
-    s.model_fingerprint = model_.fingerprint();
+    s.model = to_string(original_.kind());
+    s.model_fingerprint = original_.fingerprint();
     s.summary.termination = TerminationType::Converged;
     s.disk_frames = frames_;
     s.tensions = W_.loads.full_tensions();
@@ -203,7 +214,7 @@ class VcDynamics final : public CosseratDynamics {
     return s;
   }
   double time() const override { return t_; }
-  long shots() const override { return system_.shots; }
+  long shots() const override { return system_.shots + (multiple_system_ ? multiple_system_->shots : 0); }
   int mesh_points() const override { return mesh_.points; }
   const std::string& last_message() const override { return message_; }
 
@@ -242,8 +253,76 @@ class VcDynamics final : public CosseratDynamics {
     X_.drag = settings_.air_drag;
   }
 
-  // Newton on the step from x_; on success x_ is the solution and values_ hold its fields.
+  // The unknowns of multiple shooting from the static answer `at_rest`: VC's from a shot of the
+  // single-shooting start; VCref's from its disk poses and wrenches (n(s_j-), m(s_j-) there,
+  // made distal by the chords' disk wrench; Newton corrects the rest on this mesh).
+  void start_multiple(const Solution& at_rest) {
+    const TendonRouting& rt = model_.routing();
+    const int N = rt.disk_count() - 1;
+    const double L = model_.robot().total_length();
+    const double rate = std::sqrt(X_.S.kbt.x() / (X_.rho_a * std::pow(L, 4)));  // first-mode scale
+    multiple_system_ = std::make_unique<dyn::MultipleShooting>(
+        W_, shot_, chords_, model_.effects().disk_normal_force == DiskNormalForce::Removed, L * rate, rate);
+    dyn::StateList nodes(std::max(N - 1, 0), dyn::State::Zero());
+    if (!chords_) {
+      const bvp::NewtonResult r = solve_single(false);
+      if (!r.converged())
+        throw std::runtime_error("Cosserat dynamics: the static start did not converge: " + r.message);
+      shot_.nodes = &nodes;
+      dyn::Vec6 f;
+      const bool ok = dyn::shoot(W_, shot_, x_, f);
+      shot_.nodes = nullptr;
+      if (!ok) throw std::runtime_error("Cosserat dynamics: the static start failed to integrate");
+    } else {
+      if (static_cast<int>(at_rest.disk_frames.size()) != N + 1 || static_cast<int>(at_rest.backbone.size()) != N + 1)
+        throw InputError("at_rest", "", "needs the disk frames and backbone samples of a VCref answer");
+      const std::vector<double>& T = W_.loads.full_tensions();
+      for (int j = 1; j < N; ++j) {
+        const tendon::DiskWrench w = tendon::disk_wrench(j, at_rest.disk_frames.data(), rt, T.data(),
+                                                         model_.effects().disk_normal_force == DiskNormalForce::Removed);
+        dyn::State& y = nodes[j - 1];
+        y.head<3>() = at_rest.disk_frames[j].p;
+        Eigen::Map<Mat3>(y.data() + 3) = at_rest.disk_frames[j].R;
+        y.segment<3>(12) = at_rest.backbone[j].n - w.force;
+        y.segment<3>(15) = at_rest.backbone[j].m - w.moment;
+      }
+    }
+    multiple_system_->from_nodes(x_, nodes, xm_);
+  }
+
+  // Newton on the step from x_ (single shooting) or xm_ (multiple); on success x_ (and xm_) are
+  // the solution and values_ hold its fields.
   bvp::NewtonResult solve(bool reuse) {
+    peak_force_ = std::max(peak_force_, x_.head<3>().norm());
+    peak_moment_ = std::max(peak_moment_, x_.tail<3>().norm());
+    const double fs = std::max(W_.loads.force_scale(), peak_force_);
+    const double ms = std::max(W_.loads.moment_scale(), peak_moment_);
+    if (!multiple_) {
+      system_.force_scale = fs;
+      system_.moment_scale = ms;
+      return solve_single(reuse);
+    }
+    dyn::MultipleShooting& sys = *multiple_system_;
+    sys.set_scales(fs, ms);
+    Eigen::VectorXd x = xm_;
+    bvp::NewtonResult r = newton_.solve(sys, x, newton_options(reuse));
+    message_ = r.message;
+    if (!r.converged()) return r;
+    if (!(sys.last_ok && sys.last_x == x)) {
+      Eigen::VectorXd f(x.size());
+      if (!sys.residual(x, f)) {
+        r.termination = TerminationType::IntegrationFailed;
+        r.message += "; the shot at the solution failed";
+        return r;
+      }
+    }
+    sys.rebase(x);
+    xm_ = x;
+    x_ = x.head<6>();
+    return r;
+  }
+
+  bvp::NewtonOptions newton_options(bool reuse) const {
     bvp::NewtonOptions o;
     o.function_tolerance = options_.function_tolerance;
     o.max_iterations = options_.max_iterations;
@@ -252,12 +331,12 @@ class VcDynamics final : public CosseratDynamics {
     o.max_newton_step = 0.0;
     o.max_setup_calls = 10;  // modified Newton: the step's Jacobian changes little from step to step
     o.reuse_jacobian = reuse;
-    peak_force_ = std::max(peak_force_, x_.head<3>().norm());
-    peak_moment_ = std::max(peak_moment_, x_.tail<3>().norm());
-    system_.force_scale = std::max(W_.loads.force_scale(), peak_force_);
-    system_.moment_scale = std::max(W_.loads.moment_scale(), peak_moment_);
+    return o;
+  }
+
+  bvp::NewtonResult solve_single(bool reuse) {
     Eigen::VectorXd x = x_;
-    bvp::NewtonResult r = newton_.solve(system_, x, o);
+    bvp::NewtonResult r = newton_.solve(system_, x, newton_options(reuse));
     message_ = r.message;
     if (!r.converged()) return r;
     const dyn::Vec6 xs = x;
@@ -275,13 +354,16 @@ class VcDynamics final : public CosseratDynamics {
 
   void publish(const ValuesList& values) {
     dyn::reconstruct(mesh_, values, frames_, point_positions_);
-    dyn::energies(W_, X_, mesh_, values, frames_, point_positions_, kinetic_, potential_);
+    dyn::energies(W_, chords_, X_, mesh_, values, frames_, point_positions_, kinetic_, potential_);
   }
 
+  const StaticModel& original_;
+  std::unique_ptr<VcModel> owned_;
   const VcModel& model_;
   DynamicsSettings settings_;
   double dt_;
   CosseratDynamicsOptions options_;
+  bool chords_, multiple_;
   std::unique_ptr<ModelWorkspace> workspace_;
   VcWorkspace::Impl& W_;
   ModelInput input_;
@@ -292,7 +374,9 @@ class VcDynamics final : public CosseratDynamics {
   ValuesList y1_, y2_, yt1_;     ///< Per point: y(i), y(i-1), y_t(i).
   dyn::ShotData shot_;
   StepSystem system_;
+  std::unique_ptr<dyn::MultipleShooting> multiple_system_;
   bvp::NewtonSolver newton_;
+  Eigen::VectorXd xm_, xm_previous_;  ///< Multiple shooting's unknowns, now and a step before.
   dyn::Vec6 x_ = dyn::Vec6::Zero();
   dyn::Vec6 x_previous_ = dyn::Vec6::Zero();  ///< The unknowns of the step before.
   double t_ = 0.0;
@@ -308,7 +392,17 @@ class VcDynamics final : public CosseratDynamics {
 
 std::unique_ptr<CosseratDynamics> make_vc_dynamics(const VcModel& model, const DynamicsSettings& settings, double dt,
                                                    const CosseratDynamicsOptions& options) {
-  return std::make_unique<VcDynamics>(model, settings, dt, options);
+  return std::make_unique<VcDynamics>(model, model, nullptr, settings, dt, options, false);
+}
+
+std::unique_ptr<CosseratDynamics> make_vcref_dynamics(const StaticModel& model, const DynamicsSettings& settings,
+                                                      double dt, const CosseratDynamicsOptions& options) {
+  if (model.kind() != ModelKind::VCref) throw InputError("model", to_string(model.kind()), "is not VCref");
+  // VCref's free rods between the disks are VC's rod without its distributed tendon loads: a
+  // VcModel of the same robot and effects carries the section, loads and mesh.
+  auto rod = std::make_unique<VcModel>(model.robot(), model.effects());
+  const VcModel& ref = *rod;
+  return std::make_unique<VcDynamics>(model, ref, std::move(rod), settings, dt, options, true);
 }
 
 }  // namespace vc
@@ -316,7 +410,8 @@ std::unique_ptr<CosseratDynamics> make_vc_dynamics(const VcModel& model, const D
 std::unique_ptr<DynamicsIntegrator> make_cosserat_dynamics_integrator(const StaticModel& model,
                                                                       const DynamicsSettings& settings, double dt) {
   if (const auto* vc = dynamic_cast<const VcModel*>(&model)) return vc::make_vc_dynamics(*vc, settings, dt);
-  throw InputError("model", to_string(model.kind()), "has no Cosserat dynamics (VC has)");
+  if (model.kind() == ModelKind::VCref) return vc::make_vcref_dynamics(model, settings, dt);
+  throw InputError("model", to_string(model.kind()), "has no Cosserat dynamics (VC and VCref have)");
 }
 
 }  // namespace tdcr

@@ -35,6 +35,11 @@ struct CosseratDynamicsOptions {
   double function_tolerance = 1e-10;
   /// Most Newton iterations per time step, >= 1.
   int max_iterations = 50;
+  /// VC: multiple shooting (one interval per disk interval) instead of single shooting. Slower
+  /// per step, but single shooting's Newton loses its way on short steps of large motions (its
+  /// tip depends on the base wrench like exp(L (rho A c0^2 / EI)^(1/4)), c0 ~ 2 / dt). VCref
+  /// always uses multiple shooting.
+  bool multiple_shooting = false;
 
   /// @brief Throws InputError naming `rk4_steps`, `rk4_max_step`, `function_tolerance` or
   /// `max_iterations` when out of range.
@@ -68,14 +73,22 @@ class CosseratDynamics : public DynamicsIntegrator {
 std::unique_ptr<CosseratDynamics> make_vc_dynamics(const VcModel& model, const DynamicsSettings& settings, double dt,
                                                    const CosseratDynamicsOptions& options = {});
 
+/// @brief The VCref dynamics of `model` (a VCref model, else InputError naming `model`; it lives
+/// here, not in models/vcref/, because it is VC's machinery and the layers forbid a model folder
+/// to include a sibling's): its free rods between the disks with the chords' disk
+/// wrenches (Eq. 30-33, Eq. 58 per effects.disk_normal_force), by multiple shooting; the
+/// errors of make_vc_dynamics.
+std::unique_ptr<CosseratDynamics> make_vcref_dynamics(const StaticModel& model, const DynamicsSettings& settings,
+                                                      double dt, const CosseratDynamicsOptions& options = {});
+
 /// @brief DynamicsSettings' checks (the front end's DynamicsSettings::validate does the same;
 /// kept here so that this integrator can be built without the front end).
 void check_settings(const DynamicsSettings& settings, double dt);
 
 }  // namespace vc
 
-/// @brief The Cosserat integrator of `model` (VC; VCref: InputError naming `model` until it
-/// has one), with the default CosseratDynamicsOptions.
+/// @brief The Cosserat integrator of `model` (VC or VCref; another model: InputError naming
+/// `model`), with the default CosseratDynamicsOptions.
 std::unique_ptr<DynamicsIntegrator> make_cosserat_dynamics_integrator(const StaticModel& model,
                                                                       const DynamicsSettings& settings, double dt);
 

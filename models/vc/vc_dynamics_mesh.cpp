@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "physics/cosserat_rhs.hpp"
+#include "tdcr/models/tendon_physics.hpp"
 
 namespace tdcr::vc::dyn {
 
@@ -41,12 +42,9 @@ void Mesh::build(const VcWorkspace::Impl& W, int rk4_steps, double rk4_max_step)
   points = p;
 }
 
-namespace {
-
-/// The point loads at disk j (end of an interval of segment i) on the state y, with the step's
-/// strains on both sides: tendon terminations (Eq. 40-41), the disk's weight, its inertia, and
-/// the kinks of the continuing tendons (VcOptions::kink_forces), as vc::disk_point_loads does
-/// for the statics. Writes the values at the disk's proximal and distal points.
+// As vc::disk_point_loads does for the statics: tendon terminations (Eq. 40-41), the disk's
+// weight, and the kinks of the continuing tendons (VcOptions::kink_forces); here also the disk's
+// inertia, and the step's strain law on both sides.
 bool disk_loads(VcWorkspace::Impl& W, const ShotData& d, int i, int j, double* y) {
   const Mesh& M = *d.mesh;
   const StepSection& X = *d.X;
@@ -63,7 +61,7 @@ bool disk_loads(VcWorkspace::Impl& W, const ShotData& d, int i, int j, double* y
   X.strains(R, n, m, hp, v, u);
   Values& vp = (*d.values)[M.pre[j]];
   vp << v, u, q, w, Vec6::Zero();
-  const bool terminates = j == last && !seg.terminating.empty();
+  const bool terminates = d.distributed && j == last && !seg.terminating.empty();
   const bool weighted = W.loads.has_disk_weight() && W.loads.disk_weight(j).squaredNorm() > 0.0;
   const bool massive = M.disk_mass[j] > 0.0 && (X.c0 != 0.0 || hp.segment<3>(kQ).squaredNorm() > 0.0);
   if (terminates) {
@@ -84,7 +82,7 @@ bool disk_loads(VcWorkspace::Impl& W, const ShotData& d, int i, int j, double* y
       cont = &seg.tendons_at(s);
     else if (i + 1 < nseg)
       cont = &W.segments[i + 1].tendons_at(s);
-    if (W.model->options().kink_forces && cont && !cont->empty()) {
+    if (d.distributed && W.model->options().kink_forces && cont && !cont->empty()) {
       // KinkMap's strain law is the static one with Seff; the step's law is that law at the
       // wrench shifted by the distal point's history (StepSection::shift).
       Vec3 zn, zm;
@@ -104,39 +102,45 @@ bool disk_loads(VcWorkspace::Impl& W, const ShotData& d, int i, int j, double* y
   return true;
 }
 
-}  // namespace
-
-bool shoot(VcWorkspace::Impl& W, const ShotData& d, const Vec6& x, Vec6& res) {
-  const Mesh& M = *d.mesh;
+bool integrate_interval(VcWorkspace::Impl& W, const ShotData& d, const Interval& I, State& y) {
   const StepSection& X = *d.X;
   const ValuesList& H = *d.history;
   ValuesList& out = *d.values;
+  const SegmentLoads& seg = W.segments[I.segment];
+  const bool routed = !seg.all_straight;
+  const double h = I.h;
+  State k1, k2, k3, k4, tmp;
+  int p = I.first;
+  for (int st = 0; st < I.steps; ++st, p += 4) {
+    const double s = I.s0 + st * h;
+    const auto eval = [&](double sa, const State& ya, State& k, int point) {
+      if (!d.distributed) {
+        rhs(X, nullptr, 0, false, H[point], ya.data(), k.data(), out[point]);
+        return;
+      }
+      const std::vector<cosserat::TendonLoad>& L = seg.tendons_at(sa);
+      rhs(X, L.data(), static_cast<int>(L.size()), routed, H[point], ya.data(), k.data(), out[point]);
+    };
+    eval(s, y, k1, p);
+    tmp = y + (0.5 * h) * k1;
+    eval(s + 0.5 * h, tmp, k2, p + 1);
+    tmp = y + (0.5 * h) * k2;
+    eval(s + 0.5 * h, tmp, k3, p + 2);
+    tmp = y + h * k3;
+    eval(s + h, tmp, k4, p + 3);
+    y += (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+  }
+  return y.allFinite();
+}
+
+bool shoot(VcWorkspace::Impl& W, const ShotData& d, const Vec6& x, Vec6& res) {
   State y = State::Zero();
   Eigen::Map<Mat3>(y.data() + 3).setIdentity();
   y.segment<6>(12) = x;
-  State k1, k2, k3, k4, tmp;
-  for (const Interval& I : M.intervals) {
-    const SegmentLoads& seg = W.segments[I.segment];
-    const bool routed = !seg.all_straight;
-    const double h = I.h;
-    int p = I.first;
-    for (int st = 0; st < I.steps; ++st, p += 4) {
-      const double s = I.s0 + st * h;
-      const auto eval = [&](double sa, const State& ya, State& k, int point) {
-        const std::vector<cosserat::TendonLoad>& L = seg.tendons_at(sa);
-        rhs(X, L.data(), static_cast<int>(L.size()), routed, H[point], ya.data(), k.data(), out[point]);
-      };
-      eval(s, y, k1, p);
-      tmp = y + (0.5 * h) * k1;
-      eval(s + 0.5 * h, tmp, k2, p + 1);
-      tmp = y + (0.5 * h) * k2;
-      eval(s + 0.5 * h, tmp, k3, p + 2);
-      tmp = y + h * k3;
-      eval(s + h, tmp, k4, p + 3);
-      y += (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
-    }
-    if (!y.allFinite()) return false;
+  for (const Interval& I : d.mesh->intervals) {
+    if (!integrate_interval(W, d, I, y)) return false;
     if (!disk_loads(W, d, I.segment, I.disk, y.data())) return false;
+    if (d.nodes && I.disk < static_cast<int>(d.mesh->intervals.size())) (*d.nodes)[I.disk - 1] = y;
   }
   res = y.segment<6>(12);
   if (W.loads.has_tip_wrench()) {
@@ -185,7 +189,7 @@ void reconstruct(const Mesh& M, const ValuesList& values, std::vector<Frame>& fr
   }
 }
 
-void energies(const VcWorkspace::Impl& W, const StepSection& X, const Mesh& M, const ValuesList& values,
+void energies(const VcWorkspace::Impl& W, bool chords, const StepSection& X, const Mesh& M, const ValuesList& values,
               const std::vector<Frame>& frames, const std::vector<Vec3>& points, double& kinetic,
               double& potential) {
   const cosserat::Section& S = X.S;
@@ -209,12 +213,19 @@ void energies(const VcWorkspace::Impl& W, const StepSection& X, const Mesh& M, c
       // Constant tensions: T times the tendon's path length (the point's share of it).
       const int step = (i - I.first) / 4, stage = (i - I.first) % 4;
       const double s = I.s0 + (step + (stage == 0 ? 0.0 : stage == 3 ? 1.0 : 0.5)) * I.h;
-      for (const cosserat::TendonLoad& t : seg.tendons_at(s))
-        potential += wgt * t.T * (v + u.cross(t.r) + t.dr).norm();
+      if (!chords)
+        for (const cosserat::TendonLoad& t : seg.tendons_at(s))
+          potential += wgt * t.T * (v + u.cross(t.r) + t.dr).norm();
     }
     const int j = I.disk;
     if (M.disk_mass[j] > 0.0) kinetic += 0.5 * M.disk_mass[j] * values[M.pre[j]].segment<3>(kQ).squaredNorm();
     if (W.loads.has_disk_weight()) potential -= W.loads.disk_weight(j).dot(frames[j].p);
+  }
+  if (chords) {
+    const TendonRouting& rt = W.model->routing();
+    for (const RoutedTendon& t : rt.tendons)
+      if (W.loads.tension(t.index) > 0.0)
+        potential += W.loads.tension(t.index) * tendon::chord_length(frames.data(), rt, t.index);
   }
   if (W.loads.has_tip_wrench()) potential -= W.loads.tip_force().dot(frames.back().p);
 }
