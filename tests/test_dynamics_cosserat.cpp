@@ -116,6 +116,14 @@ void settles_on_static_answer(ModelKind kind, Effects effects) {
   EXPECT_GT(early, 1e-4);  // it did move: 20 ms after the step it is still on its way
   EXPECT_LT(s.kinetic_energy, 1e-12);
   EXPECT_LT((s.tip.R - target.tip().R).norm(), 1e-7);
+  // VC's samples hold the wrench just distal of each disk, as its statics do.
+  const Solution shape = dyn->shape();
+  ASSERT_EQ(shape.backbone.size(), target.backbone.size());
+  if (kind == ModelKind::VC)
+    for (std::size_t j = 0; j < shape.backbone.size(); ++j) {
+      EXPECT_LT((shape.backbone[j].n - target.backbone[j].n).norm(), 1e-8) << "disk " << j;
+      EXPECT_LT((shape.backbone[j].m - target.backbone[j].m).norm(), 1e-9) << "disk " << j;
+    }
 }
 
 TEST(DynamicsCosserat, DampedStepSettlesOnTheStaticAnswer) { settles_on_static_answer(ModelKind::VC, Effects{}); }

@@ -46,10 +46,6 @@ void check_settings(const DynamicsSettings& s, double dt) {
   if (!(dt > 0.0) || !std::isfinite(dt)) throw InputError("dt", format_value(dt), "must be a finite number > 0");
 }
 
-SimulationStep CosseratDynamics::advance(double t_next, const Timeline& timeline) {
-  return advance_with_input(t_next, timeline.at(t_next));
-}
-
 namespace {
 
 using dyn::Values;
@@ -102,7 +98,7 @@ class VcDynamics final : public CosseratDynamics {
   /// owned: `owned`); `chords`: VCref's tendons.
   VcDynamics(const StaticModel& original, const VcModel& model, std::unique_ptr<VcModel> owned,
              const DynamicsSettings& settings, double dt, const CosseratDynamicsOptions& o, bool chords)
-      : original_(original), owned_(std::move(owned)), model_(model), settings_(settings), dt_(dt), options_(o),
+      : original_(original), owned_(std::move(owned)), model_(model), settings_(settings), options_(o),
         chords_(chords), multiple_(chords || o.multiple_shooting), workspace_(model.make_workspace()),
         W_(static_cast<VcWorkspace&>(*workspace_).impl()), system_(W_, shot_) {
     check_settings(settings, dt);
@@ -142,6 +138,11 @@ class VcDynamics final : public CosseratDynamics {
     t_ = 0.0;
     steps_ = 0;
     publish(y1_);
+  }
+
+  SimulationStep advance(double t_next, const Timeline& timeline) override {
+    const bool midpoint = settings_.scheme == TimeScheme::ImplicitMidpoint;
+    return advance_with_input(t_next, timeline.at(midpoint ? 0.5 * (t_ + t_next) : t_next));
   }
 
   SimulationStep advance_with_input(double t_next, const ModelInput& input) override {
@@ -209,6 +210,7 @@ class VcDynamics final : public CosseratDynamics {
     s.model_fingerprint = original_.fingerprint();
     s.summary.termination = TerminationType::Converged;
     s.disk_frames = frames_;
+    s.backbone = samples_;
     s.tensions = W_.loads.full_tensions();
     s.unknowns = x_;
     return s;
@@ -352,8 +354,22 @@ class VcDynamics final : public CosseratDynamics {
     return r;
   }
 
+  // Frames, disk samples and energies of the shape `values` (at the current time), with the time
+  // derivatives yt1_ for the damping's share of the wrench.
   void publish(const ValuesList& values) {
     dyn::reconstruct(mesh_, values, frames_, point_positions_);
+    const TendonRouting& rt = model_.routing();
+    samples_.assign(frames_.size(), BackboneSample{});
+    for (std::size_t j = 0; j < frames_.size(); ++j) {
+      // The wrench just distal of disk j (the base: at the first point), as VC's statics record.
+      const int point = j == 0 ? 0 : mesh_.post[j];
+      const Values& y = values[point];
+      const Values& yt = yt1_.empty() ? Values::Zero().eval() : yt1_[point];
+      Vec3 nb = X_.bse.cwiseProduct(yt.segment<3>(dyn::kV));
+      if (X_.S.shear_extension) nb += X_.S.kse.cwiseProduct(y.segment<3>(dyn::kV) - Vec3::UnitZ());
+      const Vec3 mb = X_.S.kbt.cwiseProduct(y.segment<3>(dyn::kU)) + X_.bbt.cwiseProduct(yt.segment<3>(dyn::kU));
+      samples_[j] = BackboneSample{rt.disk_s[j], frames_[j], frames_[j].R * nb, frames_[j].R * mb};
+    }
     dyn::energies(W_, chords_, X_, mesh_, values, frames_, point_positions_, kinetic_, potential_);
   }
 
@@ -361,7 +377,6 @@ class VcDynamics final : public CosseratDynamics {
   std::unique_ptr<VcModel> owned_;
   const VcModel& model_;
   DynamicsSettings settings_;
-  double dt_;
   CosseratDynamicsOptions options_;
   bool chords_, multiple_;
   std::unique_ptr<ModelWorkspace> workspace_;
@@ -382,6 +397,7 @@ class VcDynamics final : public CosseratDynamics {
   double t_ = 0.0;
   long steps_ = 0;
   std::vector<Frame> frames_;
+  std::vector<BackboneSample> samples_;
   std::vector<Vec3> point_positions_;
   double kinetic_ = 0.0, potential_ = 0.0;
   double peak_force_ = 0.0, peak_moment_ = 0.0;  ///< Largest |n(0)|, |m(0)| so far.

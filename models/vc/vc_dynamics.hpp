@@ -53,9 +53,8 @@ class CosseratDynamics : public DynamicsIntegrator {
   /// @brief Advance one time step to `t_next` with `input` the input of the step's equations:
   /// at t_next for BDF-alpha, at the step's midpoint for ImplicitMidpoint.
   virtual SimulationStep advance_with_input(double t_next, const ModelInput& input) = 0;
-  /// @brief advance_with_input with the timeline's input at t_next (BDF-alpha) or at the step's
-  /// midpoint (ImplicitMidpoint).
-  SimulationStep advance(double t_next, const Timeline& timeline) override;
+  // advance(t_next, timeline): advance_with_input with the timeline's input at t_next
+  // (BDF-alpha) or at the step's midpoint (ImplicitMidpoint).
   /// @brief The current time (s): 0 after initialize().
   virtual double time() const = 0;
   /// @brief Newton residual evaluations (shots) since construction: a cost measure.
