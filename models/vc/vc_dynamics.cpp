@@ -58,8 +58,6 @@ bool same_input(const ModelInput& a, const ModelInput& b) {
          a.loads.tip_moment == b.loads.tip_moment && a.loads.gravity == b.loads.gravity;
 }
 
-class VcDynamics;
-
 /// The step's shooting residual as KINSOL sees it: n(0), m(0) -> tip wrench residual.
 class StepSystem final : public bvp::ResidualSystem {
  public:
@@ -127,6 +125,7 @@ class VcDynamics final : public CosseratDynamics {
     else if (!at_rest.backbone.empty())
       x << at_rest.backbone.front().n, at_rest.backbone.front().m;
     x_ = x;
+    peak_force_ = peak_moment_ = 0.0;
     if (multiple_) start_multiple(at_rest);
     bvp::NewtonResult r = solve(false);
     if (!r.converged())
@@ -178,7 +177,7 @@ class VcDynamics final : public CosseratDynamics {
     if (!r.converged()) {
       x_ = x_start;  // the state stays at t_, so that a caller may retry with another step
       xm_ = xm_start;
-      step.tip = frames_.back();
+      step.tip = frames_.back();  // the last converged shape's
       return step;
     }
     for (int i = 0; i < mesh_.points; ++i) {
