@@ -64,15 +64,16 @@ Run simulate(const StaticModel& model, const ModelInput& rest, const ModelInput&
     for (int k = 1; k <= n; ++k) {
       steps.push_back(dyn->advance_with_input(k * dt, pulled));
       if (k == static_cast<int>(std::lround(0.5 / dt)))
-        r.best_transient_s = std::min(
-            r.best_transient_s, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+        r.best_transient_s =
+            std::min(r.best_transient_s, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
       if (steps.back().status != TerminationType::Converged) {
         r.ok = false;
         r.message = "step " + std::to_string(k) + ": " + dyn->last_message();
         break;
       }
     }
-    r.best_wall_s = std::min(r.best_wall_s, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    r.best_wall_s =
+        std::min(r.best_wall_s, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     r.steps = steps;
     r.shots = dyn->shots();
     r.points = dyn->mesh_points();
@@ -115,10 +116,11 @@ int main(int argc, char** argv) {
   set.alpha = -0.2;
 
   std::printf("%s", bench::machine_stamp().c_str());
-  std::printf("VC dynamics: paper robot n = 10 (2 x 50 mm, 0.8 mm steel backbone, rho 7800 kg/m^3, massless disks),\n"
-              "tension step T1 = %.4f N (T_M) at t = 0+, held %.1f s; dt = 1/60 s, BDF-alpha alpha = %.1f,\n"
-              "tau_bt = tau_se = %.3f s, no gravity, no drag; RK4 x%d per disk interval\n",
-              t_max, duration, set.alpha, set.bending_damping_time, rk4_steps);
+  std::printf(
+      "VC dynamics: paper robot n = 10 (2 x 50 mm, 0.8 mm steel backbone, rho 7800 kg/m^3, massless disks),\n"
+      "tension step T1 = %.4f N (T_M) at t = 0+, held %.1f s; dt = 1/60 s, BDF-alpha alpha = %.1f,\n"
+      "tau_bt = tau_se = %.3f s, no gravity, no drag; RK4 x%d per disk interval\n",
+      t_max, duration, set.alpha, set.bending_damping_time, rk4_steps);
 
   const Run main_run = simulate(model, rest, pulled, set, dt, duration, rk4_steps, repeat);
   if (!main_run.ok) {
@@ -156,7 +158,8 @@ int main(int argc, char** argv) {
   const Vec3 tip = main_run.steps.back().tip.p;
   std::printf("tip at t = %.2f s: (%.6f, %.6f, %.6f) m\n", duration, tip.x(), tip.y(), tip.z());
   std::printf("time error (vs dt/4):        max over t %.3e m\n", max_tip_difference(main_run, fine_t, 4));
-  std::printf("space error (vs RK4 x%d):     max over t %.3e m\n", 4 * rk4_steps, max_tip_difference(main_run, fine_s, 1));
+  std::printf("space error (vs RK4 x%d):     max over t %.3e m\n", 4 * rk4_steps,
+              max_tip_difference(main_run, fine_s, 1));
   std::printf("tip vs dt/4 at t =");
   for (const double t : {1.0 / 60.0, 0.05, 0.1, 0.25, 0.5, 1.0, 2.0}) {
     const int k = static_cast<int>(std::lround(t / dt)) - 1;
@@ -177,7 +180,8 @@ int main(int argc, char** argv) {
     bool multiple;
   };
   int status = 0;
-  for (const Other& v : {Other{"VC, multiple shooting", &model, true}, Other{"VCref (Eq. 58 removed)", vcref.get(), true}}) {
+  for (const Other& v :
+       {Other{"VC, multiple shooting", &model, true}, Other{"VCref (Eq. 58 removed)", vcref.get(), true}}) {
     const Run r = simulate(*v.model, rest, pulled, set, dt, duration, rk4_steps, repeat, v.multiple);
     if (!r.ok) {
       std::printf("%s: FAILED: %s\n", v.name, r.message.c_str());
@@ -189,11 +193,12 @@ int main(int argc, char** argv) {
       its += s.iterations;
       itmax = std::max(itmax, s.iterations);
     }
-    std::printf("%s: wall %.4f s, real-time ratio %.1f (%.1f over the motion); iterations per step mean %.2f, max %d; "
-                "shots per step %.2f; tip at %.1f s (%.6f, %.6f, %.6f) m, %.3e m from VC's single shooting\n",
-                v.name, r.best_wall_s, duration / r.best_wall_s, 0.5 / r.best_transient_s, double(its) / r.steps.size(),
-                itmax, double(r.shots) / r.steps.size(), duration, r.steps.back().tip.p.x(), r.steps.back().tip.p.y(),
-                r.steps.back().tip.p.z(), (r.steps.back().tip.p - tip).norm());
+    std::printf(
+        "%s: wall %.4f s, real-time ratio %.1f (%.1f over the motion); iterations per step mean %.2f, max %d; "
+        "shots per step %.2f; tip at %.1f s (%.6f, %.6f, %.6f) m, %.3e m from VC's single shooting\n",
+        v.name, r.best_wall_s, duration / r.best_wall_s, 0.5 / r.best_transient_s, double(its) / r.steps.size(), itmax,
+        double(r.shots) / r.steps.size(), duration, r.steps.back().tip.p.x(), r.steps.back().tip.p.y(),
+        r.steps.back().tip.p.z(), (r.steps.back().tip.p - tip).norm());
   }
   std::printf("(targets: VC >= 20, VCref >= 5)\n");
   return status;

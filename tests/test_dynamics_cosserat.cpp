@@ -10,8 +10,8 @@
 #include <vector>
 
 #include "fixed_mesh_settings.hpp"
-#include "tdcr/core/paper_robot.hpp"
 #include "tdcr/core/error.hpp"
+#include "tdcr/core/paper_robot.hpp"
 #include "tdcr/models/vc.hpp"
 #include "vc/vc_dynamics.hpp"
 
@@ -108,7 +108,7 @@ void settles_on_static_answer(ModelKind kind, Effects effects, bool weighted = f
   o.function_tolerance = 1e-12;
   const double dt = 0.005;
   auto dyn = kind == ModelKind::VC ? vc::make_vc_dynamics(static_cast<const VcModel&>(model), set, dt, o)
-                                    : vc::make_vcref_dynamics(model, set, dt, o);
+                                   : vc::make_vcref_dynamics(model, set, dt, o);
   dyn->initialize(static_answer(model, rest, steps), rest);
   const Solution target = static_answer(model, pulled, steps);
   SimulationStep s;
@@ -119,7 +119,8 @@ void settles_on_static_answer(ModelKind kind, Effects effects, bool weighted = f
     if (k == 4) early = (s.tip.p - target.tip().p).norm();
   }
   const double err = (s.tip.p - target.tip().p).norm();
-  std::printf("%s: tip error %.3e m after 0.5 s (%.3e m at 20 ms), %ld shots\n", to_string(kind).c_str(), err, early, dyn->shots());
+  std::printf("%s: tip error %.3e m after 0.5 s (%.3e m at 20 ms), %ld shots\n", to_string(kind).c_str(), err, early,
+              dyn->shots());
   EXPECT_LT(err, 1e-8) << "tip " << s.tip.p.transpose() << " static " << target.tip().p.transpose();
   EXPECT_GT(early, 1e-4);  // it did move: 20 ms after the step it is still on its way
   EXPECT_LT(s.kinetic_energy, 1e-12);
@@ -313,7 +314,8 @@ TEST(DynamicsCosserat, VcAndVcrefAgreeAsDisksGetCloser) {
     for (int k = 1; k <= 20; ++k) {
       const SimulationStep sa = a->advance_with_input(k * dt, pulled), sb = b->advance_with_input(k * dt, pulled);
       ASSERT_EQ(sa.status, TerminationType::Converged) << "VC, n " << n << ", step " << k << ": " << a->last_message();
-      ASSERT_EQ(sb.status, TerminationType::Converged) << "VCref, n " << n << ", step " << k << ": " << b->last_message();
+      ASSERT_EQ(sb.status, TerminationType::Converged)
+          << "VCref, n " << n << ", step " << k << ": " << b->last_message();
       worst = std::max(worst, (sa.tip.p - sb.tip.p).norm());
     }
     gap.push_back(worst);

@@ -96,9 +96,16 @@ class VcDynamics final : public CosseratDynamics {
   /// owned: `owned`); `chords`: VCref's tendons.
   VcDynamics(const StaticModel& original, const VcModel& model, std::unique_ptr<VcModel> owned,
              const DynamicsSettings& settings, double dt, const CosseratDynamicsOptions& o, bool chords)
-      : original_(original), owned_(std::move(owned)), model_(model), settings_(settings), options_(o),
-        chords_(chords), multiple_(chords || o.multiple_shooting), workspace_(model.make_workspace()),
-        W_(static_cast<VcWorkspace&>(*workspace_).impl()), system_(W_, shot_) {
+      : original_(original),
+        owned_(std::move(owned)),
+        model_(model),
+        settings_(settings),
+        options_(o),
+        chords_(chords),
+        multiple_(chords || o.multiple_shooting),
+        workspace_(model.make_workspace()),
+        W_(static_cast<VcWorkspace&>(*workspace_).impl()),
+        system_(W_, shot_) {
     check_settings(settings, dt);
     options_.validate();
     const Robot& robot = model.robot();
@@ -112,7 +119,8 @@ class VcDynamics final : public CosseratDynamics {
 
   void initialize(const Solution& at_rest, const ModelInput& input) override {
     if (!at_rest.converged())
-      throw InputError("at_rest", to_string(at_rest.summary.termination), "the start must be a converged static answer");
+      throw InputError("at_rest", to_string(at_rest.summary.termination),
+                       "the start must be a converged static answer");
     bind(input);
     mesh_.build(W_, options_.rk4_steps, options_.rk4_max_step);
     const Values zero = Values::Zero();
@@ -279,8 +287,9 @@ class VcDynamics final : public CosseratDynamics {
         throw InputError("at_rest", "", "needs the disk frames and backbone samples of a VCref answer");
       const std::vector<double>& T = W_.loads.full_tensions();
       for (int j = 1; j < N; ++j) {
-        const tendon::DiskWrench w = tendon::disk_wrench(j, at_rest.disk_frames.data(), rt, T.data(),
-                                                         model_.effects().disk_normal_force == DiskNormalForce::Removed);
+        const tendon::DiskWrench w =
+            tendon::disk_wrench(j, at_rest.disk_frames.data(), rt, T.data(),
+                                model_.effects().disk_normal_force == DiskNormalForce::Removed);
         dyn::State& y = nodes[j - 1];
         y.head<3>() = at_rest.disk_frames[j].p;
         Eigen::Map<Mat3>(y.data() + 3) = at_rest.disk_frames[j].R;

@@ -190,8 +190,7 @@ void reconstruct(const Mesh& M, const ValuesList& values, std::vector<Frame>& fr
 }
 
 void energies(const VcWorkspace::Impl& W, bool chords, const StepSection& X, const Mesh& M, const ValuesList& values,
-              const std::vector<Frame>& frames, const std::vector<Vec3>& points, double& kinetic,
-              double& potential) {
+              const std::vector<Frame>& frames, const std::vector<Vec3>& points, double& kinetic, double& potential) {
   const cosserat::Section& S = X.S;
   kinetic = 0.0;
   potential = 0.0;

@@ -26,11 +26,11 @@ using ValuesList = std::vector<Values, Eigen::aligned_allocator<Values>>;
 /// One disk interval of the mesh.
 struct Interval {
   int segment = 0;
-  int disk = 0;       ///< The disk at its end (1-based disk index).
-  double s0 = 0.0;    ///< Arc length of its start (m).
-  double h = 0.0;     ///< RK4 step (m).
-  int steps = 0;      ///< RK4 steps.
-  int first = 0;      ///< Its first evaluation point (4 per step).
+  int disk = 0;     ///< The disk at its end (1-based disk index).
+  double s0 = 0.0;  ///< Arc length of its start (m).
+  double h = 0.0;   ///< RK4 step (m).
+  int steps = 0;    ///< RK4 steps.
+  int first = 0;    ///< Its first evaluation point (4 per step).
 };
 
 /// The mesh and the per-point data of one simulation.
@@ -38,7 +38,7 @@ struct Mesh {
   std::vector<Interval> intervals;
   std::vector<int> pre, post;  ///< Per disk (index 0 unused): its proximal and distal points.
   int points = 0;
-  std::vector<double> weight;  ///< Quadrature weight per point (RK4's h/6 (1, 2, 2, 1); 0 at disks).
+  std::vector<double> weight;     ///< Quadrature weight per point (RK4's h/6 (1, 2, 2, 1); 0 at disks).
   std::vector<double> disk_mass;  ///< kg, per disk (index 0 unused).
 
   /// Build for `W`'s model with the RK4 settings.
@@ -50,7 +50,7 @@ struct ShotData {
   const Mesh* mesh = nullptr;
   const StepSection* X = nullptr;
   const ValuesList* history = nullptr;  ///< Per point.
-  ValuesList* values = nullptr;          ///< Per point: written by the shot.
+  ValuesList* values = nullptr;         ///< Per point: written by the shot.
   /// VC: the tendons load the rod continuously (and at their terminations, with kinks). False:
   /// VCref's free rods, the tendons act at the disks only (as chords, added by the caller).
   bool distributed = true;
@@ -101,8 +101,8 @@ class MultipleShooting final : public bvp::ResidualSystem {
     force_ = force;
     moment_ = moment;
   }
-  long shots = 0;             ///< Residual evaluations.
-  Eigen::VectorXd last_x;     ///< The last residual's unknowns (its values are in d.values).
+  long shots = 0;          ///< Residual evaluations.
+  Eigen::VectorXd last_x;  ///< The last residual's unknowns (its values are in d.values).
   bool last_ok = false;
 
  private:
@@ -112,9 +112,9 @@ class MultipleShooting final : public bvp::ResidualSystem {
   bool chords_, remove_normal_;
   double velocity_, rate_, length_, force_ = 1.0, moment_ = 1.0;
   int disks_ = 0, n_ = 0;
-  std::vector<Mat3> rbar_;      ///< Per inner disk (index j - 1).
-  StateList ends_;              ///< Per interval: the state at its end, before the disk's loads.
-  std::vector<Frame> frames_;   ///< Disk poses 0..N for the chords.
+  std::vector<Mat3> rbar_;     ///< Per inner disk (index j - 1).
+  StateList ends_;             ///< Per interval: the state at its end, before the disk's loads.
+  std::vector<Frame> frames_;  ///< Disk poses 0..N for the chords.
   bvp::SparsityPattern pattern_;
 };
 
@@ -128,7 +128,6 @@ void reconstruct(const Mesh& mesh, const ValuesList& values, std::vector<Frame>&
 /// with `chords` VCref's chords between the disks), the tip force (the tip moment has no
 /// potential here).
 void energies(const VcWorkspace::Impl& W, bool chords, const StepSection& X, const Mesh& mesh, const ValuesList& values,
-              const std::vector<Frame>& frames, const std::vector<Vec3>& points, double& kinetic,
-              double& potential);
+              const std::vector<Frame>& frames, const std::vector<Vec3>& points, double& kinetic, double& potential);
 
 }  // namespace tdcr::vc::dyn

@@ -83,7 +83,7 @@ void rhs(const StepSection& X, const cosserat::TendonLoad* tendons, int count, b
       const Vec3& r = t.r;
       const double r2 = r.squaredNorm();
       const double rr[6] = {r.x() * r.x() - r2, r.y() * r.x(), r.y() * r.y() - r2,
-                            r.z() * r.x(), r.z() * r.y(), r.z() * r.z() - r2};
+                            r.z() * r.x(),      r.z() * r.y(), r.z() * r.z() - r2};
       for (int e = 0; e < 6; ++e) H[e] += c * rr[e];
       sum_c += c;
       sum_cr += c * r;

@@ -21,13 +21,13 @@ enum : int { kV = 0, kU = 3, kQ = 6, kW = 9, kVs = 12, kUs = 15 };
 /// the effective stiffnesses K + c0 B of the implicit step, the mass per length and the rotary
 /// inertia per length, and the drag.
 struct StepSection {
-  cosserat::Section S;     ///< Statics' section (weight, flags, K).
-  cosserat::Section Seff;  ///< The same with K + c0 B (strains from wrenches within the step).
+  cosserat::Section S;                          ///< Statics' section (weight, flags, K).
+  cosserat::Section Seff;                       ///< The same with K + c0 B (strains from wrenches within the step).
   Vec3 bse = Vec3::Zero(), bbt = Vec3::Zero();  ///< tau_se K_se, tau_bt K_bt.
-  double c0 = 0.0;         ///< y_t = c0 y + y_h (0: statics).
-  double rho_a = 0.0;      ///< kg/m.
-  Vec3 rho_j = Vec3::Zero();  ///< kg m (rho I, rho I, rho 2I).
-  double drag = 0.0;       ///< Quadratic drag coefficient, N s^2/m^3.
+  double c0 = 0.0;                              ///< y_t = c0 y + y_h (0: statics).
+  double rho_a = 0.0;                           ///< kg/m.
+  Vec3 rho_j = Vec3::Zero();                    ///< kg m (rho I, rho I, rho 2I).
+  double drag = 0.0;                            ///< Quadratic drag coefficient, N s^2/m^3.
 
   /// Strains from the base-frame wrench with the history h of the point:
   /// n_b = K_se (v - e_z) + B_se v_t, m_b = K_bt u + B_bt u_t, v_t = c0 v + v_h.
