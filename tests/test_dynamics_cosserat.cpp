@@ -324,3 +324,53 @@ TEST(DynamicsCosserat, VcAndVcrefAgreeAsDisksGetCloser) {
   EXPECT_LT(gap[1], 0.35 * gap[0]);
   EXPECT_LT(gap[2], 0.35 * gap[1]);
 }
+
+// The time schemes converge at their order: the cantilever's tip force (small: a linear swing)
+// is taken off smoothly, F (1 + cos(pi t / T)) / 2 over T = 9.6 ms, so that the modes the steps
+// cannot resolve are hardly excited; the tip at T with dt = 4e-4, 2e-4, 1e-4 s: for a
+// second-order scheme the differences of successive results fall fourfold (Richardson:
+// (x1 - x2) / (x2 - x3) -> 2^2). Midpoint, BDF2 (alpha 0) and BDF-alpha (alpha -0.2: still second
+// order, Till et al. 2019).
+TEST(DynamicsCosserat, TimeSchemesConvergeAtSecondOrder) {
+  const Robot robot = steel_robot(5);
+  const VcModel model(robot, Effects{});
+  const int steps = 4;
+  const double T = 9.6e-3;
+  const auto input = [&](double t) {
+    ModelInput in = tensions(robot, {});
+    in.loads.tip_force = Vec3(1e-3 * 0.5 * (1.0 + std::cos(M_PI * std::min(t / T, 1.0))), 0.0, 0.0);
+    return in;
+  };
+  const Solution start = static_answer(model, input(0.0), steps);
+  struct Scheme {
+    const char* name;
+    TimeScheme scheme;
+    double alpha;
+  };
+  for (const Scheme& sc :
+       {Scheme{"midpoint", TimeScheme::ImplicitMidpoint, 0.0}, Scheme{"BDF2", TimeScheme::BdfAlpha, 0.0},
+        Scheme{"BDF-alpha -0.2", TimeScheme::BdfAlpha, -0.2}}) {
+    double x[3];
+    for (int r = 0; r < 3; ++r) {
+      const double dt = 4e-4 / (1 << r);
+      DynamicsSettings set;
+      set.scheme = sc.scheme;
+      set.alpha = sc.alpha;
+      vc::CosseratDynamicsOptions o;
+      o.rk4_steps = steps;
+      auto dyn = vc::make_vc_dynamics(model, set, dt, o);
+      dyn->initialize(start, input(0.0));
+      SimulationStep s;
+      const bool midpoint = sc.scheme == TimeScheme::ImplicitMidpoint;
+      for (int k = 1; k <= (24 << r); ++k) {
+        s = dyn->advance_with_input(k * dt, input(midpoint ? (k - 0.5) * dt : k * dt));
+        ASSERT_EQ(s.status, TerminationType::Converged) << sc.name << ", dt " << dt << ", step " << k;
+      }
+      x[r] = s.tip.p.x();
+    }
+    const double ratio = (x[0] - x[1]) / (x[1] - x[2]);
+    std::printf("%s: tip x %.9e, %.9e, %.9e m; Richardson ratio %.2f\n", sc.name, x[0], x[1], x[2], ratio);
+    EXPECT_GT(ratio, 3.0) << sc.name;
+    EXPECT_LT(ratio, 5.5) << sc.name;
+  }
+}
