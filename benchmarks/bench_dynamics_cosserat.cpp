@@ -52,7 +52,8 @@ Run simulate(const StaticModel& model, const ModelInput& rest, const ModelInput&
   Run r;
   vc::CosseratDynamicsOptions o;
   o.rk4_steps = rk4_steps;
-  o.multiple_shooting = multiple;
+  o.shooting =
+      multiple ? vc::CosseratDynamicsOptions::Shooting::Multiple : vc::CosseratDynamicsOptions::Shooting::Automatic;
   const int n = static_cast<int>(std::lround(duration / dt));
   for (int rep = 0; rep < repeat; ++rep) {
     auto dyn = model.kind() == ModelKind::VC ? vc::make_vc_dynamics(static_cast<const VcModel&>(model), set, dt, o)

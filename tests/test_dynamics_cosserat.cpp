@@ -207,7 +207,8 @@ TEST(DynamicsCosserat, EnergyIsKeptWithoutDampingAndDecaysWithIt) {
     set.air_drag = drag;
     vc::CosseratDynamicsOptions o;
     o.rk4_steps = steps;
-    o.multiple_shooting = multiple;
+    o.shooting =
+        multiple ? vc::CosseratDynamicsOptions::Shooting::Multiple : vc::CosseratDynamicsOptions::Shooting::Single;
     auto dyn = vc::make_vc_dynamics(model, set, dt, o);
     dyn->initialize(start, loaded);
     const int n = static_cast<int>(std::ceil(period / dt));

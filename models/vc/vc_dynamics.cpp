@@ -31,6 +31,8 @@ void CosseratDynamicsOptions::validate() const {
   if (!(function_tolerance > 0.0) || !std::isfinite(function_tolerance))
     throw InputError("function_tolerance", format_value(function_tolerance), "must be a number > 0");
   if (max_iterations < 1) throw InputError("max_iterations", std::to_string(max_iterations), "must be >= 1");
+  if (!(automatic_threshold > 0.0))
+    throw InputError("automatic_threshold", format_value(automatic_threshold), "must be > 0");
 }
 
 void check_settings(const DynamicsSettings& s, double dt) {
@@ -49,6 +51,20 @@ void check_settings(const DynamicsSettings& s, double dt) {
 namespace {
 
 using dyn::Values;
+
+/// CosseratDynamicsOptions::Shooting for VC.
+bool shoots_multiply(const VcModel& model, const DynamicsSettings& settings, double dt,
+                     const CosseratDynamicsOptions& o) {
+  if (o.shooting != CosseratDynamicsOptions::Shooting::Automatic)
+    return o.shooting == CosseratDynamicsOptions::Shooting::Multiple;
+  const Robot& robot = model.robot();
+  const double a = settings.alpha;
+  const double c0 = settings.scheme == TimeScheme::ImplicitMidpoint ? 2.0 / dt : (1.5 + a) / (dt * (1.0 + a));
+  const double exponent =
+      robot.total_length() *
+      std::pow(robot.backbone.linear_mass() * c0 * c0 / robot.backbone.effective_stiffness().EI, 0.25);
+  return exponent > o.automatic_threshold;
+}
 using dyn::ValuesList;
 
 /// Two inputs the same (skip a re-bind).
@@ -102,7 +118,7 @@ class VcDynamics final : public CosseratDynamics {
         settings_(settings),
         options_(o),
         chords_(chords),
-        multiple_(chords || o.multiple_shooting),
+        multiple_(chords || shoots_multiply(model, settings, dt, o)),
         workspace_(model.make_workspace()),
         W_(static_cast<VcWorkspace&>(*workspace_).impl()),
         system_(W_, shot_) {

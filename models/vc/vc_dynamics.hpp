@@ -35,14 +35,24 @@ struct CosseratDynamicsOptions {
   double function_tolerance = 1e-10;
   /// Most Newton iterations per time step, >= 1.
   int max_iterations = 50;
-  /// VC: multiple shooting (one interval per disk interval) instead of single shooting. Slower
-  /// per step, but single shooting's Newton loses its way on short steps of large motions (its
-  /// tip depends on the base wrench like exp(L (rho A c0^2 / EI)^(1/4)), c0 ~ 2 / dt). VCref
+  /// VC's formulation of a step. Single shooting's tip depends on the base wrench like
+  /// exp(L (rho A c0^2 / EI)^(1/4)) (L the robot's length, c0 ~ 2 / dt the step's time
+  /// coefficient): short steps of large motions make its Newton lose its way. Multiple shooting
+  /// (one interval per disk interval) is slower per step but keeps that factor near 1. VCref
   /// always uses multiple shooting.
-  bool multiple_shooting = false;
+  enum class Shooting {
+    Automatic,  ///< Multiple when L (rho A c0^2 / EI)^(1/4) > automatic_threshold, else single.
+    Single,
+    Multiple
+  };
+  Shooting shooting = Shooting::Automatic;  ///< See Shooting.
+  /// Shooting::Automatic: the exponent above which VC shoots multiply (8: e^8 = 3000; single
+  /// shooting carried the paper robot's 8 mm swing at 6.9 and lost it at 9.8,
+  /// docs/dynamics-cosserat.md), > 0.
+  double automatic_threshold = 8.0;
 
-  /// @brief Throws InputError naming `rk4_steps`, `rk4_max_step`, `function_tolerance` or
-  /// `max_iterations` when out of range.
+  /// @brief Throws InputError naming `rk4_steps`, `rk4_max_step`, `function_tolerance`,
+  /// `max_iterations` or `automatic_threshold` when out of range.
   void validate() const;
 };
 
