@@ -89,8 +89,15 @@ double crossing_frequency(const std::vector<double>& t, const std::vector<double
 // robot, on from t = 0+ with the tensions (the disks' inertia, weights and, for VC, their kinks
 // with damping). With 2 g disks the slowest mode is underdamped (zeta about 0.25) and needs about
 // 3 s to settle to 1e-11 m.
-void settles_on_static_answer(ModelKind kind, Effects effects, bool weighted = false) {
+// `helical`: the tendons turn half a turn about the backbone (routed offsets r(s)).
+void settles_on_static_answer(ModelKind kind, Effects effects, bool weighted = false, bool helical = false) {
   Robot robot = steel_robot(5);
+  if (helical)
+    for (Segment& seg : robot.segments)
+      for (TendonSpec& t : seg.tendons) {
+        t.routing.type = TendonRoutingSpec::Type::Helical;
+        t.routing.turns = 0.5;
+      }
   if (weighted)
     for (Segment& seg : robot.segments) seg.disk_mass = 2e-4;
   const std::unique_ptr<StaticModel> owner = make_model(kind, robot, effects);
@@ -125,17 +132,23 @@ void settles_on_static_answer(ModelKind kind, Effects effects, bool weighted = f
   EXPECT_GT(early, 1e-4);  // it did move: 20 ms after the step it is still on its way
   EXPECT_LT(s.kinetic_energy, 1e-12);
   EXPECT_LT((s.tip.R - target.tip().R).norm(), 1e-7);
-  // VC's samples hold the wrench just distal of each disk, as its statics do.
+  // VC's samples hold the wrench just distal of each disk, as its statics do (the damping's
+  // share B v_t of the last strain rates, about 1e-10 /s, is in them: 1e-7 N with EA tau_se).
   const Solution shape = dyn->shape();
   ASSERT_EQ(shape.backbone.size(), target.backbone.size());
   if (kind == ModelKind::VC)
     for (std::size_t j = 0; j < shape.backbone.size(); ++j) {
-      EXPECT_LT((shape.backbone[j].n - target.backbone[j].n).norm(), 1e-8) << "disk " << j;
-      EXPECT_LT((shape.backbone[j].m - target.backbone[j].m).norm(), 1e-9) << "disk " << j;
+      EXPECT_LT((shape.backbone[j].n - target.backbone[j].n).norm(), 1e-6) << "disk " << j;
+      EXPECT_LT((shape.backbone[j].m - target.backbone[j].m).norm(), 1e-8) << "disk " << j;
     }
 }
 
 TEST(DynamicsCosserat, DampedStepSettlesOnTheStaticAnswer) { settles_on_static_answer(ModelKind::VC, Effects{}); }
+
+TEST(DynamicsCosserat, DampedStepWithHelicalTendonsSettlesOnTheStaticAnswer) {
+  settles_on_static_answer(ModelKind::VC, Effects{}, false, true);
+  settles_on_static_answer(ModelKind::VCref, Effects{}, false, true);
+}
 
 TEST(DynamicsCosserat, DampedStepWithWeightsSettlesOnTheStaticAnswer) {
   settles_on_static_answer(ModelKind::VC, Effects{}, true);
