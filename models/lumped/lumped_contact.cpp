@@ -39,6 +39,12 @@ void LumpedProblem::bind_contact(const ModelInput& input) {
   // The contact solve is the recursive form; the free-space solve before it is that too, so
   // that an untouched obstacle leaves the free-space answer of the default formulation.
   banded_ = false;
+  // An unloaded robot has no unknowns (it is straight), but an obstacle may be in its way: its
+  // answer is then the straight robot solved for, which complete() can test.
+  if (loads_.active == 0) {
+    loads_.active = body_.N;
+    reduced_ = body_.reduced(body_.N);
+  }
 }
 
 void LumpedProblem::enter_contact_mode() {

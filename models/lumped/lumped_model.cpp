@@ -128,6 +128,7 @@ void LumpedProblem::unknown_scale(Eigen::Ref<Eigen::VectorXd> s) const {
     return;
   }
   for (int j = 0; j < active(); ++j) x_scale(s.data() + body_.per_subsegment * j);
+  s.tail(static_cast<Eigen::Index>(contacts_.size())).setOnes();  // the scaled contact forces
 }
 
 void LumpedProblem::cold_guess(Eigen::VectorXd& y) {
