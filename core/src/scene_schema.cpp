@@ -435,18 +435,18 @@ const Schema<Obstacle>& obstacle_schema() {
                         "(a tube the robot stays inside)",
                         kContact})
               .required(),
-          vec3_field("point", &O::point, {"m", nullptr, "plane: a point on it", kContact}).when(is({T::Plane})),
-          vec3_field("normal", &O::normal, {"", nullptr, "plane: nonzero, pointing to the free side", kContact})
+          vec3_field("point", &O::point, {"m", "required (plane)", "plane: a point on it", kContact}).when(is({T::Plane})),
+          vec3_field("normal", &O::normal, {"", "required (plane)", "plane: nonzero, pointing to the free side", kContact})
               .when(is({T::Plane})),
-          vec3_field("center", &O::center, {"m", nullptr, "sphere: its centre", kContact}).when(is({T::Sphere})),
+          vec3_field("center", &O::center, {"m", "required (sphere)", "sphere: its centre", kContact}).when(is({T::Sphere})),
           number_field("radius", &O::radius,
-                       {"m", nullptr, "> 0; sphere, cylinder, capsule: radius; lumen: inner radius", kContact})
+                       {"m", "required (not plane)", "> 0; sphere, cylinder, capsule: radius; lumen: inner radius", kContact})
               .when(is({T::Sphere, T::Cylinder, T::Capsule, T::Lumen})),
-          points("ends", "array of [3] numbers", {"m", nullptr, "cylinder, capsule: the two axis end points", kContact}, 2,
+          points("ends", "array of [3] numbers", {"m", "required (cylinder, capsule)", "cylinder, capsule: the two axis end points", kContact}, 2,
                  [](const O& o) { return std::vector<Vec3>{o.ends[0], o.ends[1]}; },
                  [](O& o, std::vector<Vec3> v) { o.ends[0] = v[0], o.ends[1] = v[1]; }, is({T::Cylinder, T::Capsule})),
           points("centreline", "array of [3] numbers",
-                 {"m", nullptr, "lumen: at least 2 points, the tube's axis (open at both ends)", kContact}, 0,
+                 {"m", "required (lumen)", "lumen: at least 2 points, the tube's axis (open at both ends)", kContact}, 0,
                  [](const O& o) { return o.centreline; }, [](O& o, std::vector<Vec3> v) { o.centreline = std::move(v); },
                  is({T::Lumen})),
       },
