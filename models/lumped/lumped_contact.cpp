@@ -168,6 +168,7 @@ ModelProblem::Completion LumpedProblem::complete(Eigen::VectorXd& y, const bvp::
   // The set of active contacts changes between solves: a Jacobian of another set misleads.
   nopt.reuse_jacobian = false;
   nopt.freeze_jacobian_below = 0.0;
+  nopt.max_setup_calls = 10;
   // A model's bound on the Newton step (PRB: 1, for its bending-plane chart in cold solves) is
   // too short for the step from a penetrating free-space answer: examples/robot_against_wall.json
   // (PRB, a rim 7.5 mm into the wall) diverged with 5 steps of maximum length at 1 and converged

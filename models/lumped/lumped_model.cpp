@@ -116,6 +116,9 @@ void LumpedProblem::adjust_warm(bvp::NewtonOptions& options, bool same_input) co
   constexpr int kStaleAfterIterations = 2;
   options.reuse_jacobian = same_input || last_iterations_ <= kStaleAfterIterations;
   options.max_setup_calls = kReuseSetupCalls;
+  // With contact candidates (a warm start's contacts) the Jacobian is dense differences, a
+  // residual per unknown: modified Newton from the last one pays (docs/contact.md, bench_contact).
+  if (!contacts_.empty()) options.reuse_jacobian = true;
 }
 
 void LumpedProblem::x_scale(double* s) const {
