@@ -194,7 +194,29 @@ ModelProblem::Completion LumpedProblem::complete(Eigen::VectorXd& y, const bvp::
     append_contact_unknowns(y);
     summary.unknowns = size();
     SolverSummary step;
+    const Eigen::VectorXd start = y;
     copy_newton_result(newton().solve(*this, y, nopt), step);
+    if (!step.converged() && contact_stiffness_ == 0.0) {
+      // Rigid contact from a deeply penetrating answer can diverge (PRB, a 1.5 N tip force into a
+      // wall): compliant contact first, its stiffness raised a decade per solve from F_s / L
+      // (a penetration of L for the force scale) to 1e6 times that, then rigid from there.
+      add_work(step, summary);
+      y = start;
+      step = SolverSummary{};
+      const double soft = contact_force_scale_ / body_.length;
+      for (int decade = 0; decade <= 7; ++decade) {
+        contact_stiffness_ = decade < 7 ? soft * std::pow(10.0, decade) : 0.0;
+        residual_changed();
+        SolverSummary stage;
+        copy_newton_result(newton().solve(*this, y, nopt), stage);
+        if (decade < 7) add_work(stage, summary);
+        step = stage;
+        if (!stage.converged()) break;
+      }
+      contact_stiffness_ = 0.0;
+      residual_changed();
+      step.message += " (rigid contact reached through compliant contact of rising stiffness)";
+    }
     add_work(step, summary);
     summary.termination = step.termination;
     summary.residual_norm = step.residual_norm;
