@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "tdcr/core/contact_geometry.hpp"
+#include "tdcr/core/error.hpp"
 #include "tdcr/core/paper_robot.hpp"
 #include "tdcr/models/model_registry.hpp"
 #include "tdcr/models/static_model.hpp"
@@ -297,4 +298,34 @@ TEST(ContactLumpedAgreement, LargeTipForceIntoAWall) {
     tip[m] = sol.tip().p;
   }
   EXPECT_LT((tip[0] - tip[1]).norm(), 1e-5);
+}
+
+// Models without contact refuse obstacles, naming the field; so does displacement input (tension
+// input only so far); "auto" picks a model with contact.
+TEST(ContactLumpedInput, WhoTakesObstacles) {
+  Scene s = robot_scene("vc", 5);
+  s.actuation.values = {1.0, 0, 0, 0};
+  s.environment.obstacles = {plane(Vec3(0, 0.012, 0), Vec3(0, -1, 0))};
+  for (const char* model : {"vc", "vcref", "cc"}) {
+    s.model = model;
+    try {
+      run(s);
+      ADD_FAILURE() << model << " took obstacles";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.field(), "environment.obstacles") << e.what();
+    }
+  }
+  s.model = "auto";
+  const Solution a = run(s);
+  EXPECT_TRUE(a.model == "ccsub" || a.model == "prb") << a.model;
+  EXPECT_TRUE(a.converged()) << a.summary.message;
+  s.model = "ccsub";
+  s.actuation.kind = Actuation::Kind::Displacements;
+  s.actuation.values = {0.001, 0, 0, 0};
+  try {
+    run(s);
+    ADD_FAILURE() << "displacement input took obstacles";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "environment.obstacles") << e.what();
+  }
 }
