@@ -172,7 +172,7 @@ ModelProblem::Completion LumpedProblem::complete(Eigen::VectorXd& y, const bvp::
   // A model's bound on the Newton step (PRB: 1, for its bending-plane chart in cold solves) is
   // too short for the step from a penetrating free-space answer: examples/robot_against_wall.json
   // (PRB, a rim 7.5 mm into the wall) diverged with 5 steps of maximum length at 1 and converged
-  // in 8 iterations at 3 and at 10.
+  // in 8 iterations (exact Newton) at 3 and at 10.
   if (nopt.max_newton_step > 0.0) nopt.max_newton_step *= 10.0;
   for (int round = 0;; ++round) {
     gather_x(y, x_);
@@ -204,18 +204,20 @@ ModelProblem::Completion LumpedProblem::complete(Eigen::VectorXd& y, const bvp::
       y = start;
       step = SolverSummary{};
       const double soft = contact_force_scale_ / body_.length;
-      for (int decade = 0; decade <= 7; ++decade) {
+      int decade = 0;
+      for (; decade <= 7; ++decade) {
         contact_stiffness_ = decade < 7 ? soft * std::pow(10.0, decade) : 0.0;
         residual_changed();
-        SolverSummary stage;
-        copy_newton_result(newton().solve(*this, y, nopt), stage);
-        if (decade < 7) add_work(stage, summary);
-        step = stage;
-        if (!stage.converged()) break;
+        step = SolverSummary{};
+        copy_newton_result(newton().solve(*this, y, nopt), step);
+        if (!step.converged() || decade == 7) break;
+        add_work(step, summary);  // the last stage's work is added below
       }
       contact_stiffness_ = 0.0;
       residual_changed();
-      step.message += " (rigid contact reached through compliant contact of rising stiffness)";
+      step.message += step.converged() ? " (rigid contact reached through compliant contact of rising stiffness)"
+                                       : " (compliant contact of rising stiffness failed at stage " +
+                                             std::to_string(decade) + " of 7)";
     }
     add_work(step, summary);
     summary.termination = step.termination;
