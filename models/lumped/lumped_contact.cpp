@@ -112,6 +112,7 @@ void LumpedProblem::report_contacts(Solution& solution) const {
 }
 
 bool LumpedProblem::penetrating_pairs(const Eigen::VectorXd& x, bool add) {
+  passed_through_ = false;
   contact_frames_.resize(body_.N + 1);
   body_.compute_frames(x.data(), body_.N, contact_frames_.data());
   const auto candidate = [&](int j, int o, ContactBody b) {
@@ -131,7 +132,14 @@ bool LumpedProblem::penetrating_pairs(const Eigen::VectorXd& x, bool add) {
           if (b == ContactBody::Disk && radius <= 0.0) continue;
           if (candidate(j, o, b)) continue;
           const double gap = contact_point(obstacles_[o], contact_frames_[j], b, radius).gap;
-          if (pass == 0 && gap < -kPenetration) penetrates = true;
+          if (pass == 0 && gap < -kPenetration) {
+            penetrates = true;
+            // Deeper than a quarter of a finite obstacle's radius: the free answer may have passed
+            // its middle, and the nearest way out is then on its far side.
+            const Obstacle& ob = obstacles_[o];
+            if (ob.type != Obstacle::Type::Plane && ob.type != Obstacle::Type::Lumen && -gap > 0.25 * ob.radius)
+              passed_through_ = true;
+          }
           if (pass == 1 && gap < margin) {
             ContactCandidate c;
             c.disk = j, c.obstacle = o, c.body = b;
@@ -141,6 +149,17 @@ bool LumpedProblem::penetrating_pairs(const Eigen::VectorXd& x, bool add) {
     if (!penetrates) break;
   }
   return penetrates;
+}
+
+bool LumpedProblem::swept_pairs(const Eigen::VectorXd& from, const Eigen::VectorXd& to) {
+  // Shapes between two answers (their unknowns interpolated): an obstacle thinner than one step
+  // of the robot can lie between them, penetrated by neither.
+  constexpr int kSamples = 16;
+  for (int k = 1; k < kSamples; ++k) {
+    swept_x_ = from + (to - from) * (double(k) / kSamples);
+    if (penetrating_pairs(swept_x_, true)) return true;
+  }
+  return false;
 }
 
 bool LumpedProblem::warm_contacts(const Solution& previous) {
@@ -158,6 +177,55 @@ bool LumpedProblem::warm_contacts(const Solution& previous) {
     contacts_.push_back(c);
   }
   return !contacts_.empty();
+}
+
+bool LumpedProblem::load_with_contacts(Eigen::VectorXd& y, const bvp::NewtonOptions& nopt, SolverSummary& work) {
+  // Natural-parameter steps of the load factor from rest, each a Newton solve from the last
+  // answer; a step whose answer penetrates a pair left out adds it and is solved again; a failed
+  // step is halved.
+  constexpr double kFirstStep = 0.125, kMinStep = 1.0 / 1024.0;
+  rest_state(y);  // the straight robot, every candidate's force 0 (active: every subsegment)
+  double t = 0.0, h = kFirstStep;
+  Eigen::VectorXd last = y;
+  while (t < 1.0) {
+    const double next = std::min(1.0, t + h);
+    set_parameter(next);
+    residual_changed();
+    SolverSummary step;
+    copy_newton_result(newton().solve(*this, y, nopt), step);
+    add_work(step, work);
+    ++work.continuation_steps;
+    work.message = step.message;
+    if (!step.converged()) {
+      y = last;
+      h *= 0.5;
+      if (h < kMinStep) {
+        set_parameter(1.0);
+        work.termination = step.termination;
+        return false;
+      }
+      continue;
+    }
+    gather_x(y, x_);
+    contact_x_ = x_;
+    const std::size_t before = contacts_.size();
+    if (!penetrating_pairs(contact_x_, true)) swept_pairs(last.head(contact_x_.size()), contact_x_);
+    if (contacts_.size() != before) {  // a new contact closed within this step: again with it
+      residual_changed();
+      const Eigen::Index n = last.size(), added = static_cast<Eigen::Index>(contacts_.size() - before);
+      y.resize(n + added);  // the last answer, its forces, and 0 for the new candidates
+      y.head(n) = last;
+      y.tail(added).setZero();
+      last = y;
+      continue;
+    }
+    t = next;
+    last = y;
+    h = std::min(2.0 * h, 0.25);
+  }
+  set_parameter(1.0);
+  work.termination = TerminationType::Converged;
+  return true;
 }
 
 ModelProblem::Completion LumpedProblem::complete(Eigen::VectorXd& y, const bvp::NewtonOptions& options,
@@ -180,7 +248,14 @@ ModelProblem::Completion LumpedProblem::complete(Eigen::VectorXd& y, const bvp::
     contact_x_.setZero(body_.per_subsegment * body_.N);
     contact_x_.head(x_.size()) = x_;
     const std::size_t before = contacts_.size();
-    if (!penetrating_pairs(contact_x_, true)) return Completion::Done;
+    bool penetrates = penetrating_pairs(contact_x_, true);
+    if (!penetrates && round == 0 && before == 0) {
+      // The free answer may have passed a thin obstacle on its way from rest: then loaded from
+      // rest with the contacts (load_with_contacts).
+      penetrates = swept_pairs(Eigen::VectorXd::Zero(contact_x_.size()), contact_x_);
+      passed_through_ = penetrates;
+    }
+    if (!penetrates) return Completion::Done;
     if (round == kMaxContactRounds || contacts_.size() == before) {
       summary.termination = TerminationType::NoConvergence;
       summary.message += "; the answer still penetrates an obstacle after " + std::to_string(round) +
@@ -194,6 +269,21 @@ ModelProblem::Completion LumpedProblem::complete(Eigen::VectorXd& y, const bvp::
     append_contact_unknowns(y);
     summary.unknowns = size();
     SolverSummary step;
+    if (round == 0 && passed_through_) {
+      // The free answer is deep inside a sphere, cylinder or capsule: load the robot from rest
+      // with the contacts instead, so that it meets the obstacle on the side it comes from.
+      if (load_with_contacts(y, nopt, step)) {
+        add_work(step, summary);
+        summary.message += "; contact with " + std::to_string(contacts_.size()) +
+                           " candidates, loaded from rest (the free answer had passed an obstacle's middle): " +
+                           step.message;
+        continue;  // then the usual test for pairs left out
+      }
+      add_work(step, summary);
+      summary.termination = step.termination;
+      summary.message += "; loading from rest with contact failed: " + step.message;
+      return Completion::FollowAgain;
+    }
     const Eigen::VectorXd start = y;
     copy_newton_result(newton().solve(*this, y, nopt), step);
     if (!step.converged() && contact_stiffness_ == 0.0) {

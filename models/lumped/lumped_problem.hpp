@@ -274,6 +274,14 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   // with `add`, those and every pair within the margin join the candidates. True if any penetrates.
   bool penetrating_pairs(const Eigen::VectorXd& x, bool add);
   bool warm_contacts(const Solution& previous);
+  // complete(): penetrating_pairs() of shapes between the unknowns `from` and `to` (all N
+  // subsegments), the first that penetrates a pair left out adding its candidates; true if one did.
+  bool swept_pairs(const Eigen::VectorXd& from, const Eigen::VectorXd& to);
+  Eigen::VectorXd swept_x_;
+  bool passed_through_ = false;  // penetrating_pairs() found a finite obstacle penetrated deeply
+  // complete(): load the robot from rest with the candidates (load factor 0 -> 1 in steps, new
+  // contacts added as they close); y the answer at full load; false if a step could not be solved.
+  bool load_with_contacts(Eigen::VectorXd& y, const bvp::NewtonOptions& nopt, SolverSummary& work);
 
   int stride() const { return banded_ ? body_.per_subsegment + 12 : body_.per_subsegment; }
   bool recursive_residual(const double* x, double* f);
