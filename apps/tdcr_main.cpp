@@ -71,7 +71,8 @@ std::string usage() {
          "                        robot length (default 0.01); auto picks the cheapest model\n"
          "                        expected to meet it and prints why\n"
          "  --json                print the result as JSON (model, status, reason, iterations,\n"
-         "                        residual_norm, tip, disks, tendon_displacements, timing, summary)\n"
+         "                        residual_norm, tip, disks, tendon_displacements, contacts with\n"
+         "                        obstacles, timing, summary)\n"
          "  --repeat N            solve N times (N >= 1) from the same initial guess and report the\n"
          "                        median and minimum solve time\n"
          "  --integrator NAME     rk4, rk4_fixed or cvode; overrides the scene's solver.integrator\n"
@@ -260,6 +261,11 @@ void print_human(const Timed& t, int repeat) {
       std::printf("%s%.6g%s", k ? ", " : "", s.tensions[k], s.tendon_slack[k] ? " (slack)" : "");
     std::printf("]\n");
   }
+  for (const tdcr::Contact& c : s.contacts)
+    std::printf("contact: obstacle %d, %s at disk %d (s = %.4g mm), force %.6g N along [%.4g, %.4g, %.4g], "
+                "point (mm) [%.6g, %.6g, %.6g], gap %.3g m\n",
+                c.obstacle, c.disk ? "rim of disk" : "backbone", c.disk_index, c.s * 1e3, c.force, c.normal.x(),
+                c.normal.y(), c.normal.z(), c.point.x() * 1e3, c.point.y() * 1e3, c.point.z() * 1e3, c.gap);
   std::printf("solve time (us):                     median %.1f, min %.1f over %d run%s\n", t.median_us,
               t.min_us, repeat, repeat == 1 ? "" : "s");
 }

@@ -147,6 +147,7 @@ void Robot::validate() const {
     if (seg.disks < 1)
       throw InputError(sp + ".disks", std::to_string(seg.disks), "must be at least 1");
     require_non_negative(sp + ".disk_mass", seg.disk_mass);
+    require_non_negative(sp + ".disk_radius", seg.disk_radius);
     disks_passed += seg.disks;
     for (std::size_t k = 0; k < seg.tendons.size(); ++k) {
       const std::string tp = sp + ".tendons[" + std::to_string(k) + "]";

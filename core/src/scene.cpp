@@ -1,8 +1,10 @@
 #include "tdcr/core/scene.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
+#include "tdcr/core/contact_geometry.hpp"
 #include "tdcr/core/error.hpp"
 
 namespace tdcr {
@@ -52,6 +54,7 @@ bool TendonFriction::on() const {
 void ModelInput::validate(const Robot& robot) const {
   // Called on every solve: one pass over the values for valid input; field names and the error
   // are found by the checks below only when something is wrong.
+  environment.validate(robot);
   const int m = robot.tendon_count();
   if (static_cast<int>(actuation.values.size()) == m && !actuation.mixed()) {
     const bool tensions = actuation.kind == Actuation::Kind::Tensions;
@@ -82,6 +85,62 @@ void ModelInput::validate(const Robot& robot) const {
   require_finite_vec("loads.gravity", loads.gravity);
 }
 
+void Environment::validate(const Robot& robot) const {
+  if (!(std::isfinite(contact.stiffness) && contact.stiffness >= 0.0))
+    throw InputError("environment.contact.stiffness", format_value(contact.stiffness),
+                     "must be a finite number >= 0 (0: rigid contact)");
+  for (std::size_t i = 0; i < obstacles.size(); ++i) {
+    const Obstacle& o = obstacles[i];
+    const std::string p = "environment.obstacles[" + std::to_string(i) + "]";
+    const auto vec = [&](const char* key, const Vec3& v) {
+      require_finite_vec((p + "." + key).c_str(), v);
+    };
+    const auto positive = [&](const char* key, double v) {
+      if (!(std::isfinite(v) && v > 0.0)) throw InputError(p + "." + key, format_value(v), "must be positive");
+    };
+    using T = Obstacle::Type;
+    switch (o.type) {
+      case T::Plane:
+        vec("point", o.point);
+        vec("normal", o.normal);
+        if (o.normal.norm() == 0.0) throw InputError(p + ".normal", "[0, 0, 0]", "must not be zero");
+        break;
+      case T::Sphere:
+        vec("center", o.center);
+        positive("radius", o.radius);
+        break;
+      case T::Cylinder:
+      case T::Capsule:
+        vec("ends[0]", o.ends[0]);
+        vec("ends[1]", o.ends[1]);
+        positive("radius", o.radius);
+        if ((o.ends[1] - o.ends[0]).norm() == 0.0)
+          throw InputError(p + ".ends", "two equal points", "the axis end points must differ");
+        break;
+      case T::Lumen:
+        positive("radius", o.radius);
+        if (o.centreline.size() < 2)
+          throw InputError(p + ".centreline", std::to_string(o.centreline.size()) + " points",
+                           "must list at least 2 points");
+        for (std::size_t k = 0; k < o.centreline.size(); ++k) {
+          vec(("centreline[" + std::to_string(k) + "]").c_str(), o.centreline[k]);
+          if (k > 0 && (o.centreline[k] - o.centreline[k - 1]).norm() == 0.0)
+            throw InputError(p + ".centreline[" + std::to_string(k) + "]", "a repeated point",
+                             "consecutive centreline points must differ");
+        }
+        break;
+    }
+    // The base is clamped: an obstacle it already penetrates has no answer.
+    const double disk = robot.segments.empty() ? 0.0 : robot.segments[0].disk_radius;
+    const ContactPoint bb = contact_point(o, Frame{}, ContactBody::Backbone, robot.backbone.outer_radius);
+    const ContactPoint dk = contact_point(o, Frame{}, ContactBody::Disk, disk);
+    const double gap = std::min(bb.gap, disk > 0.0 ? dk.gap : bb.gap);
+    if (!(gap > 0.0))
+      throw InputError(p, "gap " + format_value(gap) + " m at the base",
+                       "the obstacle intersects the robot's base (its backbone or base disk at s = 0)");
+  }
+}
+
 void Scene::validate() const {
   robot.validate();
   input().validate(robot);
@@ -102,6 +161,7 @@ SceneEffects active_effects(const Robot& robot, const Effects& effects, const Mo
   e.shear_extension = effects.shear_extension;
   e.disk_normal_force_removed = effects.disk_normal_force == DiskNormalForce::Removed;
   e.tendon_friction = effects.tendon_friction.on();
+  e.contact = !input.environment.obstacles.empty();
   return e;
 }
 

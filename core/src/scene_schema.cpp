@@ -33,6 +33,7 @@ const Names<TendonRoutingSpec::Type> kRoutingTypes = {{"straight", TendonRouting
 constexpr const char* kAll = "all";
 constexpr const char* kStatic = "CCsub, PRB, VC, VCref";
 constexpr const char* kGravity = "CCsub, PRB, VC, VCref (gravity)";
+constexpr const char* kContact = "CCsub, PRB (contact)";
 
 const Schema<BackboneStiffness>& stiffness_schema() {
   using S = BackboneStiffness;
@@ -179,6 +180,9 @@ const Schema<Segment>& segment_schema() {
                     {"", nullptr, "may be empty (a passive segment)", kAll})
           .required(),
       number_field("disk_mass", &S::disk_mass, {"kg", nullptr, ">= 0", kGravity}),
+      number_field("disk_radius", &S::disk_radius,
+                   {"m", nullptr, ">= 0; the disks' contact surface (0: only the backbone touches obstacles)",
+                    kContact}),
   });
   return s;
 }
@@ -405,6 +409,10 @@ const Schema<Scene>& scene_schema() {
           .own_table(),
       object_field("effects", &Scene::effects, effects_schema(),
                    {"", "the paper code's", "see [effects](#scene_effects)", "see the table"})
+          .own_table(),
+      object_field("environment", &Scene::environment, environment_schema(),
+                   {"", "no obstacles", "see [environment](#scene_environment)", kContact})
+          .when([](const Scene& sc) { return !sc.environment.obstacles.empty() || sc.environment.contact.stiffness != 0.0; })
           .own_table(),
       string_field("model", &Scene::model,
                    {"", nullptr,

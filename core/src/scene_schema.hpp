@@ -261,6 +261,8 @@ Field<T> objects_field(const char* key, std::vector<C> T::*m, const Schema<C>& s
 
 /// The scene's table (scene_schema.cpp).
 const Schema<Scene>& scene_schema();
+/// The `environment` object's table (scene_environment_schema.cpp).
+const Schema<Environment>& environment_schema();
 
 /// The table of the scene's `solver` object, SolverOptions (scene_solver_schema.cpp).
 const Schema<SolverOptions>& solver_schema();

@@ -74,7 +74,7 @@ ojson matrix_json(const Eigen::MatrixXd& M) {
 constexpr const char* kContractKeys[] = {
     "model", "model_fingerprint", "status", "reason", "iterations", "residual_norm", "tip", "disks",
     "tendon_displacements", "tensions", "tendon_end_tensions", "tendon_slack", "backbone", "stability",
-    "path_events", "geometry_warnings", "tip_jacobian", "tip_compliance", "summary", "model_selection"};
+    "path_events", "geometry_warnings", "contacts", "tip_jacobian", "tip_compliance", "summary", "model_selection"};
 
 /// Adds the caller's member to j (SolutionJsonOptions::extra), its text parsed so that it is
 /// printed like the contract's own values.
@@ -144,6 +144,19 @@ std::string solution_to_json(const Solution& solution, const SolutionJsonOptions
   for (const GeometryWarning& w : solution.geometry_warnings)
     warnings.push_back(ojson{{"what", w.what}, {"tendon", w.tendon}, {"disk", w.disk}, {"value", number(w.value)}});
   j["geometry_warnings"] = warnings;
+  if (!solution.contacts.empty()) {  // free-space answers keep their JSON as it was
+    ojson contacts = ojson::array();
+    for (const Contact& c : solution.contacts)
+      contacts.push_back(ojson{{"s", number(c.s)},
+                               {"point", numbers_json({c.point.x(), c.point.y(), c.point.z()})},
+                               {"normal", numbers_json({c.normal.x(), c.normal.y(), c.normal.z()})},
+                               {"force", number(c.force)},
+                               {"gap", number(c.gap)},
+                               {"body", c.disk ? "disk" : "backbone"},
+                               {"disk", c.disk_index},
+                               {"obstacle", c.obstacle}});
+    j["contacts"] = contacts;
+  }
   if (solution.tip_jacobian.size() > 0) j["tip_jacobian"] = matrix_json(solution.tip_jacobian);
   if (solution.tip_compliance.size() > 0) j["tip_compliance"] = matrix_json(solution.tip_compliance);
   j["summary"] = summary_json(s);

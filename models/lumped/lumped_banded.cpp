@@ -144,7 +144,7 @@ void LumpedProblem::lift_banded(const Eigen::VectorXd& x, Eigen::VectorXd& y) {
 
 void LumpedProblem::gather_x(const Eigen::VectorXd& y, Eigen::VectorXd& x) const {
   if (!banded_) {
-    x = y;
+    x = y.head(body_.per_subsegment * active());  // without the contact forces
     return;
   }
   const int m = body_.per_subsegment, K = m + 12;

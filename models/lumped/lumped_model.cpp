@@ -33,6 +33,9 @@ LumpedBody::LumpedBody(const Robot& robot, const TendonRouting& routing, const E
   const BackboneStiffness k = robot.backbone.effective_stiffness();
   EI = k.EI;
   GJ = k.GJ;
+  backbone_radius = robot.backbone.outer_radius;
+  disk_radius.assign(N + 1, 0.0);
+  for (int j = 0; j <= N; ++j) disk_radius[j] = robot.segments[routing.disk_segment[j]].disk_radius;
 }
 
 LumpedBody::~LumpedBody() = default;
@@ -94,6 +97,7 @@ void LumpedProblem::bind(const ModelInput& input) {
   banded_ = body_.banded();
   reduced_ = body_.reduced(active());
   damping_ = 0.0;  // a snap switches it off again; a new input never starts damped
+  bind_contact(input);
   if (banded_ && pattern_J_ != active()) build_pattern();
 }
 
@@ -112,6 +116,9 @@ void LumpedProblem::adjust_warm(bvp::NewtonOptions& options, bool same_input) co
   constexpr int kStaleAfterIterations = 2;
   options.reuse_jacobian = same_input || last_iterations_ <= kStaleAfterIterations;
   options.max_setup_calls = kReuseSetupCalls;
+  // With contact candidates (a warm start's contacts) the Jacobian is dense differences, a
+  // residual per unknown: modified Newton from the last one pays (docs/contact.md, bench_contact).
+  if (!contacts_.empty()) options.reuse_jacobian = true;
 }
 
 void LumpedProblem::x_scale(double* s) const {
@@ -124,18 +131,23 @@ void LumpedProblem::unknown_scale(Eigen::Ref<Eigen::VectorXd> s) const {
     return;
   }
   for (int j = 0; j < active(); ++j) x_scale(s.data() + body_.per_subsegment * j);
+  s.tail(static_cast<Eigen::Index>(contacts_.size())).setOnes();  // the scaled contact forces
 }
 
 void LumpedProblem::cold_guess(Eigen::VectorXd& y) {
   residual_changed();
+  for (ContactCandidate& c : contacts_) c.lambda = 0.0;
   guess_x(x_, false);
   lift(x_, y);
+  append_contact_unknowns(y);
 }
 
 void LumpedProblem::rest_state(Eigen::VectorXd& y) {
   residual_changed();
+  for (ContactCandidate& c : contacts_) c.lambda = 0.0;
   guess_x(x_, true);
   lift(x_, y);
+  append_contact_unknowns(y);
 }
 
 void LumpedProblem::fixed_point_passes(Eigen::VectorXd& x, int passes) {
@@ -175,10 +187,12 @@ void LumpedProblem::fixed_point_passes(Eigen::VectorXd& x, int passes) {
 
 bool LumpedProblem::warm_guess(const Solution& previous, Eigen::VectorXd& y) {
   if (previous.unknowns.size() != body_.per_subsegment * body_.N || !previous.unknowns.allFinite()) return false;
+  const bool contacts = warm_contacts(previous);  // its contacts: candidates from the start
   x_ = previous.unknowns.head(body_.per_subsegment * active());
   residual_changed();
   on_warm(x_);
   lift(x_, y);
+  if (contacts) append_contact_unknowns(y);
   return true;
 }
 
@@ -186,6 +200,7 @@ void LumpedProblem::evaluate(const double* x) {
   last_valid_ = false;
   body_.compute_frames(x, active(), frames_.data(), poses_.data(), backbone_weight_on() ? centroids_.data() : nullptr);
   if (body_.statics.friction()) body_.statics.update_friction(loads_, frames_.data());
+  if (!contacts_.empty()) return evaluate_contacts();
   body_.statics.distal_wrenches(loads_, frames_.data(), centroids_.data(), F_.data(), M_.data());
 }
 
@@ -226,8 +241,10 @@ bool LumpedProblem::set_damping(const Eigen::Ref<const Eigen::VectorXd>& x_ref, 
 }
 
 bool LumpedProblem::recursive_residual(const double* x, double* f) {
+  if (!contacts_.empty()) read_contact_unknowns(x);
   evaluate(x);
   constitutive_all(x, f);
+  if (!contacts_.empty()) contact_residuals(f + body_.per_subsegment * active());
   return true;
 }
 
@@ -272,6 +289,13 @@ void LumpedProblem::extract(const Eigen::VectorXd& y, bool evaluated, Solution& 
     solution.tendon_end_tensions = tendon::end_tensions(routing, loads_.chord.data(), static_cast<int>(routing.tendons.size()));
   }
   solution.unknowns = std::move(full);
+  if (!contacts_.empty()) {
+    if (!(!banded_ && evaluated_at(y))) {
+      read_contact_unknowns(y.data());
+      evaluate(y.data());
+    }
+    report_contacts(solution);
+  }
 }
 
 bool LumpedProblem::set_driven_tensions(const std::vector<int>& index, const Eigen::VectorXd& T) {

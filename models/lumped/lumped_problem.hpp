@@ -22,6 +22,7 @@
 
 #include <Eigen/Core>
 
+#include "tdcr/core/contact_geometry.hpp"
 #include "tdcr/models/model_problem.hpp"
 #include "lumped/subsegment_statics.hpp"
 #include "tdcr/bvp/sparse_lu.hpp"
@@ -73,6 +74,8 @@ class LumpedBody {
   int N = 0;                  ///< Subsegments.
   LumpedFormulation formulation = LumpedFormulation::Automatic;
   int banded_from = 0;  ///< Automatic: banded from this many loaded subsegments on.
+  double backbone_radius = 0.0;     ///< Outer radius of the backbone (m): its contact surface.
+  std::vector<double> disk_radius;  ///< Radius of disk j (index 0..N; m): its contact surface.
 };
 
 /// The LumpedModel::BodyFactory of a body class constructible from (robot, routing, effects,
@@ -120,7 +123,12 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   /// the median loaded solve, docs/models.md "Stability"); tests compare it with stability().
   Stability direct_stability(const Eigen::VectorXd& y, double load_factor) final;
 
-  int size() const final { return stride() * loads_.active; }
+  int size() const final { return stride() * loads_.active + static_cast<int>(contacts_.size()); }
+  /// Contact (lumped_contact.cpp): the free-space answer y is checked against the obstacles of
+  /// the bound input; where it penetrates one, the candidate contacts near it join the unknowns
+  /// (their force magnitudes) and the residuals (complementarity), and Newton goes on from there,
+  /// until no candidate is left out that the answer penetrates. Done without obstacles.
+  Completion complete(Eigen::VectorXd& y, const bvp::NewtonOptions& options, SolverSummary& summary) final;
   void set_parameter(double lambda) final { loads_.set_load_factor(lambda); }
   bool residual(const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> f) final;
   /// The driver's final check right after Newton: where the last residual() call was at y at the
@@ -145,10 +153,12 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   // (structured_jacobian) solved as a block-banded system by KLU; the iterations are those of
   // the recursive form at a cost linear in J.
   bool has_newton_step() const final { return reduced_; }
+  // With contact candidates the dense Jacobian is KINSOL's finite differences (the structured
+  // one knows no contact forces).
   // Recursive form without friction: the dense Jacobian by structured forward differences
   // (structured_jacobian, then two small products); also what path following's bordered
   // systems use in the reduced form.
-  bool has_jacobian() const final { return !banded_ && !body_.statics.friction(); }
+  bool has_jacobian() const final { return !banded_ && !body_.statics.friction() && contacts_.empty(); }
   // Its diagonal blocks are forward differences (of first-order accuracy): differential
   // kinematics keeps its own central differences.
   bool jacobian_is_forward_difference() const final { return true; }
@@ -229,6 +239,50 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   std::vector<Vec3> centroids_, F_, M_;
 
  private:
+  // --- Contact (lumped_contact.cpp, docs/contact.md) ---
+  // A candidate contact: a disk's rim or the backbone at a disk's centre against an obstacle;
+  // its force magnitude (scaled by contact_force_scale_) is an unknown after the x_j.
+  struct ContactCandidate {
+    int disk = 0;
+    int obstacle = 0;
+    ContactBody body = ContactBody::Backbone;
+    double lambda = 0.0;  // scaled force magnitude of the last evaluation
+    ContactPoint at;      // its contact point at the last evaluation
+  };
+  bool contact_ = false;  // the bound input has obstacles
+  std::vector<Obstacle> obstacles_;
+  double contact_stiffness_ = 0.0;  // N/m; 0: rigid
+  double contact_force_scale_ = 1.0, contact_length_scale_ = 1.0;
+  std::vector<ContactCandidate> contacts_;
+  Eigen::VectorXd contact_x_;      // complete(): the x_j of all N subsegments
+  std::vector<Frame> contact_frames_;
+  void bind_contact(const ModelInput& input);
+  // Every subsegment loaded, the recursive form: the contact system's unknowns.
+  void enter_contact_mode();
+  // The contact forces on the disks (disk_f_, disk_m_) at the evaluated frames, then the distal
+  // wrenches (evaluate() with candidates).
+  void evaluate_contacts();
+  // The complementarity residuals of the candidates (after evaluate()).
+  void contact_residuals(double* f) const;
+  // y (the x_j of the loaded subsegments) extended by the candidates' force unknowns.
+  void append_contact_unknowns(Eigen::VectorXd& y) const;
+  // The candidates' force unknowns read from y.
+  void read_contact_unknowns(const double* y);
+  // Solution::contacts from the candidates at the evaluated state.
+  void report_contacts(Solution& solution) const;
+  // complete(): the pairs the shape x (all N subsegments) penetrates that are not candidates;
+  // with `add`, those and every pair within the margin join the candidates. True if any penetrates.
+  bool penetrating_pairs(const Eigen::VectorXd& x, bool add);
+  bool warm_contacts(const Solution& previous);
+  // complete(): penetrating_pairs() of shapes between the unknowns `from` and `to` (all N
+  // subsegments), the first that penetrates a pair left out adding its candidates; true if one did.
+  bool swept_pairs(const Eigen::VectorXd& from, const Eigen::VectorXd& to);
+  Eigen::VectorXd swept_x_;
+  bool passed_through_ = false;  // penetrating_pairs() found a finite obstacle penetrated deeply
+  // complete(): load the robot from rest with the candidates (load factor 0 -> 1 in steps, new
+  // contacts added as they close); y the answer at full load; false if a step could not be solved.
+  bool load_with_contacts(Eigen::VectorXd& y, const bvp::NewtonOptions& nopt, SolverSummary& work);
+
   int stride() const { return banded_ ? body_.per_subsegment + 12 : body_.per_subsegment; }
   bool recursive_residual(const double* x, double* f);
   // Frames from subsegment k on, the loads of disks k-1.. (kept in disk_f_, disk_m_) and all

@@ -87,6 +87,25 @@ ModelChoice choose_model(const Scene& scene, double tolerance) {
         order.erase(std::remove_if(order.begin(), order.end(),
                                    [](const ModelInfo* m) { return !m->capabilities.curved_routing; }),
                     order.end());
+  // Obstacles need a model with contact; of those, the most accurate one the tolerance allows
+  // (no accuracy table with contact yet: the free-space one is used).
+  if (e.contact) {
+    order.erase(std::remove_if(order.begin(), order.end(), [](const ModelInfo* m) { return !m->capabilities.contact; }),
+                order.end());
+    if (!order.empty() && !displacements) {
+      const ModelInfo* best = order.back();
+      for (const ModelInfo* info : order)
+        if (expected_model_error(info->kind, n, loaded) <= tolerance) {
+          best = info;
+          break;
+        }
+      c.kind = best->kind;
+      c.expected_error = expected_model_error(c.kind, n, loaded);
+      c.reason = features + ", obstacles: " + to_string(c.kind) + " (the models with contact: CCsub, PRB), expected within " +
+                 percent(c.expected_error) + " of VCref in free space";
+      return c;
+    }
+  }
   if (order.empty())
     throw InputError("model", "auto", "no model takes this scene");
   if (displacements) {

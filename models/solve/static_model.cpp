@@ -55,6 +55,12 @@ void StaticModel::check_input(const ModelInput& input) const {
                            format_value(*robot_.segments[i].tendons[j].stiffness),
                            "the " + name() + " model is kinematic: elastic tendons need a static model");
   }
+  if (!caps.contact && !input.environment.obstacles.empty())
+    throw InputError("environment.obstacles", std::to_string(input.environment.obstacles.size()) + " obstacles",
+                     "the " + name() + " model does not model contact yet (CCsub and PRB do)");
+  if (!input.environment.obstacles.empty() && !tensions)
+    throw InputError("environment.obstacles", std::to_string(input.environment.obstacles.size()) + " obstacles",
+                     "contact is modelled with tension input only so far (give actuation.tensions)");
   if (!caps.external_loads) {
     const Loads& l = input.loads;
     auto refuse = [&](const char* field, const Vec3& v) {

@@ -325,7 +325,7 @@ void bind_input(py::module_& m) {
       .def_readwrite("gravity", &tdcr::Loads::gravity);
 
   py::class_<tdcr::ModelInput>(m, "ModelInput", "The per-call input of a model: actuation and loads")
-      .def(py::init([](const tdcr::Actuation& a, const tdcr::Loads& l) { return tdcr::ModelInput{a, l}; }),
+      .def(py::init([](const tdcr::Actuation& a, const tdcr::Loads& l) { return tdcr::ModelInput{a, l, tdcr::Environment{}}; }),
            "actuation"_a = tdcr::Actuation(), "loads"_a = tdcr::Loads())
       .def_readwrite("actuation", &tdcr::ModelInput::actuation)
       .def_readwrite("loads", &tdcr::ModelInput::loads)

@@ -109,6 +109,16 @@ void bind_solution_parts(py::module_& m) {
       .def_readonly("tendon", &tdcr::GeometryWarning::tendon)
       .def_readonly("disk", &tdcr::GeometryWarning::disk)
       .def_readonly("value", &tdcr::GeometryWarning::value);
+
+  py::class_<tdcr::Contact>(m, "Contact", "A contact with an obstacle: where it pushes (m, base frame) and how hard (N)")
+      .def_readonly("s", &tdcr::Contact::s, "arc length of the touching disk (m)")
+      .def_readonly("point", &tdcr::Contact::point, "contact point on the robot (m)")
+      .def_readonly("normal", &tdcr::Contact::normal, "unit direction of the force on the robot")
+      .def_readonly("force", &tdcr::Contact::force, "force magnitude (N), >= 0")
+      .def_readonly("gap", &tdcr::Contact::gap, "distance to the obstacle (m), <= 0 in contact")
+      .def_property_readonly("body", [](const tdcr::Contact& c) { return c.disk ? "disk" : "backbone"; })
+      .def_readonly("disk", &tdcr::Contact::disk_index, "the disk (1-based disk list)")
+      .def_readonly("obstacle", &tdcr::Contact::obstacle, "index in the scene's environment.obstacles");
 }
 
 void bind_solution(py::module_& m) {
@@ -121,6 +131,7 @@ void bind_solution(py::module_& m) {
       .def_readonly("stability", &S::stability)
       .def_readonly("path_events", &S::path_events)
       .def_readonly("geometry_warnings", &S::geometry_warnings)
+      .def_readonly("contacts", &S::contacts, "contacts with obstacles that carry force")
       .def_property_readonly("loads", [](const S& s) { return tdcr::Loads(s.loads); }, "the input's loads (a copy)")
       .def_property_readonly("converged", &S::converged)
       .def_property_readonly("termination", [](const S& s) { return tdcr::to_string(s.summary.termination); })

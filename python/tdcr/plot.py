@@ -92,6 +92,61 @@ def _draw_frame(draw3d, draw2d, T, length, alpha=1.0):
         draw2d(a, color, 1.5, "-", alpha)
 
 
+def _circle(center, normal, radius, n=48):
+    """A circle (n + 1 points closing it) about `center` in the plane of `normal`."""
+    normal = np.asarray(normal, float) / np.linalg.norm(normal)
+    a = np.cross(normal, [1.0, 0.0, 0.0])
+    if np.linalg.norm(a) < 1e-6:
+        a = np.cross(normal, [0.0, 1.0, 0.0])
+    a /= np.linalg.norm(a)
+    b = np.cross(normal, a)
+    t = np.linspace(0.0, 2.0 * np.pi, n + 1)[:, None]
+    return np.asarray(center, float) + radius * (np.cos(t) * a + np.sin(t) * b)
+
+
+def obstacle_curves(obstacle, near, size):
+    """Wire-frame polylines (m) of an obstacle of the scene file's `environment.obstacles`: a
+    square of side `size` of a plane about the point nearest `near`, great circles of a sphere,
+    rings and generators of a cylinder or capsule, rings along a lumen's centreline."""
+    kind = obstacle["type"]
+    if kind == "plane":
+        n = np.asarray(obstacle["normal"], float)
+        n /= np.linalg.norm(n)
+        c = np.asarray(near, float) - np.dot(np.asarray(near, float) - obstacle["point"], n) * n
+        a = np.cross(n, [1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.cross(n, [0.0, 1.0, 0.0])
+        a /= np.linalg.norm(a)
+        b = np.cross(n, a)
+        h = 0.5 * size
+        corners = [c + h * (sa * a + sb * b) for sa, sb in ((1, 1), (-1, 1), (-1, -1), (1, -1), (1, 1))]
+        grid = [np.array([c - h * a + t * b, c + h * a + t * b]) for t in np.linspace(-h, h, 5)]
+        return [np.array(corners)] + grid
+    if kind == "sphere":
+        return [_circle(obstacle["center"], axis, obstacle["radius"]) for axis in np.eye(3)]
+    if kind in ("cylinder", "capsule"):
+        p0, p1 = (np.asarray(e, float) for e in obstacle["ends"])
+        axis = p1 - p0
+        r = obstacle["radius"]
+        curves = [_circle(p, axis, r) for p in (p0, p1)]
+        ring = _circle(p0, axis, r, n=8)
+        curves += [np.array([q, q + axis]) for q in ring[:-1]]
+        if kind == "capsule":  # the end caps' half circles through the axis
+            u = axis / np.linalg.norm(axis)
+            for q in ring[:-1:2]:
+                d = (q - p0) / r
+                for p, sign in ((p0, -1.0), (p1, 1.0)):
+                    t = np.linspace(0.0, 0.5 * np.pi, 12)[:, None]
+                    curves.append(p + r * (np.cos(t) * d + sign * np.sin(t) * u))
+        return curves
+    if kind == "lumen":
+        c = np.asarray(obstacle["centreline"], float)
+        curves = [c]
+        for k in range(len(c)):
+            tangent = c[min(k + 1, len(c) - 1)] - c[max(k - 1, 0)]
+            curves.append(_circle(c[k], tangent, obstacle["radius"]))
+        return curves
+    return []
+
+
 def figure(scene, solutions, title=None):
     """A matplotlib Figure of `solutions` (one per model) of `scene`'s robot."""
     plt = _pyplot()
@@ -144,6 +199,27 @@ def figure(scene, solutions, title=None):
                 ax.annotate("", xy=arrow[1, [i, j]], xytext=arrow[0, [i, j]],
                             arrowprops=dict(arrowstyle="->", color="m", lw=2))
         ax3.plot([], [], color="m", lw=2, label="tip force %.3g N" % fnorm)
+    # Obstacles (grey wire frames) and the contact forces of the last model (red arrows, the
+    # largest a quarter of the robot's length).
+    obstacles = scene.to_dict().get("environment", {}).get("obstacles", [])
+    middle = pts.mean(axis=0) * 1e-3
+    for o in obstacles:
+        for q in obstacle_curves(o, middle, 1.2 * L):
+            draw3d(q * 1e3, "0.5", 0.7, "-", 0.6)
+            draw2d(q * 1e3, "0.5", 0.7, "-", 0.6)
+    if obstacles:
+        ax3.plot([], [], color="0.5", lw=0.7, label="obstacles (%d)" % len(obstacles))
+    contacts = [c for s in solutions[-1:] for c in s.contacts]
+    if contacts:
+        fmax = max(c.force for c in contacts)
+        for c in contacts:
+            start = np.asarray(c.point) * 1e3
+            arrow = np.array([start, start + 0.25 * L * 1e3 * (c.force / fmax) * np.asarray(c.normal)])
+            draw3d(arrow, "r", 2.0, "-", 1.0)
+            for ax, (i, j) in zip(ax2, pairs):
+                ax.annotate("", xy=arrow[1, [i, j]], xytext=arrow[0, [i, j]],
+                            arrowprops=dict(arrowstyle="->", color="r", lw=2))
+        ax3.plot([], [], color="r", lw=2, label="contact forces (largest %.3g N)" % fmax)
     mnorm = float(np.linalg.norm(np.asarray(loads.tip_moment)))
     if mnorm > 0:  # listed, not drawn: an arrow of a moment reads as a force
         ax3.plot([], [], ls="none", label="tip moment %.3g N m" % mnorm)

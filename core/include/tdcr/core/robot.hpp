@@ -79,6 +79,8 @@ struct Segment {
   int disks = 10;                    ///< Spacer disks in the segment, the last one at its end.
   std::vector<TendonSpec> tendons;   ///< Tendons terminating at this segment's end.
   double disk_mass = 0.0;            ///< kg per disk, used for gravity only.
+  /// Outer radius of the spacer disks (m), their contact surface; 0: only the backbone touches.
+  double disk_radius = 0.0;
 };
 
 /// @brief The robot: a backbone and its segments, base to tip.

@@ -122,14 +122,56 @@ struct Effects {
   void validate(const Robot& robot) const;
 };
 
+/// @brief A rigid obstacle in the base frame (docs/contact.md). Its signed distance is positive
+/// in free space (where the robot may be) and negative inside the obstacle; for a `Lumen` the
+/// free space is the inside of the tube, so the robot must stay inside.
+struct Obstacle {
+  /// @brief The primitive.
+  enum class Type {
+    Plane,     ///< Half space {x : (x - point) . normal < 0} is solid; `normal` points to free space.
+    Sphere,    ///< Solid ball (`center`, `radius`).
+    Cylinder,  ///< Solid cylinder with flat caps, axis from `ends[0]` to `ends[1]`, `radius`.
+    Capsule,   ///< Solid capsule: the points within `radius` of the segment `ends[0]`-`ends[1]`.
+    Lumen      ///< A tube of inner `radius` around the polyline `centreline`; the robot is inside.
+  };
+  Type type = Type::Plane;               ///< The primitive.
+  Vec3 point = Vec3::Zero();             ///< Plane: a point on it (m).
+  Vec3 normal = Vec3::UnitZ();           ///< Plane: normal towards free space (need not be unit).
+  Vec3 center = Vec3::Zero();            ///< Sphere: centre (m).
+  double radius = 0.0;                   ///< Sphere, cylinder, capsule: radius; lumen: inner radius (m).
+  Vec3 ends[2] = {Vec3::Zero(), Vec3::UnitZ()};  ///< Cylinder, capsule: the axis end points (m).
+  std::vector<Vec3> centreline;          ///< Lumen: at least 2 points (m), straight or curved.
+};
+
+/// @brief How contact forces arise. Frictionless; rigid unless a stiffness is given.
+struct ContactSettings {
+  /// Compliant contact: the normal force is stiffness times the penetration (N/m); 0: rigid
+  /// (force >= 0, gap >= 0, force gap = 0, solved exactly).
+  double stiffness = 0.0;
+};
+
+/// @brief The robot's surroundings: obstacles the backbone and the disks may touch.
+struct Environment {
+  std::vector<Obstacle> obstacles;  ///< In the base frame; none: free space.
+  ContactSettings contact;          ///< Rigid or compliant contact.
+
+  /// @brief Throws InputError naming the field (`environment.obstacles[i].radius`, ...) and value:
+  /// a non-finite number, a non-positive radius, a zero plane normal or cylinder axis, a lumen
+  /// centreline with fewer than 2 points or a repeated point, a negative stiffness, and an
+  /// obstacle that intersects the robot's base (its backbone or base disk at s = 0).
+  void validate(const Robot& robot) const;
+};
+
 /// @brief The per-call input of a model: how the tendons are actuated and the external loads.
 /// A model is built once from a robot and its effects; a trajectory is a sequence of inputs.
 struct ModelInput {
   Actuation actuation;  ///< Tendon tensions or displacements, one value per tendon.
   Loads loads;          ///< Tip wrench and gravity (base frame).
+  Environment environment;  ///< Obstacles the robot may touch (none: free space).
 
   /// @brief Throws InputError naming the field and value: a list of the wrong length for
-  /// `robot`, a non-finite value, a negative tension, a non-finite load.
+  /// `robot`, a non-finite value, a negative tension, a non-finite load, an unusable obstacle
+  /// (Environment::validate).
   void validate(const Robot& robot) const;
 };
 
@@ -143,6 +185,7 @@ struct SceneEffects {
   bool shear_extension = true;            ///< Effects::shear_extension (CC, VC, VCref).
   bool disk_normal_force_removed = false;  ///< Effects::disk_normal_force is Removed (Eq. 58).
   bool tendon_friction = false;           ///< Effects::tendon_friction is on (some mu > 0).
+  bool contact = false;                   ///< The environment has obstacles (CCsub, PRB).
 };
 
 /// @brief The effects a solve of `robot` with `effects` under `input` turns on.
@@ -154,6 +197,7 @@ struct Scene {
   Actuation actuation;  ///< Tendon tensions or displacements (`actuation`).
   Loads loads;          ///< Tip wrench and gravity (`loads`); none by default.
   Effects effects;      ///< Physical effects to simulate (`effects`).
+  Environment environment;  ///< Obstacles and contact settings (`environment`); none by default.
   std::string model = "vc";  ///< "cc", "ccsub", "prb", "vc", "vcref" (or "auto").
   SolverOptions solver;  ///< Numerical settings (`solver`).
 
@@ -163,7 +207,7 @@ struct Scene {
   /// model registry by the models layer (tdcr::validate_scene, models/static_model.hpp).
   void validate() const;
   /// @brief The per-call part of the scene: actuation and loads.
-  ModelInput input() const { return ModelInput{actuation, loads}; }
+  ModelInput input() const { return ModelInput{actuation, loads, environment}; }
   /// @brief The effects this scene enables (see SceneEffects).
   SceneEffects active_effects() const { return tdcr::active_effects(robot, effects, input()); }
 };

@@ -133,6 +133,19 @@ struct BackboneSample {
   Vec3 m = Vec3::Zero();         ///< Internal moment (N m), base frame.
 };
 
+/// @brief A contact of the robot with an obstacle in an answer (docs/contact.md): where the
+/// obstacle pushes, how hard, and what of the robot it touches.
+struct Contact {
+  double s = 0.0;               ///< Arc length of the touching disk (m).
+  Vec3 point = Vec3::Zero();    ///< Contact point on the robot's surface (m, base frame).
+  Vec3 normal = Vec3::UnitZ();  ///< Unit direction of the force on the robot (base frame).
+  double force = 0.0;           ///< Magnitude of the normal force (N), >= 0.
+  double gap = 0.0;             ///< Distance to the obstacle (m); <= 0 in contact (compliant: the penetration).
+  bool disk = false;            ///< True: a disk's rim touches; false: the backbone's surface.
+  int disk_index = 0;           ///< The disk (1-based disk list; the backbone at that disk's centre).
+  int obstacle = 0;             ///< Index in Environment::obstacles.
+};
+
 /// @brief The answer of a model for one scene.
 struct Solution {
   std::string model;                      ///< Model name ("cc", "vc", ...).
@@ -159,6 +172,7 @@ struct Solution {
   Stability stability;                    ///< Stability of the answer (if tested: SolverOptions::stability).
   std::vector<PathEvent> path_events;     ///< Folds, bifurcations, snaps met on the way.
   std::vector<GeometryWarning> geometry_warnings;  ///< Shapes a real robot cannot take.
+  std::vector<Contact> contacts;          ///< Contacts with obstacles that carry force (CCsub, PRB).
   /// d(tip pose) / d(Actuation::values), 6 x m (SolverOptions::differential_kinematics; empty
   /// otherwise or if it could not be computed). Rows 0-2: tip position (m per unit of the value,
   /// base frame); rows 3-5: rotation vector w of the tip rotation increment in the base frame,

@@ -53,6 +53,7 @@ class LumpedModel : public StaticModel {
     c.tendon_forces_at_disks = true;
     c.displacement_statics = true;
     c.tendon_friction = true;
+    c.contact = true;
     return c;
   }();
   ModelCapabilities capabilities() const override { return kCapabilities; }

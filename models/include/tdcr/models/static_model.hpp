@@ -72,6 +72,9 @@ struct ModelCapabilities {
   /// external loads is tested (ModelProblem::automatic_stability_under_loads). False
   /// where the answer is always no and asking would cost a bind (VC).
   bool stability_under_loads = true;
+  /// Contact with the obstacles of ModelInput::environment (docs/contact.md); a model without it
+  /// refuses a scene with obstacles.
+  bool contact = false;
 };
 
 class StaticModel;

@@ -1,0 +1,322 @@
+// Contact of CCsub and PRB with the obstacles of the bound input (docs/contact.md): candidate
+// contacts at the disks (the backbone's surface at a disk's centre, a disk's rim), each with its
+// force magnitude as an unknown and a complementarity residual; their forces act on the disks in
+// the recursive balance like the tendon forces and the tip wrench.
+//
+// Rigid contact: gap g >= 0, force f >= 0, g f = 0, as the Fischer-Burmeister function
+// phi(a, b) = a + b - sqrt(a^2 + b^2) = 0 of the scaled gap a = g / r_o and force b = f / F_s,
+// F_s = EI / L^2: semismooth, and Newton converges on it where strict complementarity holds.
+// Compliant contact: f = k max(0, -g).
+#include <algorithm>
+#include <cmath>
+
+#include "lumped/lumped_problem.hpp"
+#include "solve/newton_summary.hpp"
+#include "tdcr/core/error.hpp"
+
+namespace tdcr::detail {
+
+namespace {
+// A shape penetrating an obstacle deeper than this (m) is not an answer: the pair joins the
+// contact candidates. Far below the 1e-9 m the contact tests allow, far above round-off of the
+// positions (1e-16 of a robot's length).
+constexpr double kPenetration = 1e-12;
+// Rounds of candidates added after a penetrating answer before the solve gives up.
+constexpr int kMaxContactRounds = 8;
+// Scaled forces below this are reported as no contact (a candidate the answer does not touch
+// has force 0 to Newton's tolerance).
+constexpr double kReportedForce = 1e-9;
+}  // namespace
+
+void LumpedProblem::bind_contact(const ModelInput& input) {
+  contacts_.clear();
+  contact_ = !input.environment.obstacles.empty();
+  if (!contact_) return;
+  obstacles_ = input.environment.obstacles;  // allocates only when the obstacles grow
+  contact_stiffness_ = input.environment.contact.stiffness;
+  contact_force_scale_ = body_.EI / (body_.length * body_.length);
+  contact_length_scale_ = body_.backbone_radius > 0.0 ? body_.backbone_radius : 1e-3 * body_.length;
+  // The contact solve is the recursive form; the free-space solve before it is that too, so
+  // that an untouched obstacle leaves the free-space answer of the default formulation.
+  banded_ = false;
+  // An unloaded robot has no unknowns (it is straight), but an obstacle may be in its way: its
+  // answer is then the straight robot solved for, which complete() can test.
+  if (loads_.active == 0) {
+    loads_.active = body_.N;
+    reduced_ = body_.reduced(body_.N);
+  }
+}
+
+void LumpedProblem::enter_contact_mode() {
+  residual_changed();
+  loads_.active = body_.N;  // a contact can load any disk
+  banded_ = false;
+  reduced_ = false;
+  damping_ = 0.0;
+}
+
+void LumpedProblem::append_contact_unknowns(Eigen::VectorXd& y) const {
+  if (contacts_.empty()) return;
+  const Eigen::Index n = y.size();
+  y.conservativeResize(n + static_cast<Eigen::Index>(contacts_.size()));
+  for (std::size_t i = 0; i < contacts_.size(); ++i) y[n + static_cast<Eigen::Index>(i)] = contacts_[i].lambda;
+}
+
+void LumpedProblem::read_contact_unknowns(const double* y) {
+  const double* lambda = y + stride() * active();
+  for (std::size_t i = 0; i < contacts_.size(); ++i) contacts_[i].lambda = lambda[i];
+}
+
+void LumpedProblem::evaluate_contacts() {
+  body_.statics.disk_loads(loads_, frames_.data(), disk_f_.data(), disk_m_.data());
+  for (ContactCandidate& c : contacts_) {
+    const Frame& frame = frames_[c.disk];
+    const double radius = c.body == ContactBody::Disk ? body_.disk_radius[c.disk] : body_.backbone_radius;
+    c.at = contact_point(obstacles_[c.obstacle], frame, c.body, radius);
+    // Reaction forces: not scaled by the load factor (they are whatever keeps the robot out).
+    const Vec3 f = (c.lambda * contact_force_scale_) * c.at.normal;
+    disk_f_[c.disk] += f;
+    disk_m_[c.disk] += (c.at.point - frame.p).cross(f);
+  }
+  body_.statics.distal_wrenches(loads_, frames_.data(), centroids_.data(), disk_f_.data(), disk_m_.data(), F_.data(),
+                                M_.data());
+}
+
+void LumpedProblem::contact_residuals(double* f) const {
+  for (std::size_t i = 0; i < contacts_.size(); ++i) {
+    const ContactCandidate& c = contacts_[i];
+    const double a = c.at.gap / contact_length_scale_, b = c.lambda;
+    if (contact_stiffness_ > 0.0)
+      f[i] = b - contact_stiffness_ * std::max(0.0, -c.at.gap) / contact_force_scale_;
+    else
+      f[i] = a + b - std::sqrt(a * a + b * b);
+  }
+}
+
+void LumpedProblem::report_contacts(Solution& solution) const {
+  solution.contacts.clear();
+  const std::vector<double>& s = body_.statics.routing().disk_s;
+  for (const ContactCandidate& c : contacts_) {
+    if (!(c.lambda > kReportedForce)) continue;
+    Contact out;
+    out.s = s[c.disk];
+    out.point = c.at.point;
+    out.normal = c.at.normal;
+    out.force = c.lambda * contact_force_scale_;
+    out.gap = c.at.gap;
+    out.disk = c.body == ContactBody::Disk;
+    out.disk_index = c.disk;
+    out.obstacle = c.obstacle;
+    solution.contacts.push_back(out);
+  }
+}
+
+bool LumpedProblem::penetrating_pairs(const Eigen::VectorXd& x, bool add) {
+  passed_through_ = false;
+  contact_frames_.resize(body_.N + 1);
+  body_.compute_frames(x.data(), body_.N, contact_frames_.data());
+  const auto candidate = [&](int j, int o, ContactBody b) {
+    for (const ContactCandidate& c : contacts_)
+      if (c.disk == j && c.obstacle == o && c.body == b) return true;
+    return false;
+  };
+  // Pairs this close join the candidates with the penetrating ones: the contact solve then moves
+  // the robot without stepping into the neighbours of the first contacts unseen.
+  const double margin = 0.1 * body_.length / body_.N;
+  bool penetrates = false;
+  for (int pass = 0; pass < (add ? 2 : 1); ++pass) {
+    for (int j = 1; j <= body_.N; ++j)
+      for (int o = 0; o < static_cast<int>(obstacles_.size()); ++o)
+        for (ContactBody b : {ContactBody::Backbone, ContactBody::Disk}) {
+          const double radius = b == ContactBody::Disk ? body_.disk_radius[j] : body_.backbone_radius;
+          if (b == ContactBody::Disk && radius <= 0.0) continue;
+          if (candidate(j, o, b)) continue;
+          const double gap = contact_point(obstacles_[o], contact_frames_[j], b, radius).gap;
+          if (pass == 0 && gap < -kPenetration) {
+            penetrates = true;
+            // Deeper than a quarter of a finite obstacle's radius: the free answer may have passed
+            // its middle, and the nearest way out is then on its far side.
+            const Obstacle& ob = obstacles_[o];
+            if (ob.type != Obstacle::Type::Plane && ob.type != Obstacle::Type::Lumen && -gap > 0.25 * ob.radius)
+              passed_through_ = true;
+          }
+          if (pass == 1 && gap < margin) {
+            ContactCandidate c;
+            c.disk = j, c.obstacle = o, c.body = b;
+            contacts_.push_back(c);
+          }
+        }
+    if (!penetrates) break;
+  }
+  return penetrates;
+}
+
+bool LumpedProblem::swept_pairs(const Eigen::VectorXd& from, const Eigen::VectorXd& to) {
+  // Shapes between two answers (their unknowns interpolated): an obstacle thinner than one step
+  // of the robot can lie between them, penetrated by neither.
+  constexpr int kSamples = 16;
+  for (int k = 1; k < kSamples; ++k) {
+    swept_x_ = from + (to - from) * (double(k) / kSamples);
+    if (penetrating_pairs(swept_x_, true)) return true;
+  }
+  return false;
+}
+
+bool LumpedProblem::warm_contacts(const Solution& previous) {
+  if (!contact_ || previous.contacts.empty()) return false;
+  enter_contact_mode();
+  contacts_.clear();
+  for (const Contact& p : previous.contacts) {
+    if (p.obstacle < 0 || p.obstacle >= static_cast<int>(obstacles_.size()) || p.disk_index < 1 ||
+        p.disk_index > body_.N)
+      continue;
+    ContactCandidate c;
+    c.disk = p.disk_index, c.obstacle = p.obstacle;
+    c.body = p.disk ? ContactBody::Disk : ContactBody::Backbone;
+    c.lambda = p.force / contact_force_scale_;
+    contacts_.push_back(c);
+  }
+  return !contacts_.empty();
+}
+
+bool LumpedProblem::load_with_contacts(Eigen::VectorXd& y, const bvp::NewtonOptions& nopt, SolverSummary& work) {
+  // Natural-parameter steps of the load factor from rest, each a Newton solve from the last
+  // answer; a step whose answer penetrates a pair left out adds it and is solved again; a failed
+  // step is halved.
+  constexpr double kFirstStep = 0.125, kMinStep = 1.0 / 1024.0;
+  rest_state(y);  // the straight robot, every candidate's force 0 (active: every subsegment)
+  double t = 0.0, h = kFirstStep;
+  Eigen::VectorXd last = y;
+  while (t < 1.0) {
+    const double next = std::min(1.0, t + h);
+    set_parameter(next);
+    residual_changed();
+    SolverSummary step;
+    copy_newton_result(newton().solve(*this, y, nopt), step);
+    add_work(step, work);
+    ++work.continuation_steps;
+    work.message = step.message;
+    if (!step.converged()) {
+      y = last;
+      h *= 0.5;
+      if (h < kMinStep) {
+        set_parameter(1.0);
+        work.termination = step.termination;
+        return false;
+      }
+      continue;
+    }
+    gather_x(y, x_);
+    contact_x_ = x_;
+    const std::size_t before = contacts_.size();
+    if (!penetrating_pairs(contact_x_, true)) swept_pairs(last.head(contact_x_.size()), contact_x_);
+    if (contacts_.size() != before) {  // a new contact closed within this step: again with it
+      residual_changed();
+      const Eigen::Index n = last.size(), added = static_cast<Eigen::Index>(contacts_.size() - before);
+      y.resize(n + added);  // the last answer, its forces, and 0 for the new candidates
+      y.head(n) = last;
+      y.tail(added).setZero();
+      last = y;
+      continue;
+    }
+    t = next;
+    last = y;
+    h = std::min(2.0 * h, 0.25);
+  }
+  set_parameter(1.0);
+  work.termination = TerminationType::Converged;
+  return true;
+}
+
+ModelProblem::Completion LumpedProblem::complete(Eigen::VectorXd& y, const bvp::NewtonOptions& options,
+                                                 SolverSummary& summary) {
+  if (!contact_) return Completion::Done;
+  bvp::NewtonOptions nopt = options;
+  nopt.linear_solver = bvp::LinearSolverKind::Dense;
+  // The set of active contacts changes between solves: a Jacobian of another set misleads.
+  nopt.reuse_jacobian = false;
+  nopt.freeze_jacobian_below = 0.0;
+  nopt.max_setup_calls = 10;
+  // A model's bound on the Newton step (PRB: 1, for its bending-plane chart in cold solves) is
+  // too short for the step from a penetrating free-space answer: examples/robot_against_wall.json
+  // (PRB, a rim 7.5 mm into the wall) diverged with 5 steps of maximum length at 1 and converged
+  // in 8 iterations (exact Newton) at 3 and at 10.
+  if (nopt.max_newton_step > 0.0) nopt.max_newton_step *= 10.0;
+  for (int round = 0;; ++round) {
+    gather_x(y, x_);
+    read_contact_unknowns(y.data());
+    contact_x_.setZero(body_.per_subsegment * body_.N);
+    contact_x_.head(x_.size()) = x_;
+    const std::size_t before = contacts_.size();
+    bool penetrates = penetrating_pairs(contact_x_, true);
+    if (!penetrates && round == 0 && before == 0) {
+      // The free answer may have passed a thin obstacle on its way from rest: then loaded from
+      // rest with the contacts (load_with_contacts).
+      penetrates = swept_pairs(Eigen::VectorXd::Zero(contact_x_.size()), contact_x_);
+      passed_through_ = penetrates;
+    }
+    if (!penetrates) return Completion::Done;
+    if (round == kMaxContactRounds || contacts_.size() == before) {
+      summary.termination = TerminationType::NoConvergence;
+      summary.message += "; the answer still penetrates an obstacle after " + std::to_string(round) +
+                         " rounds of contact candidates";
+      return Completion::Done;
+    }
+    if (before == 0) enter_contact_mode();
+    residual_changed();
+    y = contact_x_;
+    for (std::size_t i = before; i < contacts_.size(); ++i) contacts_[i].lambda = 0.0;
+    append_contact_unknowns(y);
+    summary.unknowns = size();
+    SolverSummary step;
+    if (round == 0 && passed_through_) {
+      // The free answer is deep inside a sphere, cylinder or capsule: load the robot from rest
+      // with the contacts instead, so that it meets the obstacle on the side it comes from.
+      if (load_with_contacts(y, nopt, step)) {
+        add_work(step, summary);
+        summary.message += "; contact with " + std::to_string(contacts_.size()) +
+                           " candidates, loaded from rest (the free answer had passed an obstacle's middle): " +
+                           step.message;
+        continue;  // then the usual test for pairs left out
+      }
+      add_work(step, summary);
+      summary.termination = step.termination;
+      summary.message += "; loading from rest with contact failed: " + step.message;
+      return Completion::FollowAgain;
+    }
+    const Eigen::VectorXd start = y;
+    copy_newton_result(newton().solve(*this, y, nopt), step);
+    if (!step.converged() && contact_stiffness_ == 0.0) {
+      // Rigid contact from a deeply penetrating answer can diverge (PRB, a 1.5 N tip force into a
+      // wall): compliant contact first, its stiffness raised a decade per solve from F_s / L
+      // (a penetration of L for the force scale) to 1e6 times that, then rigid from there.
+      add_work(step, summary);
+      y = start;
+      step = SolverSummary{};
+      const double soft = contact_force_scale_ / body_.length;
+      int decade = 0;
+      for (; decade <= 7; ++decade) {
+        contact_stiffness_ = decade < 7 ? soft * std::pow(10.0, decade) : 0.0;
+        residual_changed();
+        step = SolverSummary{};
+        copy_newton_result(newton().solve(*this, y, nopt), step);
+        if (!step.converged() || decade == 7) break;
+        add_work(step, summary);  // the last stage's work is added below
+      }
+      contact_stiffness_ = 0.0;
+      residual_changed();
+      step.message += step.converged() ? " (rigid contact reached through compliant contact of rising stiffness)"
+                                       : " (compliant contact of rising stiffness failed at stage " +
+                                             std::to_string(decade) + " of 7)";
+    }
+    add_work(step, summary);
+    summary.termination = step.termination;
+    summary.residual_norm = step.residual_norm;
+    summary.physical_residual = step.physical_residual;
+    summary.linear_solver = step.linear_solver;
+    summary.message += "; contact with " + std::to_string(contacts_.size()) + " candidates: " + step.message;
+    if (!step.converged()) return Completion::FollowAgain;  // cold, with these candidates
+  }
+}
+
+}  // namespace tdcr::detail
