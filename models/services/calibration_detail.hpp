@@ -9,6 +9,7 @@
 
 #include <Eigen/Core>
 
+#include "tdcr/models/answer_linearisation.hpp"
 #include "tdcr/models/calibration.hpp"
 
 namespace tdcr::calibration_detail {
@@ -45,6 +46,11 @@ struct Prediction {
   Solution solution;  // the converged answer (a warm start at nearby parameters)
 };
 
+/// Newton's tolerance of the residual points' solves (scaled residual max-norm): a hundred times
+/// SolverOptions::kMinFunctionTolerance, above the residual's rounding floor, and far below
+/// CalibrationOptions::solve_function_tolerance's default.
+constexpr double kPolishTolerance = 1e-13;
+
 /// All measurements' solves, residuals and the structured-difference Jacobian.
 class Evaluator {
  public:
@@ -60,10 +66,17 @@ class Evaluator {
   int residual_count() const { return offsets_.back(); }
   int forward_solves() const { return solves_; }
   int failed_solves() const { return failed_; }
+  int linearised() const { return linearised_; }
 
   /// Every measurement solved with the model parameters of `values` (parameter units), each
   /// warm-started from its answer in `warm` (at other parameters) where there is one, else cold.
-  std::vector<Prediction> predict(const Eigen::VectorXd& values, const std::vector<Prediction>* warm = nullptr);
+  /// With `polish`, each solve goes on to Newton's tolerance kPolishTolerance (a residual point:
+  /// its answer must not depend on where it started); without, to the options' tolerance (the
+  /// differences, started from the polished answers).
+  /// With `linear` (one per measurement, of the answers in `warm`), a measurement whose
+  /// linearisation holds is predicted from it to first order, without a solve.
+  std::vector<Prediction> predict(const Eigen::VectorXd& values, const std::vector<Prediction>* warm = nullptr,
+                                  bool polish = false, const std::vector<AnswerLinearisation>* linear = nullptr);
   /// The standardised residuals of the predictions with the base frame of `values` (a failed
   /// measurement's entries are 0 and `ok[i]` is false).
   Eigen::VectorXd residuals(const std::vector<Prediction>& p, const Eigen::VectorXd& values, std::vector<bool>* ok) const;
@@ -82,9 +95,11 @@ class Evaluator {
   std::vector<Parameter> params_;
   CalibrationOptions options_;
   SolverOptions solver_;
+  SolverOptions polish_;  // solver_ with Newton's tolerance kPolishTolerance (residual points)
   std::vector<int> offsets_;  // residual offsets, size samples + 1
   int solves_ = 0;
   int failed_ = 0;
+  int linearised_ = 0;  // difference columns' answers by the implicit function theorem
 };
 
 /// The statistics of per-measurement residuals.

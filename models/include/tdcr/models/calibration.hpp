@@ -12,11 +12,14 @@
 ///
 /// The fit is a Ceres Solver problem with one residual block per measurement (its model solve,
 /// each standardised by its standard deviation) under a robust loss. All measurements are solved
-/// by one model per parameter vector. The Jacobian is by structured forward differences: one
-/// model rebuild per parameter, every measurement solved again warm-started from its answer at
-/// the unperturbed parameters (tdcr::warm_start_from_other_robot); a base-frame offset is
-/// applied to the answers and costs no solve. The residuals themselves are cold solves (the
-/// model's own loading path), so that the cost is one function of the parameters.
+/// by one model per parameter vector, warm-started from the last iterate's answers and taken to
+/// a Newton tolerance near the residual's rounding floor, so that the cost is one function of the
+/// parameters (the first point cold, along the model's own loading path). The Jacobian's model
+/// columns are by the implicit function theorem (AnswerLinearisation: F_x once per answer, per
+/// parameter one residual evaluation of the model rebuilt at the shifted parameter), or by
+/// structured forward differences (every measurement solved again, warm-started from its answer
+/// at the unshifted parameters); a base-frame offset is applied to the answers and costs no
+/// solve.
 ///
 /// @code
 /// tdcr::Scene scene = tdcr::load_scene("robot.json");
@@ -150,6 +153,16 @@ enum class CalibrationLoss {
 /// @brief Text name ("none", "huber", "cauchy").
 std::string to_string(CalibrationLoss loss);
 
+/// @brief How the model parameters' columns of the Jacobian are computed.
+enum class CalibrationJacobian {
+  /// The implicit function theorem: each answer's F_x once per Jacobian, then per parameter one
+  /// residual evaluation of the model rebuilt at the shifted parameter and one output pass
+  /// (AnswerLinearisation); a measurement it cannot take (CC, displacement input) is solved.
+  ImplicitFunction,
+  /// Structured forward differences: per parameter every measurement solved again (warm).
+  Differences
+};
+
 /// @brief Settings of a calibration, in the spirit of ceres::Solver::Options.
 struct CalibrationOptions {
   ModelKind model = ModelKind::VC;                    ///< The model whose parameters are fitted.
@@ -182,6 +195,8 @@ struct CalibrationOptions {
   /// Warm-start the differences' solves from the unperturbed answers (false: every solve cold,
   /// for comparison; bench_calibration measures both).
   bool warm_start = true;
+  /// The model parameters' Jacobian columns (bench_calibration measures both).
+  CalibrationJacobian jacobian = CalibrationJacobian::ImplicitFunction;
 
   /// @brief Throws InputError (field `calibration.<name>`) naming the value: no parameter, a
   /// tolerance, step or standard deviation that is not a positive finite number, fewer than 1
@@ -232,6 +247,9 @@ struct CalibrationSummary {
   int iterations = 0;        ///< Ceres iterations.
   int forward_solves = 0;    ///< Model solves, the differences' included.
   int failed_solves = 0;     ///< Solves that did not converge (their measurement's step rejected).
+  /// Answers of the Jacobian's model-parameter columns linearised instead of solved
+  /// (CalibrationJacobian::ImplicitFunction).
+  int linearised_answers = 0;
   double initial_cost = 0.0; ///< Ceres cost at the start.
   double final_cost = 0.0;   ///< Ceres cost at the end.
   ResidualStatistics before; ///< At the start.
