@@ -102,6 +102,10 @@ class Evaluator {
   int linearised_ = 0;  // difference columns' answers by the implicit function theorem
 };
 
+/// The robust loss's weight rho'(s) of a measurement whose standardised residual has squared
+/// norm s (1 without a loss, and for Huber up to loss_scale^2).
+double loss_weight(const CalibrationOptions& options, double s);
+
 /// The statistics of per-measurement residuals.
 ResidualStatistics statistics(const std::vector<SampleResidual>& r, const Eigen::VectorXd& standardised);
 

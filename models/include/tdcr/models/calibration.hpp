@@ -268,9 +268,15 @@ struct CalibrationResult {
   /// base frame: it is reported here (and by the CLI), not in `scene`.
   Frame base;
   std::vector<FittedParameter> parameters;  ///< In fit order.
-  Eigen::MatrixXd covariance;   ///< Of the parameters (their units); non-identifiable rows: inf.
+  /// Of the parameters (their units); non-identifiable rows: inf. From the Jacobian weighted by
+  /// the robust loss at the solution (each measurement by rho'(s) of its squared standardised
+  /// residual, normalised by the mean weight) and, when scaled by the residuals, the weighted
+  /// residuals: a measurement the loss down-weights (an outlier) does not inflate the standard
+  /// errors; without down-weighting it is the plain covariance.
+  Eigen::MatrixXd covariance;
   Eigen::MatrixXd correlation;  ///< Correlation matrix (NaN where not identifiable).
-  /// Singular values of the Jacobian scaled by the parameters' scales, largest first.
+  /// Singular values of the Jacobian scaled by the parameters' scales (and weighted as for the
+  /// covariance), largest first.
   Eigen::VectorXd singular_values;
   std::vector<std::string> non_identifiable;  ///< Names of the parameters not identifiable.
   /// Empty, or one sentence naming the non-identifiable parameters and the null direction.
