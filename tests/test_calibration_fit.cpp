@@ -224,6 +224,34 @@ TEST(CalibrationFit, LinearisedAnswerMatchesTheSolve) {
   }
 }
 
+// The residual points' solves (Newton to 1e-13, calibration_detail.hpp's kPolishTolerance) give
+// the same answer warm-started from a far iterate's answer as cold, to 1e-12 relative: the cost
+// is one function of the parameters.
+TEST(CalibrationFit, PolishedAnswersDoNotDependOnTheStart) {
+  const Scene truth = paper_scene(5);
+  Scene far = truth;
+  far.robot.backbone.youngs_modulus *= 1.3;
+  tdcr::SolverOptions tight = data_solver(truth);
+  tight.function_tolerance = 1e-13;
+  tight.reuse_jacobian = false;
+  tight.extrapolate_warm_starts = false;
+  for (ModelKind kind : {ModelKind::CCsub, ModelKind::PRB, ModelKind::VC})
+    for (const tdcr::ModelInput& in : inputs(truth, 4, 0.1, 0.0, 19)) {
+      auto model = tdcr::make_model(kind, truth);
+      auto ws = model->make_workspace();
+      auto far_model = tdcr::make_model(kind, far);
+      auto far_ws = far_model->make_workspace();
+      const tdcr::Solution start = tdcr::solve(*far_model, *far_ws, in, tight);
+      ASSERT_TRUE(start.converged());
+      const tdcr::Solution cold = tdcr::solve(*model, *ws, in, tight);
+      const tdcr::Solution from = tdcr::warm_start_from_other_robot(*model, start);
+      const tdcr::Solution warm = tdcr::solve(*model, *ws, in, tight, &from);
+      ASSERT_TRUE(cold.converged() && warm.converged());
+      EXPECT_GT((start.tip().p - cold.tip().p).norm(), 1e-4);
+      EXPECT_LT((warm.tip().p - cold.tip().p).norm(), 1e-12 * cold.tip().p.norm()) << tdcr::to_string(kind);
+    }
+}
+
 // The covariance with the robust loss's weights: without outliers Huber's covariance is the plain
 // least-squares one; one measurement 50 standard deviations off, down-weighted by Huber or
 // Cauchy (default scale), leaves the standard errors within 30 % of the same loss's on the clean
