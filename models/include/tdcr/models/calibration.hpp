@@ -192,8 +192,11 @@ struct CalibrationOptions {
   CovarianceScaling covariance = CovarianceScaling::Automatic;  ///< How standard errors are scaled.
   /// Newton tolerance of the forward solves (scaled residual): tight, as the differences need it.
   double solve_function_tolerance = 1e-12;
-  /// Warm-start the differences' solves from the unperturbed answers (false: every solve cold,
-  /// for comparison; bench_calibration measures both).
+  /// Warm-start the solves: the residual points' from the last iterate's answers, each then taken
+  /// to Newton's tolerance 1e-13 so that its answer does not depend on the start; the
+  /// differences' from the unperturbed answers. False: every solve cold, to
+  /// solve_function_tolerance (for comparison; bench_calibration measures both). The
+  /// implicit-function columns solve nothing either way.
   bool warm_start = true;
   /// The model parameters' Jacobian columns (bench_calibration measures both).
   CalibrationJacobian jacobian = CalibrationJacobian::ImplicitFunction;
