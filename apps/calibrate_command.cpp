@@ -100,6 +100,7 @@ void print_json(const CalibrationResult& r, const std::optional<std::string>& ou
   j["reason"] = r.summary.termination + (r.summary.message.empty() ? "" : ": " + r.summary.message);
   j["iterations"] = r.summary.iterations;
   j["forward_solves"] = r.summary.forward_solves;
+  j["linearised_answers"] = r.summary.linearised_answers;
   j["time_s"] = r.summary.time_s;
   nlohmann::ordered_json ps = nlohmann::ordered_json::array();
   for (const FittedParameter& p : r.parameters)

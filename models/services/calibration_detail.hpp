@@ -1,6 +1,6 @@
 // Private pieces of the calibration service (calibration.hpp): the resolved parameters and how
 // they change a scene (calibration_parameters.cpp), and the evaluator of all measurements' model
-// solves, residuals and structured-difference Jacobian (calibration_evaluator.cpp).
+// solves, residuals and Jacobian (calibration_evaluator.cpp).
 #pragma once
 
 #include <memory>
@@ -81,9 +81,11 @@ class Evaluator {
   /// measurement's entries are 0 and `ok[i]` is false).
   Eigen::VectorXd residuals(const std::vector<Prediction>& p, const Eigen::VectorXd& values, std::vector<bool>* ok) const;
   /// Given the predictions `p` and residuals `r` at `values`, the residuals' derivative with respect to the scaled
-  /// parameters (values / scale), by forward differences: one model rebuild per model parameter
-  /// (all measurements solved warm), base-frame parameters by central differences of the
-  /// transform. `ok[i]` false where measurement i could not be solved (also in a difference).
+  /// parameters (values / scale), by forward differences: one model rebuild per model parameter,
+  /// each measurement's answer there linearised from its answer in `p` (options.jacobian
+  /// ImplicitFunction: F_x factorised once per measurement here) or solved warm; base-frame
+  /// parameters by central differences of the transform. `ok[i]` false where measurement i could
+  /// not be solved (also in a difference).
   void jacobian_at(const Eigen::VectorXd& values, const std::vector<Prediction>& p, const Eigen::VectorXd& r,
                    std::vector<bool>& ok, Eigen::MatrixXd* jacobian);
   /// Per-measurement errors of predictions with the base frame of `values`.

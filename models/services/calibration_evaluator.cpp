@@ -1,7 +1,9 @@
-// The calibration's evaluator: every measurement solved by one model per parameter vector;
-// standardised residuals; the Jacobian by structured forward differences (one model rebuild per
-// model parameter, every measurement warm-started from its answer at the unperturbed parameters,
-// tdcr::warm_start_from_other_robot), the base frame's by differences of the transform.
+// The calibration's evaluator: every measurement solved by one model per parameter vector (warm
+// from the last iterate's answers, polished); standardised residuals; the Jacobian by forward
+// differences with one model rebuild per model parameter, each measurement's shifted answer by
+// the implicit function theorem (AnswerLinearisation) or solved warm from its answer at the
+// unshifted parameters (tdcr::warm_start_from_other_robot); the base frame's by differences of
+// the transform.
 #include <algorithm>
 #include <cmath>
 #include <limits>

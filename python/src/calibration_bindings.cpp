@@ -76,6 +76,7 @@ void bind_calibration(py::module_& m) {
       .def_readonly("iterations", &CS::iterations)
       .def_readonly("forward_solves", &CS::forward_solves)
       .def_readonly("failed_solves", &CS::failed_solves)
+      .def_readonly("linearised_answers", &CS::linearised_answers)
       .def_readonly("initial_cost", &CS::initial_cost)
       .def_readonly("final_cost", &CS::final_cost)
       .def_readonly("before", &CS::before)
