@@ -48,6 +48,8 @@ bool AnswerLinearisation::linearise(const StaticModel& model, ModelWorkspace& wo
         g.cwiseProduct(scale).cwiseAbs().maxCoeff() < f_.cwiseProduct(scale).cwiseAbs().maxCoeff()) {
       x_ = answer.unknowns;
       f_ = g;
+    } else if (!sys.residual(x_, f_)) {  // the system's last evaluation at x again (a Jacobian may reuse it)
+      return false;
     }
   }
   // F_x as Newton's own (analytic, structured, or forward differences): its O(sqrt(eps)) error
