@@ -1,6 +1,6 @@
 // tdcr calibrate SCENE.json DATA.csv --model M --fit NAME[:LO:HI],... [-o OUT.json] [--json]
 // [--loss huber|cauchy|none] [--loss-scale S] [--position-std M] [--rotation-std RAD]
-// [--max-iterations N] [--cold]: the model's parameters fitted to the measurements
+// [--max-iterations N] [--cold] [--differences]: the model's parameters fitted to the measurements
 // (tdcr::calibrate), the report printed, the calibrated scene written.
 #include "calibrate_command.hpp"
 
@@ -62,6 +62,7 @@ CalibrateArgs parse_args(const std::vector<std::string>& args) {
     else if (name == "-o" || name == "--output") out.output = value();
     else if (name == "--json" && !inline_value) out.json = true;
     else if (name == "--cold" && !inline_value) out.options.warm_start = false;
+    else if (name == "--differences" && !inline_value) out.options.jacobian = CalibrationJacobian::Differences;
     else if (name == "--loss") {
       const std::string v = value();
       if (v == "huber") out.options.loss = CalibrationLoss::Huber;
@@ -100,6 +101,7 @@ void print_json(const CalibrationResult& r, const std::optional<std::string>& ou
   j["reason"] = r.summary.termination + (r.summary.message.empty() ? "" : ": " + r.summary.message);
   j["iterations"] = r.summary.iterations;
   j["forward_solves"] = r.summary.forward_solves;
+  j["linearised_answers"] = r.summary.linearised_answers;
   j["time_s"] = r.summary.time_s;
   nlohmann::ordered_json ps = nlohmann::ordered_json::array();
   for (const FittedParameter& p : r.parameters)
@@ -170,7 +172,7 @@ void print_text(const CalibrationResult& r, const std::optional<std::string>& ou
 std::string calibrate_usage() {
   return "       tdcr calibrate SCENE.json DATA.csv --model NAME --fit NAME[:LO:HI],... [-o OUT.json] [--json]\n"
          "                      [--loss huber|cauchy|none] [--loss-scale S] [--position-std M] [--rotation-std RAD]\n"
-         "                      [--max-iterations N] [--cold]   (docs/calibration.md)\n";
+         "                      [--max-iterations N] [--cold] [--differences]   (docs/calibration.md)\n";
 }
 
 int run_calibrate(const std::vector<std::string>& argv) {

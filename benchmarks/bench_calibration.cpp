@@ -18,7 +18,9 @@
 //
 // speed (calibration_speed.csv): E and the two segments' offset scales of the paper robot
 // (n = 10) fitted by CCsub, PRB and VC on 100 measurements of the same model (random tensions and
-// tip forces, 0.1 mm noise) from a start 30 % off: wall time of the whole calibration.
+// tip forces, 0.1 mm noise) from a start 30 % off: wall and thread CPU time of the whole
+// calibration, with the implicit-function Jacobian (default) and with the structured differences
+// (warm and cold solves).
 //
 // --quick (the ctest smoke run): n = 5 only, small sets; exits 1 if a fit fails or does not lower
 // its training error.
@@ -215,7 +217,7 @@ int accuracy(const Args& a) {
 int speed(const Args& a) {
   const int n = 10, count = a.quick ? 20 : 100;
   bench::Csv csv(a.out + "/calibration_speed.csv",
-                 "n,model,measurements,fit,warm_start,iterations,solves,time_s,cpu_s,e_rel_error,converged");
+                 "n,model,measurements,fit,jacobian,warm_start,iterations,solves,linearised,time_s,cpu_s,e_rel_error,converged");
   int bad = 0;
   const Scene truth = paper::scene(n, 1, "vc");
   const double tm = paper::max_tension(truth.robot);
@@ -238,8 +240,13 @@ int speed(const Args& a) {
     start.robot.backbone.youngs_modulus *= 1.3;
     for (Segment& seg : start.robot.segments)
       for (TendonSpec& t : seg.tendons) t.y *= 0.7;
-    for (bool warm : {true, false}) {
+    // The implicit-function Jacobian (default), and the structured differences warm and cold.
+    const std::pair<CalibrationJacobian, bool> variants[] = {{CalibrationJacobian::ImplicitFunction, true},
+                                                             {CalibrationJacobian::Differences, true},
+                                                             {CalibrationJacobian::Differences, false}};
+    for (const auto& [jacobian, warm] : variants) {
       CalibrationOptions o;
+      o.jacobian = jacobian;
       o.model = kind;
       o.parameters = parse_calibration_parameters("youngs_modulus,segment_offset_scale");
       o.position_std = kNoise;
@@ -249,10 +256,12 @@ int speed(const Args& a) {
       r = calibrate(start, data, o);
       const double cpu_s = 1e-6 * (bench::thread_cpu_us() - cpu0);
       const double e_rel = r.parameters[0].value / truth.robot.backbone.youngs_modulus - 1.0;
-      csv.row(n, to_string(kind), data.samples.size(), "\"youngs_modulus,segment_offset_scale\"", warm ? 1 : 0,
-              r.summary.iterations, r.summary.forward_solves, r.summary.time_s, cpu_s, e_rel, r.converged() ? 1 : 0);
-      std::printf("%-6s n = %d, %zu measurements, %s: %s, CPU %.3g s\n", to_string(kind).c_str(), n,
-                  data.samples.size(), warm ? "warm differences" : "cold differences", r.summary.brief_report().c_str(), cpu_s);
+      const char* how = jacobian == CalibrationJacobian::ImplicitFunction ? "implicit" : "differences";
+      csv.row(n, to_string(kind), data.samples.size(), "\"youngs_modulus,segment_offset_scale\"", how, warm ? 1 : 0,
+              r.summary.iterations, r.summary.forward_solves, r.summary.linearised_answers, r.summary.time_s, cpu_s, e_rel,
+              r.converged() ? 1 : 0);
+      std::printf("%-6s n = %d, %zu measurements, %s, %s: %s, CPU %.3g s\n", to_string(kind).c_str(), n,
+                  data.samples.size(), how, warm ? "warm" : "cold", r.summary.brief_report().c_str(), cpu_s);
       bad += !r.converged();
     }
   }

@@ -14,6 +14,7 @@ MODEL_FOLDERS = {"cc", "ccsub", "prb", "vc", "vcref", "lumped"}
 PUBLIC = {
     "cosserat_rod.hpp": "physics", "tendon_physics.hpp": "physics",
     "static_model.hpp": "solve", "model_problem.hpp": "solve", "dynamics.hpp": "solve",
+    "answer_linearisation.hpp": "solve",
     "cc.hpp": "cc", "ccsub.hpp": "ccsub", "prb.hpp": "prb", "vc.hpp": "vc", "vcref.hpp": "vcref",
     "lumped_model.hpp": "lumped",
 }

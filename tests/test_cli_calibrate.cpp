@@ -85,6 +85,14 @@ TEST_F(CalibrateCli, FitsSweepOutputAndWritesTheScene) {
   const json scene = json::parse(read_file(dir_ / "calibrated.json"));
   EXPECT_NEAR(scene["robot"]["backbone"]["youngs_modulus"].get<double>() / 2.11e11, 1.0, 1e-6);
   EXPECT_EQ(run("solve " + path("calibrated.json")).status, 0);
+  EXPECT_GT(j["linearised_answers"].get<int>(), 0);
+  // The Jacobian by re-solving instead (--differences): the same fit, nothing linearised.
+  const CliRun d = run("calibrate " + path("start.json") + " " + path("data.csv") +
+                       " --model ccsub --fit youngs_modulus --json --differences");
+  ASSERT_EQ(d.status, 0) << d.err << d.out;
+  const json k = json::parse(d.out);
+  EXPECT_EQ(k["linearised_answers"], 0);
+  EXPECT_NEAR(k["parameters"][0]["value"].get<double>() / j["parameters"][0]["value"].get<double>(), 1.0, 1e-9);
 }
 
 TEST_F(CalibrateCli, TextReportNamesParametersAndErrors) {

@@ -36,10 +36,12 @@ class Cache : public ceres::EvaluationCallback {
   }
 
   // The residuals at z (and the Jacobian if asked). The measurements at a new point are solved
-  // cold, along the model's own loading path: the cost is then one function of the parameters
-  // (answers warm-started from the last iterate differ from it within the Newton tolerance, and
-  // near the optimum that noise exceeded Levenberg-Marquardt's predicted decrease: PRB with tip
-  // forces took 12 iterations instead of 5). The differences start warm from these answers.
+  // warm from the last iterate's answers (the first point cold, along the model's own loading
+  // path), each to Newton's tolerance kPolishTolerance: there quadratic convergence makes the
+  // answer independent of its start far below the options' tolerance, so the cost stays one
+  // function of the parameters. (Warm answers at only that tolerance differ from cold ones within
+  // it, and near the optimum that noise exceeded Levenberg-Marquardt's predicted decrease: PRB
+  // with tip forces took 12 iterations instead of 5.) The differences start warm from these.
   void ensure(const double* z, bool jacobian) {
     const Eigen::Map<const Eigen::VectorXd> zv(z, scale_.size());
     if (have_ && zv != z_ && have_iterate_ && zv == iterate_.z) {
@@ -51,7 +53,8 @@ class Cache : public ceres::EvaluationCallback {
       Point next;
       next.z = zv;
       next.values = next.z.cwiseProduct(scale_);
-      next.predictions = e_.predict(next.values);
+      const std::vector<Prediction>* warm = have_iterate_ ? &iterate_.predictions : have_ ? &current_.predictions : nullptr;
+      next.predictions = e_.predict(next.values, warm, true);
       next.r = e_.residuals(next.predictions, next.values, &next.ok);
       current_ = std::move(next);
       z_ = zv;
@@ -207,6 +210,7 @@ CalibrationResult calibrate(const Scene& scene, const CalibrationData& data, con
   fill_report(evaluator, values, cache.r(), cache.J(), data.has_std, options, out);
   out.summary.forward_solves = evaluator.forward_solves();
   out.summary.failed_solves = evaluator.failed_solves();
+  out.summary.linearised_answers = evaluator.linearised();
   out.summary.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return out;
 }

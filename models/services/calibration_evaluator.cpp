@@ -1,7 +1,9 @@
-// The calibration's evaluator: every measurement solved by one model per parameter vector;
-// standardised residuals; the Jacobian by structured forward differences (one model rebuild per
-// model parameter, every measurement warm-started from its answer at the unperturbed parameters,
-// tdcr::warm_start_from_other_robot), the base frame's by differences of the transform.
+// The calibration's evaluator: every measurement solved by one model per parameter vector (warm
+// from the last iterate's answers, polished); standardised residuals; the Jacobian by forward
+// differences with one model rebuild per model parameter, each measurement's shifted answer by
+// the implicit function theorem (AnswerLinearisation) or solved warm from its answer at the
+// unshifted parameters (tdcr::warm_start_from_other_robot); the base frame's by differences of
+// the transform.
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -68,12 +70,18 @@ Evaluator::Evaluator(const Scene& scene, const CalibrationData& data, std::vecto
   } else if (solver_.integrator == IntegratorKind::AccuracyDrivenRK4) {
     solver_.integrator = IntegratorKind::FixedStepRK4;
   }
+  // The residual points' solves: Newton to near the rounding floor of the residual, where its
+  // quadratic convergence leaves the answer independent of the start (warm from the last
+  // iterate, or cold) to far below the tolerance the differences need.
+  polish_ = solver_;
+  polish_.function_tolerance = std::min(options.solve_function_tolerance, kPolishTolerance);
   offsets_.push_back(0);
   for (const CalibrationSample& s : data.samples)
     offsets_.push_back(offsets_.back() + (s.tip ? 3 : 0) + (s.rotation ? 3 : 0) + 3 * static_cast<int>(s.points.size()));
 }
 
-std::vector<Prediction> Evaluator::predict(const Eigen::VectorXd& values, const std::vector<Prediction>* warm) {
+std::vector<Prediction> Evaluator::predict(const Eigen::VectorXd& values, const std::vector<Prediction>* warm,
+                                          bool polish, const std::vector<AnswerLinearisation>* linear) {
   std::vector<Prediction> out(data_.samples.size());
   const Scene scene = apply_parameters(scene_, params_, values);
   std::unique_ptr<StaticModel> model;
@@ -90,14 +98,22 @@ std::vector<Prediction> Evaluator::predict(const Eigen::VectorXd& values, const 
     const CalibrationSample& m = data_.samples[u];
     const bool from = options_.warm_start && warm && (*warm)[u].solved;
     Solution s;
-    if (from) {
+    if (linear && (*linear)[u].valid() && (*linear)[u].predict(*model, *ws, m.input, solver_, s)) {
+      ++linearised_;
+    } else if (from) {
       const Solution start = warm_start_from_other_robot(*model, (*warm)[u].solution);
-      s = solve(*model, *ws, m.input, solver_, &start);
+      s = solve(*model, *ws, m.input, polish ? polish_ : solver_, &start);
       ++solves_;
     }
-    if (!from || !s.converged()) {
+    if (!s.converged()) {
       s = solve(*model, *ws, m.input, solver_);
       ++solves_;
+      if (polish && options_.warm_start && s.converged()) {
+        // A cold answer polished like the warm ones, so that all residual points agree.
+        Solution t = solve(*model, *ws, m.input, polish_, &s);
+        ++solves_;
+        if (t.converged()) s = std::move(t);
+      }
     }
     Prediction& p = out[u];
     p.solved = s.converged() && !s.disk_frames.empty();
@@ -150,6 +166,25 @@ void Evaluator::jacobian_at(const Eigen::VectorXd& values, const std::vector<Pre
                             std::vector<bool>& ok, Eigen::MatrixXd* jacobian) {
   const int np = parameters();
   jacobian->setZero(residual_count(), np);
+  // The implicit function theorem: every answer linearised once at `values` (F_x), then each
+  // model parameter's column from one residual evaluation and one output pass per measurement.
+  std::vector<AnswerLinearisation> linear;
+  bool any_model_parameter = false;
+  for (const Parameter& par : params_) any_model_parameter = any_model_parameter || !is_base_parameter(par.kind);
+  if (options_.jacobian == CalibrationJacobian::ImplicitFunction && any_model_parameter) {
+    linear.resize(data_.samples.size());
+    try {
+      const Scene scene = apply_parameters(scene_, params_, values);
+      const auto model = make_model(options_.model, scene);
+      const auto ws = model->make_workspace();
+      for (int i = 0; i < samples(); ++i) {
+        const auto u = static_cast<std::size_t>(i);
+        if (p[u].solved) linear[u].linearise(*model, *ws, data_.samples[u].input, solver_, p[u].solution);
+      }
+    } catch (const InputError&) {
+      linear.clear();  // the differences then solve (and say why a measurement fails)
+    }
+  }
   for (int q = 0; q < np; ++q) {
     const Parameter& par = params_[static_cast<std::size_t>(q)];
     const double h = options_.difference_step * par.scale;
@@ -167,7 +202,7 @@ void Evaluator::jacobian_at(const Eigen::VectorXd& values, const std::vector<Pre
     Eigen::VectorXd shifted = values;
     shifted[q] += dir * h;
     std::vector<bool> ok1;
-    const Eigen::VectorXd r1 = residuals(predict(shifted, &p), shifted, &ok1);
+    const Eigen::VectorXd r1 = residuals(predict(shifted, &p, false, linear.empty() ? nullptr : &linear), shifted, &ok1);
     std::vector<bool> ok2;
     Eigen::VectorXd r2;
     bool other_way = false;

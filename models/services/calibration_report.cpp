@@ -1,5 +1,6 @@
 // The calibration report: covariance and standard errors, correlation, and the parameters the data
-// cannot identify, all from the SVD of the final Jacobian scaled by the parameters' scales.
+// cannot identify, all from the SVD of the final Jacobian scaled by the parameters' scales and
+// weighted by the robust loss at the solution.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -19,12 +20,33 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kNullShare = 1e-2;
 }  // namespace
 
+double loss_weight(const CalibrationOptions& options, double s) {
+  const double b = options.loss_scale * options.loss_scale;
+  switch (options.loss) {
+    case CalibrationLoss::Huber: return s <= b ? 1.0 : std::sqrt(b / s);  // ceres::HuberLoss
+    case CalibrationLoss::Cauchy: return 1.0 / (1.0 + s / b);              // ceres::CauchyLoss
+    case CalibrationLoss::None: break;
+  }
+  return 1.0;
+}
+
 void fill_report(const Evaluator& evaluator, const Eigen::VectorXd& values, const Eigen::VectorXd& r,
                  const Eigen::MatrixXd& J, bool has_std, const CalibrationOptions& options, CalibrationResult& out) {
   const std::vector<Parameter>& params = evaluator.parameter_list();
   const int np = static_cast<int>(params.size());
   const Eigen::Index m = J.rows();
-  Eigen::JacobiSVD<Eigen::MatrixXd> svd(J, Eigen::ComputeThinU | Eigen::ComputeFullV);
+  // The robust loss's weights at the solution (iteratively reweighted least squares: w_i =
+  // rho'(s_i) of measurement i's squared standardised residual s_i), normalised by their mean
+  // over the residual components: a measurement the loss down-weights counts that much less in
+  // the covariance, and uniform weights (no outliers) give the plain covariance.
+  Eigen::VectorXd w = Eigen::VectorXd::Ones(m);
+  for (int i = 0; i < evaluator.samples(); ++i)
+    w.segment(evaluator.offset(i), evaluator.size(i)).setConstant(
+        loss_weight(options, r.segment(evaluator.offset(i), evaluator.size(i)).squaredNorm()));
+  const double mean_w = m > 0 ? w.mean() : 1.0;
+  const Eigen::VectorXd root_w = (w / mean_w).cwiseSqrt();
+  const Eigen::MatrixXd Jw = root_w.asDiagonal() * J;
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(Jw, Eigen::ComputeThinU | Eigen::ComputeFullV);
   const Eigen::VectorXd S = svd.singularValues();
   const Eigen::MatrixXd& V = svd.matrixV();
   out.singular_values = Eigen::VectorXd::Zero(np);
@@ -47,7 +69,9 @@ void fill_report(const Evaluator& evaluator, const Eigen::VectorXd& values, cons
   const bool scaled = options.covariance == CovarianceScaling::Residuals ||
                       (options.covariance == CovarianceScaling::Automatic && !has_std);
   double s2 = 1.0;
-  if (scaled) s2 = m > rank ? r.squaredNorm() / static_cast<double>(m - rank) : kNaN;
+  // The residual variance from the weighted residuals (w_i r_i: a down-weighted outlier adds
+  // at most its bounded influence, loss_scale^2 for Huber), over the mean weight squared.
+  if (scaled) s2 = m > rank ? (w.cwiseProduct(r) / mean_w).squaredNorm() / static_cast<double>(m - rank) : kNaN;
   Eigen::MatrixXd Cz = Eigen::MatrixXd::Zero(np, np);
   for (int k = 0; k < rank; ++k) Cz += V.col(k) * V.col(k).transpose() / (S[k] * S[k]);
   Cz *= s2;

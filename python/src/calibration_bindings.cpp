@@ -76,6 +76,7 @@ void bind_calibration(py::module_& m) {
       .def_readonly("iterations", &CS::iterations)
       .def_readonly("forward_solves", &CS::forward_solves)
       .def_readonly("failed_solves", &CS::failed_solves)
+      .def_readonly("linearised_answers", &CS::linearised_answers)
       .def_readonly("initial_cost", &CS::initial_cost)
       .def_readonly("final_cost", &CS::final_cost)
       .def_readonly("before", &CS::before)
@@ -109,7 +110,7 @@ void bind_calibration(py::module_& m) {
       "_calibrate",
       [](const tdcr::Scene& scene, const tdcr::CalibrationData& data, const std::string& model, const std::string& fit,
          const std::string& loss, double loss_scale, double position_std, double rotation_std, int max_iterations,
-         bool warm_start) {
+         bool warm_start, bool differences) {
         tdcr::CalibrationOptions o;
         o.model = tdcr::parse_model_kind(model);
         o.parameters = tdcr::parse_calibration_parameters(fit);
@@ -122,12 +123,13 @@ void bind_calibration(py::module_& m) {
         o.rotation_std = rotation_std;
         o.max_iterations = max_iterations;
         o.warm_start = warm_start;
+        if (differences) o.jacobian = tdcr::CalibrationJacobian::Differences;
         o.validate();
         py::gil_scoped_release release;
         return tdcr::calibrate(scene, data, o);
       },
       "scene"_a, "data"_a, "model"_a, "fit"_a, "loss"_a, "loss_scale"_a, "position_std"_a, "rotation_std"_a,
-      "max_iterations"_a, "warm_start"_a);
+      "max_iterations"_a, "warm_start"_a, "differences"_a = false);
 }
 
 }  // namespace tdcr_python

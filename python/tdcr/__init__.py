@@ -103,7 +103,7 @@ def solve(scene, model=None, warm_start=None, accuracy=0.01):
 
 
 def calibrate(scene, data, model=None, fit="youngs_modulus", loss="huber", loss_scale=3.0, position_std=1e-4,
-              rotation_std=1e-3, max_iterations=100, warm_start=True):
+              rotation_std=1e-3, max_iterations=100, warm_start=True, differences=False):
     """Fit a model's parameters to measured shapes, as `tdcr calibrate SCENE DATA --model M --fit ...`
     (docs/calibration.md).
 
@@ -112,7 +112,9 @@ def calibrate(scene, data, model=None, fit="youngs_modulus", loss="huber", loss_
     separated by commas (or a list), each optionally with bounds as name:LOWER:UPPER, e.g.
     "youngs_modulus,segment_offset_scale,base_offset". loss: "huber", "cauchy" or "none", with
     loss_scale in standard deviations. position_std (m) and rotation_std (rad): standard
-    deviations where the data give none. Returns a CalibrationResult (fitted values with standard
+    deviations where the data give none. warm_start=False solves every measurement cold;
+    differences=True makes the Jacobian by re-solving instead of the implicit function theorem
+    (`--cold`, `--differences`). Returns a CalibrationResult (fitted values with standard
     errors, correlation, residuals before and after, the calibrated scene); bad input (a bad row,
     an unknown parameter, a negative bound) raises InputError naming the line and column or the
     entry.
@@ -127,4 +129,4 @@ def calibrate(scene, data, model=None, fit="youngs_modulus", loss="huber", loss_
             raise _input_error("data", repr(data)[:80], "must be the path of a data file or a CalibrationData")
         data = read_calibration_data(_os.fsdecode(data), s)
     return _calibrate(s, data, s.model, fit, loss, float(loss_scale), float(position_std), float(rotation_std),
-                      int(max_iterations), bool(warm_start))
+                      int(max_iterations), bool(warm_start), bool(differences))

@@ -44,6 +44,10 @@ def test_calibrate_recovers_youngs_modulus(paper_scene, tmp_path):
     assert abs(r.scene.robot.backbone.youngs_modulus / E - 1.0) < 1e-6
     assert r.correlation.shape == (1, 1) and r.base.shape == (4, 4)
     assert len(r.residuals_after) == 8 and r.residuals_after[0].line == 2
+    assert r.summary.linearised_answers > 0
+    d = tdcr.calibrate(start, data, model="ccsub", fit=["youngs_modulus"], differences=True)
+    assert d.summary.linearised_answers == 0
+    assert abs(d.values["youngs_modulus"] / r.values["youngs_modulus"] - 1.0) < 1e-9
 
 
 def test_bad_row_names_line_and_column(paper_scene, tmp_path):

@@ -12,11 +12,14 @@
 ///
 /// The fit is a Ceres Solver problem with one residual block per measurement (its model solve,
 /// each standardised by its standard deviation) under a robust loss. All measurements are solved
-/// by one model per parameter vector. The Jacobian is by structured forward differences: one
-/// model rebuild per parameter, every measurement solved again warm-started from its answer at
-/// the unperturbed parameters (tdcr::warm_start_from_other_robot); a base-frame offset is
-/// applied to the answers and costs no solve. The residuals themselves are cold solves (the
-/// model's own loading path), so that the cost is one function of the parameters.
+/// by one model per parameter vector, warm-started from the last iterate's answers and taken to
+/// a Newton tolerance near the residual's rounding floor, so that the cost is one function of the
+/// parameters (the first point cold, along the model's own loading path). The Jacobian's model
+/// columns are by the implicit function theorem (AnswerLinearisation: F_x once per answer, per
+/// parameter one residual evaluation of the model rebuilt at the shifted parameter), or by
+/// structured forward differences (every measurement solved again, warm-started from its answer
+/// at the unshifted parameters); a base-frame offset is applied to the answers and costs no
+/// solve.
 ///
 /// @code
 /// tdcr::Scene scene = tdcr::load_scene("robot.json");
@@ -150,6 +153,16 @@ enum class CalibrationLoss {
 /// @brief Text name ("none", "huber", "cauchy").
 std::string to_string(CalibrationLoss loss);
 
+/// @brief How the model parameters' columns of the Jacobian are computed.
+enum class CalibrationJacobian {
+  /// The implicit function theorem: each answer's F_x once per Jacobian, then per parameter one
+  /// residual evaluation of the model rebuilt at the shifted parameter and one output pass
+  /// (AnswerLinearisation); a measurement it cannot take (CC, displacement input) is solved.
+  ImplicitFunction,
+  /// Structured forward differences: per parameter every measurement solved again (warm).
+  Differences
+};
+
 /// @brief Settings of a calibration, in the spirit of ceres::Solver::Options.
 struct CalibrationOptions {
   ModelKind model = ModelKind::VC;                    ///< The model whose parameters are fitted.
@@ -179,9 +192,14 @@ struct CalibrationOptions {
   CovarianceScaling covariance = CovarianceScaling::Automatic;  ///< How standard errors are scaled.
   /// Newton tolerance of the forward solves (scaled residual): tight, as the differences need it.
   double solve_function_tolerance = 1e-12;
-  /// Warm-start the differences' solves from the unperturbed answers (false: every solve cold,
-  /// for comparison; bench_calibration measures both).
+  /// Warm-start the solves: the residual points' from the last iterate's answers, each then taken
+  /// to Newton's tolerance 1e-13 so that its answer does not depend on the start; the
+  /// differences' from the unperturbed answers. False: every solve cold, to
+  /// solve_function_tolerance (for comparison; bench_calibration measures both). The
+  /// implicit-function columns solve nothing either way.
   bool warm_start = true;
+  /// The model parameters' Jacobian columns (bench_calibration measures both).
+  CalibrationJacobian jacobian = CalibrationJacobian::ImplicitFunction;
 
   /// @brief Throws InputError (field `calibration.<name>`) naming the value: no parameter, a
   /// tolerance, step or standard deviation that is not a positive finite number, fewer than 1
@@ -232,6 +250,9 @@ struct CalibrationSummary {
   int iterations = 0;        ///< Ceres iterations.
   int forward_solves = 0;    ///< Model solves, the differences' included.
   int failed_solves = 0;     ///< Solves that did not converge (their measurement's step rejected).
+  /// Answers of the Jacobian's model-parameter columns linearised instead of solved
+  /// (CalibrationJacobian::ImplicitFunction).
+  int linearised_answers = 0;
   double initial_cost = 0.0; ///< Ceres cost at the start.
   double final_cost = 0.0;   ///< Ceres cost at the end.
   ResidualStatistics before; ///< At the start.
@@ -250,9 +271,15 @@ struct CalibrationResult {
   /// base frame: it is reported here (and by the CLI), not in `scene`.
   Frame base;
   std::vector<FittedParameter> parameters;  ///< In fit order.
-  Eigen::MatrixXd covariance;   ///< Of the parameters (their units); non-identifiable rows: inf.
+  /// Of the parameters (their units); non-identifiable rows: inf. From the Jacobian weighted by
+  /// the robust loss at the solution (each measurement by rho'(s) of its squared standardised
+  /// residual, normalised by the mean weight) and, when scaled by the residuals, the weighted
+  /// residuals: a measurement the loss down-weights (an outlier) does not inflate the standard
+  /// errors; without down-weighting it is the plain covariance.
+  Eigen::MatrixXd covariance;
   Eigen::MatrixXd correlation;  ///< Correlation matrix (NaN where not identifiable).
-  /// Singular values of the Jacobian scaled by the parameters' scales, largest first.
+  /// Singular values of the Jacobian scaled by the parameters' scales (and weighted as for the
+  /// covariance), largest first.
   Eigen::VectorXd singular_values;
   std::vector<std::string> non_identifiable;  ///< Names of the parameters not identifiable.
   /// Empty, or one sentence naming the non-identifiable parameters and the null direction.

@@ -94,6 +94,7 @@ struct SolveHistory {
 }  // namespace detail
 
 class ModelWorkspace;
+class AnswerLinearisation;
 namespace detail {
 /// Displacement input (models/solve/displacement_input.hpp): the workspace's problem with the
 /// driven tendons' tensions as unknowns, bound for `input` (started from `tension_start`, a
@@ -173,6 +174,7 @@ class StaticModel {
 
  private:
   friend class ModelWorkspace;
+  friend class AnswerLinearisation;  // binds two models' problems to linearise across them
   friend Solution solve(const StaticModel&, ModelWorkspace&, const ModelInput&, const SolverOptions&,
                         const Solution*);
   friend ModelProblem& detail::bind_displacement_problem(const StaticModel&, ModelWorkspace&,
