@@ -9,6 +9,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <string>
 #include <vector>
 
@@ -29,15 +31,15 @@ using Vec6 = Eigen::Matrix<double, 6, 1>;
 using Mat6 = Eigen::Matrix<double, 6, 6>;
 using Twists = Eigen::Matrix<double, 6, Eigen::Dynamic>;
 
-// Central-difference step of a subsegment's local pose in its unknowns (angles, rad): truncation
-// ~h^2 = 1e-12 relative, rounding ~1e-16 / h = 1e-10 on the unit-size derivatives.
-constexpr double kTwistStep = 1e-6;
-// Relative step of the velocity-product terms' difference along q' (bias accelerations).
-constexpr double kBiasStep = 1e-7;
-// PRB: inertia added to the bending-plane angle phi of a subsegment, as a fraction of its disk's
-// polar inertia. phi has no inertia of its own where the subsegment is straight (a polar angle at
+// Step of the fourth-order differences of a subsegment's local pose in its unknowns (angles,
+// rad): truncation ~h^4 = 1e-12 relative, rounding ~1e-16 / h = 1e-13.
+constexpr double kTwistStep = 1e-3;
+// Step (rad) of the velocity-product terms' differences along q' (bias accelerations).
+constexpr double kBiasStep = 1e-3;
+// PRB: inertia added to the bending-plane angle phi of a subsegment, as a fraction of m l^2 (its
+// disk's mass, its length): that of turning the plane of a bend of sqrt(kPhiInertia) rad. phi has no inertia of its own where the subsegment is straight (a polar angle at
 // zero bend): without it M is singular there. It only slows a plane's turning near straight.
-constexpr double kPhiInertia = 1.0;
+constexpr double kPhiInertia = 1e-2;
 
 // The spatial inertia about the base origin, ordering (omega, v_o), of a body with mass m,
 // centre c and rotational inertia Ic about c (base frame).
@@ -86,7 +88,8 @@ class LumpedDynamics final : public DynamicsIntegrator {
   // The input at t (from the timeline once advance() has one), bound to the problem if it changed.
   void input_at(double t);
   // Frames and the twist columns (omega; v_o) of every unknown at q into `T`.
-  void twists(const double* q, Twists& T);
+  // With `points`, the link midpoints go there (and the link Jacobians are not computed).
+  void twists(const double* q, Twists& T, std::vector<Vec3>* points = nullptr);
   // Q = -S r at q (frames_ and T_ must be those of q); S's diagonal blocks kept in S_.
   bool generalized_force(const double* q);
   // M at q from T_ (frames_ of q); the composite inertias kept in IC_.
@@ -94,6 +97,17 @@ class LumpedDynamics final : public DynamicsIntegrator {
   // b: velocity-product forces minus drag, at (q, v).
   void bias(const double* q, const double* v);
   double potential_energy(const double* q);
+  // PRB: m a of link l at q'' = 0 from bias()'s stencil of positions (step h along q').
+  Vec3 link_force(int l, double h) const {
+    const Vec3 acc = (-link_stencil_[0][l] + 16.0 * link_stencil_[2][l] - 30.0 * link_c_[l] +
+                      16.0 * link_stencil_[3][l] - link_stencil_[1][l]) / (12.0 * h * h);
+    return link_mass_[l] * acc;
+  }
+  // PRB: the bending plane phi of a subsegment that is straight at rest is no state (a polar
+  // angle at zero bend) but decides the plane it can start bending in: take it from the first
+  // static answer along the timeline that bends the subsegment (planar motions start right).
+  void choose_bending_planes(const Timeline& timeline);
+  bool chart_chosen_ = false;
   // Springs' stiffness of unknown i (the diagonal of D / tau_bt) at q.
   double spring(int i, const double* q) const;
 
@@ -112,6 +126,14 @@ class LumpedDynamics final : public DynamicsIntegrator {
   std::vector<double> mass_, air_length_;
   std::vector<Vec3> inertia_;
   std::vector<double> length_;  // l_j, j = 1..N
+  // PRB: the backbone of a subsegment as point masses at its four link midpoints (its joints
+  // between two disks would have no inertia of their own otherwise): mass, world position and
+  // the local Jacobian (base frame) of link i of subsegment j at index 4 j + i.
+  static constexpr int kLinks = 4;
+  bool links_ = false;
+  std::vector<double> link_mass_;
+  std::vector<Vec3> link_c_, link_stencil_[4];
+  std::vector<Eigen::Matrix<double, 3, 5>> link_J_;
 
   // State and buffers, sized once.
   double t_ = 0.0;
@@ -167,14 +189,29 @@ LumpedDynamics::LumpedDynamics(const LumpedModel& model, const LumpedBody& body,
   // not move), with the rotary inertia of the section and of the half-length about the disk.
   const double ro = robot.backbone.outer_radius, ri = robot.backbone.inner_radius;
   const double rg2 = 0.25 * (ro * ro + ri * ri);
-  for (int j = 1; j <= N_; ++j)
+  links_ = m_ == 5;
+  link_mass_.assign(kLinks * (N_ + 1), 0.0);
+  link_c_.assign(kLinks * (N_ + 1), Vec3::Zero());
+  for (auto& st : link_stencil_) st.assign(kLinks * (N_ + 1), Vec3::Zero());
+  link_J_.assign(kLinks * (N_ + 1), Eigen::Matrix<double, 3, 5>::Zero());
+  const PrbParameters& prb = model.effects().prb;
+  const double gsum = prb.gamma[0] + prb.gamma[1] + prb.gamma[2] + prb.gamma[3];
+  for (int j = 1; j <= N_; ++j) {
     for (int side : {j - 1, j}) {
       if (side == 0) continue;
       const double h = 0.5 * length_[j], mh = mu * h;
-      mass_[side] += mh;
-      inertia_[side] += Vec3(mh * (rg2 + h * h / 3.0), mh * (rg2 + h * h / 3.0), 2.0 * mh * rg2);
+      // The section's rotary inertia always; CCsub: the half-length's mass and its rotary inertia
+      // about the disk too.
+      inertia_[side] += Vec3(mh * rg2, mh * rg2, 2.0 * mh * rg2);
+      if (!links_) {
+        mass_[side] += mh;
+        inertia_[side] += Vec3(mh * h * h / 3.0, mh * h * h / 3.0, 0.0);
+      }
       air_length_[side] += h;
     }
+    if (links_)
+      for (int i = 0; i < kLinks; ++i) link_mass_[kLinks * j + i] = mu * length_[j] * prb.gamma[i] / gsum;
+  }
   // Accuracy: the static solve's tip tolerance as an angle, CVODE's relative tolerance.
   const double L = body.length;
   const double tip_tol = solver.tip_tolerance > 0.0 ? solver.tip_tolerance : SolverOptions::kTipToleranceOverLength * L;
@@ -231,24 +268,46 @@ void LumpedDynamics::input_at(double t) {
   bound_valid_ = true;
 }
 
-void LumpedDynamics::twists(const double* q, Twists& T) {
+void LumpedDynamics::twists(const double* q, Twists& T, std::vector<Vec3>* points) {
   body_.compute_frames(q, N_, frames_b_.data(), poses_.data());
-  double xp[8], xm[8];
-  SubsegmentPose gp, gm;
+  if (links_) {
+    std::vector<Vec3>& c = points ? *points : link_c_;
+    for (int j = 1; j <= N_; ++j)
+      for (int i = 0; i < kLinks; ++i)
+        c[kLinks * j + i] = frames_b_[j - 1].p + frames_b_[j - 1].R * poses_[j].aux[3 + i];
+  }
+  double xs[8];
+  SubsegmentPose g[4];
+  static constexpr double kOffset[4] = {2.0, 1.0, -1.0, -2.0};
+  static constexpr double kWeight[4] = {-1.0 / 12.0, 8.0 / 12.0, -8.0 / 12.0, 1.0 / 12.0};
   for (int j = 1; j <= N_; ++j) {
     const double* xj = q + m_ * (j - 1);
     const Mat3& R0 = frames_b_[j - 1].R;
     const Vec3& pj = frames_b_[j].p;
     for (int i = 0; i < m_; ++i) {
-      std::copy(xj, xj + m_, xp);
-      std::copy(xj, xj + m_, xm);
-      xp[i] += kTwistStep;
-      xm[i] -= kTwistStep;
-      body_.local(j, xp, gp);
-      body_.local(j, xm, gm);
-      const Mat3 dR = (gp.R - gm.R) / (2.0 * kTwistStep);
+      // Fourth-order central differences: the mass matrix is ill-conditioned (torsion against
+      // bending), so its columns' noise must stay near rounding.
+      std::copy(xj, xj + m_, xs);
+      for (int k = 0; k < 4; ++k) {
+        xs[i] = xj[i] + kOffset[k] * kTwistStep;
+        body_.local(j, xs, g[k]);
+      }
+      Mat3 dR = Mat3::Zero();
+      Vec3 dp = Vec3::Zero();
+      for (int k = 0; k < 4; ++k) {
+        dR += kWeight[k] * g[k].R;
+        dp += kWeight[k] * g[k].p;
+      }
+      dR /= kTwistStep;
+      dp /= kTwistStep;
       const Vec3 w_loc = lie::vee(dR * poses_[j].R.transpose());
-      const Vec3 a = R0 * ((gp.p - gm.p) / (2.0 * kTwistStep));
+      if (links_ && !points)
+        for (int l = 0; l < kLinks; ++l) {
+          Vec3 dc = Vec3::Zero();
+          for (int k = 0; k < 4; ++k) dc += kWeight[k] * g[k].aux[3 + l];
+          link_J_[kLinks * j + l].col(i) = R0 * dc / kTwistStep;
+        }
+      const Vec3 a = R0 * dp;
       const Vec3 w = R0 * w_loc;
       T.col(m_ * (j - 1) + i) << w, a - w.cross(pj);
     }
@@ -294,17 +353,45 @@ void LumpedDynamics::mass_matrix() {
     const Mat3 Ic = f.R * inertia_[k].asDiagonal() * f.R.transpose();
     Io_[k] = spatial_inertia(mass_[k], f.p, Ic);
     IC_[k] = IC_[k + 1] + Io_[k];
+    // PRB: the links of subsegment k + 1 are rigid with disk k.
+    if (links_ && k < N_)
+      for (int i = 0; i < kLinks; ++i)
+        IC_[k] += spatial_inertia(link_mass_[kLinks * (k + 1) + i], link_c_[kLinks * (k + 1) + i], Mat3::Zero());
   }
-  // Block (a, b), a <= b: the disks moving with both columns are those k >= b.
+  // Block (a, b), a <= b: the bodies moving rigidly with both columns are the disks k >= b and
+  // the links of subsegments > b; PRB: the links of b move with its columns through link_J_.
   for (int bj = 1; bj <= N_; ++bj) {
-    const Eigen::Matrix<double, 6, Eigen::Dynamic> U = IC_[bj] * T_.middleCols(m_ * (bj - 1), m_);
+    Eigen::Matrix<double, 6, Eigen::Dynamic> U = IC_[bj] * T_.middleCols(m_ * (bj - 1), m_);
+    if (links_)
+      for (int i = 0; i < kLinks; ++i) {
+        const int l = kLinks * bj + i;
+        const Eigen::Matrix<double, 3, 5>& J = link_J_[l];
+        for (int c = 0; c < m_; ++c) {
+          U.col(c).head<3>() += link_mass_[l] * link_c_[l].cross(Vec3(J.col(c)));
+          U.col(c).tail<3>() += link_mass_[l] * J.col(c);
+        }
+      }
     for (int aj = 1; aj <= bj; ++aj) {
       M_.block(m_ * (aj - 1), m_ * (bj - 1), m_, m_).noalias() = T_.middleCols(m_ * (aj - 1), m_).transpose() * U;
       if (aj != bj) M_.block(m_ * (bj - 1), m_ * (aj - 1), m_, m_) = M_.block(m_ * (aj - 1), m_ * (bj - 1), m_, m_).transpose();
     }
   }
-  if (m_ == 5)
-    for (int j = 1; j <= N_; ++j) M_(m_ * (j - 1) + 3, m_ * (j - 1) + 3) += kPhiInertia * inertia_[j].z();
+  if (links_)
+    for (int j = 1; j <= N_; ++j) {
+      // The diagonal block's own links: U above holds their rigid part (twist T of b), which
+      // for b's own columns is not their motion: replace it by J^T m J.
+      for (int i = 0; i < kLinks; ++i) {
+        const int l = kLinks * j + i;
+        const Eigen::Matrix<double, 3, 5>& J = link_J_[l];
+        const auto Tj = T_.middleCols(m_ * (j - 1), m_);
+        Eigen::Matrix<double, 5, 5> rigid;
+        for (int c = 0; c < m_; ++c)
+          for (int r = 0; r < m_; ++r)
+            rigid(r, c) = link_mass_[l] * (Tj.col(r).tail<3>() + Tj.col(r).head<3>().cross(link_c_[l])).dot(J.col(c));
+        M_.block(m_ * (j - 1), m_ * (j - 1), m_, m_) += link_mass_[l] * J.transpose() * J - rigid;
+      }
+      M_(m_ * (j - 1) + 3, m_ * (j - 1) + 3) += kPhiInertia * mass_[j] * length_[j] * length_[j];
+    }
 }
 
 void LumpedDynamics::bias(const double* q, const double* v) {
@@ -313,14 +400,25 @@ void LumpedDynamics::bias(const double* q, const double* v) {
   // The columns' rates T' = dT/dq q' by a central difference along q'.
   Vec6 Tdot_v_sum = Vec6::Zero();
   const bool moving = vn > 0.0;
+  double h = 0.0;
   if (moving) {
-    const double h = kBiasStep / vn;
+    // Fourth order along q' (the same stencil as twists()); PRB: the links' positions too, for
+    // their accelerations (second differences).
+    h = kBiasStep / vn;
+    qs_ = qv + 2.0 * h * vv;
+    twists(qs_.data(), Tp_, &link_stencil_[0]);
+    Tp_ *= -1.0 / 12.0;
+    qs_ = qv - 2.0 * h * vv;
+    twists(qs_.data(), Tm_, &link_stencil_[1]);
+    Tp_ += (1.0 / 12.0) * Tm_;
     qs_ = qv + h * vv;
-    twists(qs_.data(), Tp_);
+    twists(qs_.data(), Tm_, &link_stencil_[2]);
+    Tp_ += (8.0 / 12.0) * Tm_;
     qs_ = qv - h * vv;
-    twists(qs_.data(), Tm_);
+    twists(qs_.data(), Tm_, &link_stencil_[3]);
+    Tp_ -= (8.0 / 12.0) * Tm_;
+    Tp_ /= h;
     body_.compute_frames(q, N_, frames_b_.data(), poses_.data());  // back to q
-    Tp_ = (Tp_ - Tm_) / (2.0 * h);
   }
   // Spatial velocities and bias accelerations of the disks, from the base.
   Vec6 V = Vec6::Zero(), A = Vec6::Zero();
@@ -345,7 +443,22 @@ void LumpedDynamics::bias(const double* q, const double* v) {
       f.tail<3>() -= drag;
     }
     F += f;
+    Eigen::Matrix<double, 5, 1> own = Eigen::Matrix<double, 5, 1>::Zero();
+    if (links_ && moving) {
+      // The links of subsegment k + 1 are rigid with disk k; those of k move through link_J_.
+      for (int i = 0; i < kLinks && k < N_; ++i) {
+        const int l = kLinks * (k + 1) + i;
+        const Vec3 fl = link_force(l, h);
+        F.head<3>() += link_c_[l].cross(fl);
+        F.tail<3>() += fl;
+      }
+      for (int i = 0; i < kLinks; ++i) {
+        const int l = kLinks * k + i;
+        own += link_J_[l].transpose() * link_force(l, h);
+      }
+    }
     b_.segment(m_ * (k - 1), m_).noalias() = T_.middleCols(m_ * (k - 1), m_).transpose() * F;
+    if (links_) b_.segment(m_ * (k - 1), m_) += own.head(m_);
   }
 }
 
@@ -370,14 +483,20 @@ int LumpedDynamics::rhs_fn(sunrealtype t, N_Vector y, N_Vector yd, void* user) {
   const double* v = yv + n;
   s.input_at(t);
   s.twists(q, s.T_);
-  if (!s.generalized_force(q)) return 1;  // recoverable: CVODE retries a smaller step
+  if (!s.generalized_force(q)) {
+    if (std::getenv("TDCR_DEBUG_CVODE")) std::fprintf(stderr, "Q failed: r %s\n", s.r_.allFinite() ? "finite" : "nonfinite");
+    return 1;  // recoverable: CVODE retries a smaller step
+  }
   s.mass_matrix();
   s.bias(q, v);
   Eigen::Map<const Eigen::VectorXd> vv(v, n);
   for (int i = 0; i < n; ++i) s.damp_[i] = s.settings_.bending_damping_time * s.spring(i, q);
   s.rhs_ = s.Q_ - s.damp_.cwiseProduct(vv) - s.b_;
   s.llt_.compute(s.M_);
-  if (s.llt_.info() != Eigen::Success) return 1;
+  if (s.llt_.info() != Eigen::Success) {
+    if (std::getenv("TDCR_DEBUG_CVODE")) std::fprintf(stderr, "LLT failed\n");
+    return 1;
+  }
   Eigen::Map<Eigen::VectorXd> dq(d, n), dv(d + n, n);
   dq = vv;
   dv = s.llt_.solve(s.rhs_);
@@ -450,13 +569,14 @@ void LumpedDynamics::initialize(const Solution& at_rest, const ModelInput& input
   ls_ = SUNLinSol_Dense(y_, A_mat_, ctx_);
   if (!A_mat_ || !ls_) throw std::runtime_error("lumped dynamics: dense matrix or solver creation failed");
   check(CVodeSetLinearSolver(cvode_, ls_, A_mat_), "CVodeSetLinearSolver");
-  if (problem_->has_jacobian()) check(CVodeSetJacFn(cvode_, &jac_fn), "CVodeSetJacFn");
+  if (problem_->has_jacobian() && !std::getenv("TDCR_NO_JAC")) check(CVodeSetJacFn(cvode_, &jac_fn), "CVodeSetJacFn");
   cvode_ready_ = true;
 }
 
 SimulationStep LumpedDynamics::advance(double t_next, const Timeline& timeline) {
   if (!cvode_ready_) throw std::logic_error("lumped dynamics: advance() before initialize()");
   timeline_ = &timeline;
+  if (!chart_chosen_) choose_bending_planes(timeline);
   SimulationStep step;
   long before = 0, after = 0;
   CVodeGetNumSteps(cvode_, &before);
@@ -476,6 +596,18 @@ SimulationStep LumpedDynamics::advance(double t_next, const Timeline& timeline) 
     if (t_ >= stop) t_ = stop;
   }
   CVodeGetNumSteps(cvode_, &after);
+  if (std::getenv("TDCR_DEBUG_CVODE")) {
+    long nf = 0, nj = 0, nni = 0, ncf = 0, netf = 0, nsetup = 0;
+    double h = 0;
+    CVodeGetNumRhsEvals(cvode_, &nf);
+    CVodeGetNumJacEvals(cvode_, &nj);
+    CVodeGetNumNonlinSolvIters(cvode_, &nni);
+    CVodeGetNumNonlinSolvConvFails(cvode_, &ncf);
+    CVodeGetNumErrTestFails(cvode_, &netf);
+    CVodeGetNumLinSolvSetups(cvode_, &nsetup);
+    CVodeGetLastStep(cvode_, &h);
+    std::fprintf(stderr, "t %g steps %ld rhs %ld jac %ld setups %ld nni %ld ncf %ld netf %ld h %g flag %d %s\n", t_, after, nf, nj, nsetup, nni, ncf, netf, h, flag, cvode_message_.c_str());
+  }
   const double* yv = N_VGetArrayPointer(y_);
   q_ = Eigen::Map<const Eigen::VectorXd>(yv, n_);
   v_ = Eigen::Map<const Eigen::VectorXd>(yv + n_, n_);
@@ -501,16 +633,49 @@ SimulationStep LumpedDynamics::advance(double t_next, const Timeline& timeline) 
   return step;
 }
 
+void LumpedDynamics::choose_bending_planes(const Timeline& timeline) {
+  chart_chosen_ = true;
+  if (m_ != 5) return;
+  double* y = N_VGetArrayPointer(y_);
+  std::vector<bool> open(N_ + 1, false);
+  bool any = false;
+  for (int j = 1; j <= N_; ++j) {
+    const double* x = y + m_ * (j - 1);
+    open[j] = std::abs(x[0]) + std::abs(x[1]) + std::abs(x[2]) < 1e-12;
+    any = any || open[j];
+  }
+  if (!any) return;
+  std::unique_ptr<ModelWorkspace> ws = model_.make_workspace();
+  for (const TimelineEntry& e : timeline.entries) {
+    const Solution s = solve(model_, *ws, e.input);
+    if (!s.converged()) continue;
+    for (int j = 1; j <= N_; ++j) {
+      const double* x = s.unknowns.data() + m_ * (j - 1);
+      if (open[j] && std::abs(x[0]) + std::abs(x[1]) + std::abs(x[2]) > 1e-9) {
+        y[m_ * (j - 1) + 3] = x[3];
+        open[j] = false;
+      }
+    }
+  }
+  Solution chart;
+  chart.unknowns = Eigen::Map<const Eigen::VectorXd>(y, n_);
+  Eigen::VectorXd ignored;
+  problem_->warm_guess(chart, ignored);  // the gauge references follow
+  check(CVodeReInit(cvode_, t_, y_), "CVodeReInit");
+}
+
 double LumpedDynamics::potential_energy(const double* q) {
   double U = 0.0;
   for (int i = 0; i < n_; ++i) {
     const int c = i % m_;
-    if (m_ == 5 && c == 3) continue;  // phi: no spring
+    if (m_ == 5 && c == 3) continue;  // phi: no spring of its own
     U += 0.5 * spring(i, q) * q[i] * q[i];
   }
   // Conservative loads: gravity on the lumped masses, the tip force, constant tendon tensions.
   const Loads& L = input_.loads;
   for (int k = 1; k <= N_; ++k) U -= mass_[k] * L.gravity.dot(frames_b_[k].p);
+  if (links_)
+    for (int l = kLinks; l < kLinks * (N_ + 1); ++l) U -= link_mass_[l] * L.gravity.dot(link_c_[l]);
   U -= L.tip_force.dot(frames_b_[N_].p);
   if (input_.actuation.kind == Actuation::Kind::Tensions && !input_.actuation.mixed()) {
     const TendonRouting& routing = body_.statics.routing();
@@ -560,15 +725,24 @@ Eigen::VectorXd LumpedDynamics::frequencies(const Eigen::VectorXd& x, const Mode
   }
   twists(x.data(), T_);
   mass_matrix();
-  const Eigen::MatrixXd Ks = 0.5 * (K_ + K_.transpose());
-  Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(Ks, M_);
+  // PRB: phi is no coordinate of a straight subsegment (a polar angle at zero bend): held fixed.
+  std::vector<int> keep;
+  for (int i = 0; i < n_; ++i)
+    if (!(m_ == 5 && i % m_ == 3)) keep.push_back(i);
+  const int nk = static_cast<int>(keep.size());
+  Eigen::MatrixXd Ks(nk, nk), Mk(nk, nk);
+  for (int a = 0; a < nk; ++a)
+    for (int b = 0; b < nk; ++b) {
+      Ks(a, b) = 0.5 * (K_(keep[a], keep[b]) + K_(keep[b], keep[a]));
+      Mk(a, b) = M_(keep[a], keep[b]);
+    }
+  Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(Ks, Mk);
   Eigen::VectorXd f = es.eigenvalues().cwiseMax(0.0).cwiseSqrt() / (2.0 * M_PI);
   std::sort(f.data(), f.data() + f.size());
   return f;
 }
 
 }  // namespace
-
 std::unique_ptr<DynamicsIntegrator> make_lumped_dynamics(const LumpedModel& model, const LumpedBody& body,
                                                          const DynamicsSettings& settings, double dt,
                                                          const SolverOptions& solver) {
