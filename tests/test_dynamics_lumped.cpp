@@ -3,7 +3,9 @@
 // dissipates) and the input errors of the dynamics keys.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
+#include <iostream>
 #include <string>
 
 #include "tdcr/core/error.hpp"
@@ -59,7 +61,7 @@ class LumpedDynamicsTest : public ::testing::TestWithParam<ModelKind> {};
 // With damping, a constant input after a short ramp settles on the static answer of the same
 // model (its own statics are the zero of the generalized force).
 TEST_P(LumpedDynamicsTest, SettlesOnItsOwnStaticAnswer) {
-  const Robot robot = paper_robot_with_mass(5);
+  const Robot robot = paper_robot_with_mass(3);
   auto model = make_model(GetParam(), robot, Effects());
   const double T = 0.4 * paper::max_tension(robot);
   const Timeline tl = step_timeline({0, 0, 0, 0}, {T, 0, 0, 0.5 * T}, 0.01);
@@ -87,7 +89,9 @@ TEST_P(LumpedDynamicsTest, DampingDissipatesEnergy) {
   auto model = make_model(GetParam(), robot, Effects());
   Timeline tl;
   TimelineEntry a, b;
-  a.input.loads.tip_force = Vec3(0.01, 0.004, 0.0);
+  // In a plane: through the straight shape, a motion out of PRB's bending planes would spin their
+  // angle (docs/dynamics.md, "Limits").
+  a.input.loads.tip_force = Vec3(0.01, 0.0, 0.0);
   b.t = 1e-4;  // released within 0.1 ms
   tl.entries = {a, b};
   SimulationOptions o;

@@ -8,6 +8,7 @@
 #include <sunmatrix/sunmatrix_dense.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -156,6 +157,7 @@ class LumpedDynamics final : public DynamicsIntegrator {
   SUNLinearSolver ls_ = nullptr;
   bool cvode_ready_ = false;
   std::string cvode_message_;
+  long debug_rhs_ = 0;
 };
 
 LumpedDynamics::LumpedDynamics(const LumpedModel& model, const LumpedBody& body, const DynamicsSettings& settings,
@@ -476,6 +478,7 @@ double LumpedDynamics::spring(int i, const double* q) const {
 
 int LumpedDynamics::rhs_fn(sunrealtype t, N_Vector y, N_Vector yd, void* user) {
   auto& s = *static_cast<LumpedDynamics*>(user);
+  ++s.debug_rhs_;
   const double* yv = N_VGetArrayPointer(y);
   double* d = N_VGetArrayPointer(yd);
   const int n = s.n_;
@@ -576,7 +579,9 @@ void LumpedDynamics::initialize(const Solution& at_rest, const ModelInput& input
 SimulationStep LumpedDynamics::advance(double t_next, const Timeline& timeline) {
   if (!cvode_ready_) throw std::logic_error("lumped dynamics: advance() before initialize()");
   timeline_ = &timeline;
+  const auto c0 = std::chrono::steady_clock::now();
   if (!chart_chosen_) choose_bending_planes(timeline);
+  const auto c1 = std::chrono::steady_clock::now();
   SimulationStep step;
   long before = 0, after = 0;
   CVodeGetNumSteps(cvode_, &before);
@@ -606,6 +611,10 @@ SimulationStep LumpedDynamics::advance(double t_next, const Timeline& timeline) 
     CVodeGetNumErrTestFails(cvode_, &netf);
     CVodeGetNumLinSolvSetups(cvode_, &nsetup);
     CVodeGetLastStep(cvode_, &h);
+    long nfels = 0;
+    CVodeGetNumLinRhsEvals(cvode_, &nfels);
+    std::fprintf(stderr, "my rhs %ld nfeLS %ld; ", debug_rhs_, nfels);
+    std::fprintf(stderr, "chart %g s, all %g s; ", std::chrono::duration<double>(c1 - c0).count(), std::chrono::duration<double>(std::chrono::steady_clock::now() - c0).count());
     std::fprintf(stderr, "t %g steps %ld rhs %ld jac %ld setups %ld nni %ld ncf %ld netf %ld h %g flag %d %s\n", t_, after, nf, nj, nsetup, nni, ncf, netf, h, flag, cvode_message_.c_str());
   }
   const double* yv = N_VGetArrayPointer(y_);
