@@ -41,6 +41,8 @@ constexpr double kBiasStep = 1e-3;
 // disk's mass, its length): that of turning the plane of a bend of sqrt(kPhiInertia) rad. phi has no inertia of its own where the subsegment is straight (a polar angle at
 // zero bend): without it M is singular there. It only slows a plane's turning near straight.
 constexpr double kPhiInertia = 1e-2;
+// CVODE steps allowed per output step.
+constexpr long kMaxStepsPerOutput = 20000;
 
 // The spatial inertia about the base origin, ordering (omega, v_o), of a body with mass m,
 // centre c and rotational inertia Ic about c (base frame).
@@ -567,7 +569,9 @@ void LumpedDynamics::initialize(const Solution& at_rest, const ModelInput& input
   check(CVodeSetErrHandlerFn(cvode_, &on_error, this), "CVodeSetErrHandlerFn");
   check(CVodeSetUserData(cvode_, this), "CVodeSetUserData");
   check(CVodeSVtolerances(cvode_, rtol_, abstol_), "CVodeSVtolerances");
-  check(CVodeSetMaxNumSteps(cvode_, 100000), "CVodeSetMaxNumSteps");
+  // Per output step: a step that needs more has met a singularity (e.g. a CCsub subsegment bent
+  // to 90 deg, where its twist law degenerates), not a hard stretch of motion.
+  check(CVodeSetMaxNumSteps(cvode_, kMaxStepsPerOutput), "CVodeSetMaxNumSteps");
   A_mat_ = SUNDenseMatrix(2 * n_, 2 * n_, ctx_);
   ls_ = SUNLinSol_Dense(y_, A_mat_, ctx_);
   if (!A_mat_ || !ls_) throw std::runtime_error("lumped dynamics: dense matrix or solver creation failed");
@@ -595,7 +599,10 @@ SimulationStep LumpedDynamics::advance(double t_next, const Timeline& timeline) 
     sunrealtype reached = t_;
     cvode_message_.clear();
     flag = CVode(cvode_, stop, y_, &reached, CV_NORMAL);
-    if (flag < 0) break;
+    if (flag < 0) {
+      t_ = reached;
+      break;
+    }
     t_ = reached;
     if (stop < t_next && t_ >= stop) check(CVodeReInit(cvode_, t_, y_), "CVodeReInit");
     if (t_ >= stop) t_ = stop;
