@@ -83,47 +83,66 @@ TEST_P(LumpedDynamicsTest, SettlesOnItsOwnStaticAnswer) {
   EXPECT_GT((tip - r.steps.front().tip.p).norm(), 1e-3);
 }
 
-// Undamped, the energy of a released cantilever stays; damped, it never grows and decays.
-TEST_P(LumpedDynamicsTest, DampingDissipatesEnergy) {
-  const Robot robot = cantilever(6, 0.1);
-  auto model = make_model(GetParam(), robot, Effects());
+// A released cantilever (a small tip force in the x-z plane, released within 0.1 ms).
+Timeline release_timeline(const Vec3& force) {
   Timeline tl;
   TimelineEntry a, b;
-  // In a plane: through the straight shape, a motion out of PRB's bending planes would spin their
-  // angle (docs/dynamics.md, "Limits").
-  a.input.loads.tip_force = Vec3(0.01, 0.0, 0.0);
-  b.t = 1e-4;  // released within 0.1 ms
+  a.input.loads.tip_force = force;
+  b.t = 1e-4;
   tl.entries = {a, b};
+  return tl;
+}
+
+// Undamped, the energy of the released cantilever stays (CCsub: PRB's stiff link modes, excited
+// by the release and undamped, would have to be resolved by steps of ~1e-8 s).
+TEST(LumpedDynamics, UndampedKeepsEnergy) {
+  const Robot robot = cantilever(6, 0.1);
+  auto model = make_model(ModelKind::CCsub, robot, Effects());
   SimulationOptions o;
-  o.duration = 0.1;
+  o.duration = 0.05;
   o.dt = 0.001;
   SolverOptions solver;
   solver.tip_tolerance = 1e-10;
-  DynamicsSettings undamped;
-  const SimulationResult u = simulate(*model, undamped, tl, o, solver);
+  const SimulationResult u = simulate(*model, DynamicsSettings{}, release_timeline(Vec3(0.01, 0.004, 0.0)), o, solver);
   ASSERT_TRUE(u.completed) << u.message;
   const double E0 = u.steps[1].kinetic_energy + u.steps[1].potential_energy;
   ASSERT_GT(E0, 0.0);
   for (std::size_t k = 2; k < u.steps.size(); ++k)
     EXPECT_NEAR(u.steps[k].kinetic_energy + u.steps[k].potential_energy, E0, 2e-3 * E0) << "t = " << u.steps[k].t;
+}
+
+// Damped, the energy never grows and decays. Overdamped (first mode's damping ratio 2): PRB's
+// bending-plane chart makes a swing through the straight shape slow (docs/dynamics.md, "Limits").
+TEST_P(LumpedDynamicsTest, DampingDissipatesEnergy) {
+  const Robot robot = cantilever(6, 0.1);
+  auto model = make_model(GetParam(), robot, Effects());
+  SimulationOptions o;
+  o.duration = 0.1;
+  o.dt = 0.001;
+  SolverOptions solver;
+  solver.tip_tolerance = 1e-10;
   DynamicsSettings damped;
-  damped.bending_damping_time = 2e-4;
-  const SimulationResult d = simulate(*model, damped, tl, o, solver);
+  damped.bending_damping_time = 1e-2;
+  const SimulationResult d = simulate(*model, damped, release_timeline(Vec3(0.01, 0.0, 0.0)), o, solver);
   ASSERT_TRUE(d.completed) << d.message;
-  double last = d.steps[1].kinetic_energy + d.steps[1].potential_energy;
+  const double E0 = d.steps[1].kinetic_energy + d.steps[1].potential_energy;
+  double last = E0;
   for (std::size_t k = 2; k < d.steps.size(); ++k) {
     const double E = d.steps[k].kinetic_energy + d.steps[k].potential_energy;
     EXPECT_LE(E, last * (1.0 + 1e-6) + 1e-15) << "t = " << d.steps[k].t;
     last = E;
   }
-  EXPECT_LT(last, 0.2 * E0);
+  EXPECT_LT(last, 0.5 * E0);
 }
 
 // The first period of the released cantilever, from the tip's zero crossings, is that of the
-// linearised model's first frequency.
-TEST_P(LumpedDynamicsTest, MotionHasTheFirstNaturalFrequency) {
+// linearised model's first frequency. A damping time of 1 us damps the stiff modes the release
+// excites (torsion, PRB's links: damping ratios >> 1) and shifts the first mode by a relative
+// (omega tau / 2)^2 / 2 ~ 1e-8. CCsub only: PRB's swings through the straight shape stall
+// (docs/dynamics.md, "Limits").
+TEST(LumpedDynamics, MotionHasTheFirstNaturalFrequency) {
   const Robot robot = cantilever(8, 0.1);
-  auto model = make_model(GetParam(), robot, Effects());
+  auto model = make_model(ModelKind::CCsub, robot, Effects());
   const auto& lumped = static_cast<const LumpedModel&>(*model);
   const Eigen::VectorXd all =
       lumped.natural_frequencies(Eigen::VectorXd::Zero(lumped.unknowns_per_subsegment() * 8), ModelInput{});
@@ -136,11 +155,13 @@ TEST_P(LumpedDynamicsTest, MotionHasTheFirstNaturalFrequency) {
   b.t = 1e-5;
   tl.entries = {a, b};
   SimulationOptions o;
-  o.duration = 4.0 / f1;
-  o.dt = 1.0 / (200.0 * f1);
+  o.duration = 3.0 / f1;
+  o.dt = 1.0 / (100.0 * f1);
   SolverOptions solver;
   solver.tip_tolerance = 1e-11;
-  const SimulationResult r = simulate(*model, DynamicsSettings{}, tl, o, solver);
+  DynamicsSettings d;
+  d.bending_damping_time = 1e-6;
+  const SimulationResult r = simulate(*model, d, tl, o, solver);
   ASSERT_TRUE(r.completed) << r.message;
   std::vector<double> up;  // upward zero crossings of tip_x, interpolated
   for (std::size_t k = 1; k < r.steps.size(); ++k) {
@@ -177,7 +198,9 @@ TEST_P(LumpedDynamicsTest, CantileverFrequenciesApproachEulerBernoulli) {
               << " Hz (error " << e2 << ")\n";
     // PRB's f1 levels off at +0.055 %: its spring factors give a subsegment the compliance
     // sum 1/K_Theta_q = 0.9988 l/EI (paper Table 1), so its limit is EB's times 1/sqrt(0.9988).
-    if (GetParam() == ModelKind::CCsub) EXPECT_LT(e1, last1);
+    if (GetParam() == ModelKind::CCsub) {
+      EXPECT_LT(e1, last1);
+    }
     EXPECT_LT(e2, last2);
     last1 = e1, last2 = e2;
   }
