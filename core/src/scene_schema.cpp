@@ -403,7 +403,7 @@ const Schema<DynamicsSettings>& dynamics_schema() {
       number_field("shear_damping_time", &D::shear_damping_time,
                    {"s", nullptr, "the same for shear and extension, >= 0", "VC, VCref (CCsub and PRB are inextensible)"}),
       number_field("air_drag", &D::air_drag,
-                   {"N s^2/m^3", nullptr, "quadratic drag per length, f = -air_drag |v| v; >= 0", kDynamics}),
+                   {"N s^2/m^3", nullptr, "quadratic drag per length, f = -air_drag norm(v) v; >= 0", kDynamics}),
       choice_field("scheme", &D::scheme, kTimeSchemes,
                    {"", nullptr, "`\"bdf_alpha\"` or `\"implicit_midpoint\"`", "VC, VCref (CCsub, PRB: CVODE BDF)"}),
       number_field("alpha", &D::alpha, {"", nullptr, "BDF-alpha parameter in [-0.5, 0]", "VC, VCref"}),
