@@ -15,6 +15,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
+#include <Eigen/LU>
 
 #include "lumped/lumped_dynamics.hpp"
 #include "lumped/lumped_problem.hpp"
@@ -144,6 +145,13 @@ class LumpedDynamics final : public DynamicsIntegrator {
   std::vector<Mat3> S_;  // per subsegment m x m (top-left) of S
   Eigen::MatrixXd M_, Jr_, K_;
   Eigen::LLT<Eigen::MatrixXd> llt_;
+  // The Newton systems (I - gamma J) x = b by their Schur complement (lumped_dynamics.cpp,
+  // make_schur_solver): n x n instead of 2n x 2n, since J's first block row is [0 I].
+  Eigen::MatrixXd schur_, schur_A21_;
+  Eigen::PartialPivLU<Eigen::MatrixXd> schur_lu_;
+  Eigen::VectorXd schur_b_;
+  double schur_gamma_ = 0.0;
+  SUNLinearSolver make_schur_solver();
   std::vector<Mat6> IC_, Io_;
   std::vector<Vec6> V_, A_;
   Eigen::VectorXd qs_;

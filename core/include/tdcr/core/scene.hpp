@@ -187,7 +187,7 @@ struct TimelineEntry {
 
 /// @brief Scene-file key `timeline`.
 struct Timeline {
-  std::vector<TimelineEntry> entries;
+  std::vector<TimelineEntry> entries;  ///< In order of t (strictly increasing).
   /// @brief The input at time t: linear between entries, the first before the first entry, the
   /// last after the last. An empty timeline has no input (InputError naming `timeline`).
   ModelInput at(double t) const;

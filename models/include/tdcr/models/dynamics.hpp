@@ -75,7 +75,7 @@ std::unique_ptr<DynamicsIntegrator> make_dynamics_integrator(const StaticModel& 
 
 /// @brief The result of a simulation: one step per output time, t = 0 first.
 struct SimulationResult {
-  std::vector<SimulationStep> steps;
+  std::vector<SimulationStep> steps;  ///< One per output time, t = 0 first (up to a failed step).
   bool completed = false;  ///< Every step converged up to `duration`.
   std::string message;     ///< Why it stopped early, with the time, residual and iterations.
 };
