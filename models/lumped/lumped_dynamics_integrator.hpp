@@ -99,8 +99,7 @@ class LumpedDynamics final : public DynamicsIntegrator {
   double potential_energy(const double* q);
   // PRB: m a of link l at q'' = 0 from bias()'s stencil of positions (step h along q').
   Vec3 link_force(int l, double h) const {
-    const Vec3 acc = (-link_stencil_[0][l] + 16.0 * link_stencil_[2][l] - 30.0 * link_c_[l] +
-                      16.0 * link_stencil_[3][l] - link_stencil_[1][l]) / (12.0 * h * h);
+    const Vec3 acc = (link_stencil_[2][l] - 2.0 * link_c_[l] + link_stencil_[3][l]) / (h * h);
     return link_mass_[l] * acc;
   }
   // PRB: the bending plane phi of a subsegment that is straight at rest is no state (a polar
