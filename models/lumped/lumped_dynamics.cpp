@@ -175,8 +175,12 @@ int LumpedDynamics::jac_fn(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix J, 
   Eigen::Map<Eigen::MatrixXd> Jm(SUNDenseMatrix_Data(J), 2 * n, 2 * n);
   Jm.setZero();
   Jm.topRightCorner(n, n).setIdentity();
-  Jm.bottomLeftCorner(n, n) = -s.llt_.solve(s.K_);
-  Jm.bottomRightCorner(n, n) = -s.llt_.solve(Eigen::MatrixXd(s.damp_.asDiagonal()));
+  auto J21 = Jm.bottomLeftCorner(n, n);
+  J21 = -s.K_;
+  s.llt_.solveInPlace(J21);
+  auto J22 = Jm.bottomRightCorner(n, n);
+  J22.diagonal() = -s.damp_;
+  s.llt_.solveInPlace(J22);
   return Jm.allFinite() ? 0 : 1;
 }
 

@@ -108,7 +108,9 @@ void LumpedDynamics::mass_matrix() {
   // Block (a, b), a <= b: the bodies moving rigidly with both columns are the disks k >= b and
   // the links of subsegments > b; PRB: the links of b move with its columns through link_J_.
   for (int bj = 1; bj <= N_; ++bj) {
-    Eigen::Matrix<double, 6, Eigen::Dynamic> U = IC_[bj] * T_.middleCols(m_ * (bj - 1), m_);
+    // At most 5 columns: on the stack (no allocation in CVODE's right-hand side).
+    Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::ColMajor, 6, 5> U(6, m_);
+    U.noalias() = IC_[bj] * T_.middleCols(m_ * (bj - 1), m_);
     if (links_)
       for (int i = 0; i < kLinks; ++i) {
         const int l = kLinks * bj + i;
