@@ -110,6 +110,9 @@ void LumpedDynamics::free_cvode() {
   if (A_mat_) SUNMatDestroy(A_mat_);
   if (y_) N_VDestroy(y_);
   if (abstol_) N_VDestroy(abstol_);
+  if (ele_) N_VDestroy(ele_);
+  if (ewt_) N_VDestroy(ewt_);
+  ele_ = nullptr, ewt_ = nullptr;
   if (ctx_) SUNContext_Free(&ctx_);
   cvode_ = nullptr, ls_ = nullptr, A_mat_ = nullptr, y_ = nullptr, abstol_ = nullptr, ctx_ = nullptr;
 }
@@ -244,7 +247,9 @@ void LumpedDynamics::initialize(const Solution& at_rest, const ModelInput& input
   check(SUNContext_Create(nullptr, &ctx_), "SUNContext_Create");
   y_ = N_VNew_Serial(2 * n_, ctx_);
   abstol_ = N_VNew_Serial(2 * n_, ctx_);
-  if (!y_ || !abstol_) throw std::runtime_error("lumped dynamics: N_VNew_Serial failed");
+  ele_ = N_VNew_Serial(2 * n_, ctx_);
+  ewt_ = N_VNew_Serial(2 * n_, ctx_);
+  if (!y_ || !abstol_ || !ele_ || !ewt_) throw std::runtime_error("lumped dynamics: N_VNew_Serial failed");
   std::copy(y0.data(), y0.data() + 2 * n_, N_VGetArrayPointer(y_));
   double* at = N_VGetArrayPointer(abstol_);
   for (int i = 0; i < n_; ++i) at[i] = atol_q_, at[n_ + i] = atol_v_;
@@ -270,8 +275,7 @@ SimulationStep LumpedDynamics::advance(double t_next, const Timeline& timeline) 
   timeline_ = &timeline;
   if (!chart_chosen_) choose_bending_planes(timeline);
   SimulationStep step;
-  long before = 0, after = 0;
-  CVodeGetNumSteps(cvode_, &before);
+  long steps = 0;  // summed per CVode call: CVodeReInit (at timeline entries) resets the count
   int flag = CV_SUCCESS;
   while (t_ < t_next) {
     // Stop at the timeline's entries: the input's slope jumps there, and CVODE restarts.
@@ -281,7 +285,11 @@ SimulationStep LumpedDynamics::advance(double t_next, const Timeline& timeline) 
     check(CVodeSetStopTime(cvode_, stop), "CVodeSetStopTime");
     sunrealtype reached = t_;
     cvode_message_.clear();
+    long n0 = 0, n1 = 0;
+    CVodeGetNumSteps(cvode_, &n0);
     flag = CVode(cvode_, stop, y_, &reached, CV_NORMAL);
+    CVodeGetNumSteps(cvode_, &n1);
+    steps += n1 - n0;
     if (flag < 0) {
       t_ = reached;
       break;
@@ -290,18 +298,14 @@ SimulationStep LumpedDynamics::advance(double t_next, const Timeline& timeline) 
     if (stop < t_next && t_ >= stop) check(CVodeReInit(cvode_, t_, y_), "CVodeReInit");
     if (t_ >= stop) t_ = stop;
   }
-  CVodeGetNumSteps(cvode_, &after);
   const double* yv = N_VGetArrayPointer(y_);
   q_ = Eigen::Map<const Eigen::VectorXd>(yv, n_);
   v_ = Eigen::Map<const Eigen::VectorXd>(yv + n_, n_);
-  step.iterations = static_cast<int>(after - before);
+  step.iterations = static_cast<int>(steps);
   step.t = flag < 0 ? t_ : t_next;
   // CVODE's weighted local error of its last step (RMS norm; below 1 when accepted).
-  N_Vector ele = N_VClone(y_), ewt = N_VClone(y_);
-  if (ele && ewt && CVodeGetEstLocalErrors(cvode_, ele) == CV_SUCCESS && CVodeGetErrWeights(cvode_, ewt) == CV_SUCCESS)
-    step.residual = N_VWrmsNorm(ele, ewt);
-  if (ele) N_VDestroy(ele);
-  if (ewt) N_VDestroy(ewt);
+  if (CVodeGetEstLocalErrors(cvode_, ele_) == CV_SUCCESS && CVodeGetErrWeights(cvode_, ewt_) == CV_SUCCESS)
+    step.residual = N_VWrmsNorm(ele_, ewt_);
   step.status = flag < 0 ? TerminationType::IntegrationFailed : TerminationType::Converged;
   // Energies and the tip at the reached state.
   input_at(step.t);

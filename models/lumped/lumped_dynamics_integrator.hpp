@@ -157,6 +157,7 @@ class LumpedDynamics final : public DynamicsIntegrator {
 
   SUNContext ctx_ = nullptr;
   N_Vector y_ = nullptr, abstol_ = nullptr;
+  N_Vector ele_ = nullptr, ewt_ = nullptr;  // advance(): CVODE's local errors and their weights
   void* cvode_ = nullptr;
   SUNMatrix A_mat_ = nullptr;
   SUNLinearSolver ls_ = nullptr;
