@@ -25,6 +25,7 @@
 #include "cli_option.hpp"
 #include "inverse_command.hpp"
 #include "plot_command.hpp"
+#include "simulate_command.hpp"
 #include "tdcr/core/error.hpp"
 #include "tdcr/core/scene_io.hpp"
 #include "tdcr/models/model_registry.hpp"
@@ -55,7 +56,7 @@ std::string usage() {
   return "usage: tdcr solve SCENE.json [--model NAME] [--accuracy FRACTION] [--json] [--repeat N]\n"
          "                             [--integrator rk4|rk4_fixed|cvode] [--tip-tolerance M] [--continuation]\n"
          "                             [--jacobian]\n"
-         + tdcr::cli::inverse_usage() + tdcr::cli::calibrate_usage() +
+         + tdcr::cli::inverse_usage() + tdcr::cli::calibrate_usage() + tdcr::cli::simulate_usage() +
          "       tdcr sweep SWEEP.json -o OUT.csv [--threads N] [--shard i/N]   (tdcr sweep --help)\n"
          "       tdcr sweep-merge OUT.csv SHARD.csv...\n"
          "       tdcr plot SCENE.json [--model NAME[,NAME...]] -o FILE.png|svg   (tdcr plot --help)\n"
@@ -93,6 +94,12 @@ std::string usage() {
          "  to measured shapes (DATA.csv in the sweep CSV's columns); prints the fitted values,\n"
          "  standard errors, correlations and residuals, writes the calibrated scene with -o;\n"
          "  exit status 1 if the fit did not converge\n"
+         "\n"
+         "tdcr simulate: the robot in motion (CCsub, PRB) from rest on the static answer of the\n"
+         "  scene's first \"timeline\" entry, with its \"dynamics\" (docs/dynamics.md); one CSV row per\n"
+         "  output step of --dt (default 1/60 s): t, tip_x, tip_y, tip_z, rot_x, rot_y, rot_z\n"
+         "  (rotation vector, rad), status, iterations (CVODE steps), kinetic and potential energy;\n"
+         "  exit status 1 if a step failed (its time, residual and iterations on standard error)\n"
          "\n"
          "models:\n" + models +
          "  auto    the cheapest model expected to meet --accuracy\n"
@@ -323,6 +330,14 @@ int run(const std::vector<std::string>& args) {
       return 0;
     }
     return tdcr::cli::run_calibrate(rest);
+  }
+  if (cmd == "simulate") {
+    const std::vector<std::string> rest(args.begin() + 1, args.end());
+    if (std::find(rest.begin(), rest.end(), "--help") != rest.end()) {
+      std::printf("%s", usage().c_str());
+      return 0;
+    }
+    return tdcr::cli::run_simulate(rest);
   }
   if (cmd == "sweep") return tdcr::sweep_command({args.begin() + 1, args.end()});
   if (cmd == "sweep-merge") return tdcr::sweep_merge_command({args.begin() + 1, args.end()});

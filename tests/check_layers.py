@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """The models layer's dependencies point one way (docs/design-notes.md, "The layers"):
-services -> models (cc, ccsub, prb, vc, vcref, lumped) -> solve -> physics -> bvp, core.
+services (and dynamics) -> models (cc, ccsub, prb, vc, vcref, lumped) -> solve -> physics -> bvp, core.
 Reads every #include "..." under models/ and bvp/ and fails, naming the file and the include,
 where a file reaches a layer above its own or a sibling model's folder."""
 import pathlib
@@ -17,12 +17,16 @@ PUBLIC = {
     "answer_linearisation.hpp": "solve",
     "cc.hpp": "cc", "ccsub.hpp": "ccsub", "prb.hpp": "prb", "vc.hpp": "vc", "vcref.hpp": "vcref",
     "lumped_model.hpp": "lumped",
+    # The integrator interface, implemented by the models (like static_model.hpp).
+    "dynamics.hpp": "solve",
 }
 
 
 def layer_of_folder(folder):
     if folder in MODEL_FOLDERS:
         return "model"
+    if folder == "dynamics":  # simulate and the integrators' dispatch: a service
+        return "services"
     return folder
 
 
@@ -36,7 +40,7 @@ def where(include, including_file):
             folder = PUBLIC.get(parts[2], "services")
             return layer_of_folder(folder), folder
         return None
-    if parts[0] in MODEL_FOLDERS | {"physics", "solve", "services"}:
+    if parts[0] in MODEL_FOLDERS | {"physics", "solve", "services", "dynamics"}:
         return layer_of_folder(parts[0]), parts[0]
     if len(parts) == 1:  # same folder: the including file's own layer
         return own_layer(including_file)

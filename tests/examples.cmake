@@ -8,3 +8,7 @@ foreach(scene ${TDCR_EXAMPLE_SCENES})
            COMMAND ${TDCR_PYTHON3} ${CMAKE_CURRENT_SOURCE_DIR}/check_example.py $<TARGET_FILE:tdcr_cli> ${scene}
                    ${PROJECT_SOURCE_DIR}/examples/expected/${name}.json)
 endforeach()
+# The dynamics example also runs as a simulation (2 s of the paper robot's tension step).
+add_test(NAME example_paper_robot_dynamics_simulate
+         COMMAND tdcr_cli simulate ${PROJECT_SOURCE_DIR}/examples/paper_robot_dynamics.json --duration 2
+                 -o ${CMAKE_CURRENT_BINARY_DIR}/paper_robot_dynamics.csv)

@@ -404,8 +404,8 @@ TEST(SceneIo, EveryExampleParsesAndValidates) {
     EXPECT_EQ(s.robot.segments.size(), 2u);
     EXPECT_EQ(s.robot.tendon_count(), 4);
     EXPECT_DOUBLE_EQ(s.robot.total_length(), 0.1);
-    EXPECT_EQ(s.model, stem == "paper_robot_tip_force" || stem == "paper_robot_displacements"
-                           ? "vc"
+    EXPECT_EQ(s.model, stem == "paper_robot_tip_force" || stem == "paper_robot_displacements" ? "vc"
+                       : stem == "paper_robot_dynamics"                                    ? "ccsub"
                            : entry.path().stem().string().substr(std::string("paper_robot_").size()));
     expect_same_scene(s, tdcr::parse_scene(tdcr::scene_to_json(s)));
     ++count;

@@ -146,6 +146,8 @@ void Scene::validate() const {
   input().validate(robot);
   effects.validate(robot);
   solver.validate();
+  if (dynamics) dynamics->validate();
+  if (!timeline.entries.empty()) timeline.validate(robot);
 }
 
 SceneEffects active_effects(const Robot& robot, const Effects& effects, const ModelInput& input) {

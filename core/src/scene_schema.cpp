@@ -393,6 +393,69 @@ const Schema<Effects>& effects_schema() {
   return s;
 }
 
+
+// --- Robots that move: `dynamics` and `timeline` (tdcr/models/dynamics.hpp). ---
+const Names<TimeScheme> kTimeSchemes = {{"bdf_alpha", TimeScheme::BdfAlpha},
+                                        {"implicit_midpoint", TimeScheme::ImplicitMidpoint}};
+constexpr const char* kDynamics = "`tdcr simulate` (CCsub, PRB; VC, VCref when their dynamics exist)";
+
+const Schema<DynamicsSettings>& dynamics_schema() {
+  using D = DynamicsSettings;
+  static const Schema<D> s({
+      number_field("bending_damping_time", &D::bending_damping_time,
+                   {"s", nullptr, "Kelvin-Voigt retardation time of bending and torsion, >= 0 (0: undamped)", kDynamics}),
+      number_field("shear_damping_time", &D::shear_damping_time,
+                   {"s", nullptr, "the same for shear and extension, >= 0", "VC, VCref (CCsub and PRB are inextensible)"}),
+      number_field("air_drag", &D::air_drag,
+                   {"N s^2/m^3", nullptr, "quadratic drag per length, f = -air_drag norm(v) v; >= 0", kDynamics}),
+      choice_field("scheme", &D::scheme, kTimeSchemes,
+                   {"", nullptr, "`\"bdf_alpha\"` or `\"implicit_midpoint\"`", "VC, VCref (CCsub, PRB: CVODE BDF)"}),
+      number_field("alpha", &D::alpha, {"", nullptr, "BDF-alpha parameter in [-0.5, 0]", "VC, VCref"}),
+  });
+  return s;
+}
+
+const std::vector<const char*> kTimelineKeys = {"t", "actuation", "loads"};
+
+// `timeline`: read after `actuation` and `loads`; an entry without one of them keeps the
+// previous entry's (the first: the scene's).
+Field<Scene> timeline_field() {
+  Field<Scene> f{{"timeline", "array",
+                  {"", "none (static scene)",
+                   "entries `{\"t\": s, \"actuation\": {...}, \"loads\": {...}}` with t strictly increasing; "
+                   "inputs linear between entries, an entry without `actuation` or `loads` keeps the previous "
+                   "one's; the simulation starts at rest on the static answer of the first entry",
+                   kDynamics}},
+                 [](const json& j, const std::string& p, Scene& sc) {
+                   require_array(j, p);
+                   sc.timeline.entries.clear();
+                   ModelInput prev = sc.input();
+                   for (std::size_t i = 0; i < j.size(); ++i) {
+                     const JsonObject o(j[i], index_path(p, i), kTimelineKeys);
+                     TimelineEntry e;
+                     e.t = read_number(o.at("t"), o.path("t"));
+                     e.input = prev;
+                     if (o.has("actuation")) e.input.actuation = actuation_schema().read(o.at("actuation"), o.path("actuation"));
+                     if (o.has("loads")) e.input.loads = loads_schema().read(o.at("loads"), o.path("loads"));
+                     prev = e.input;
+                     sc.timeline.entries.push_back(e);
+                   }
+                 },
+                 [](const Scene& sc) {
+                   ojson a = ojson::array();
+                   for (const TimelineEntry& e : sc.timeline.entries) {
+                     ojson o = ojson::object();
+                     o["t"] = number(e.t);
+                     o["actuation"] = actuation_schema().write(e.input.actuation);
+                     o["loads"] = loads_schema().write(e.input.loads);
+                     a.push_back(o);
+                   }
+                   return a;
+                 },
+                 [](const Scene& sc) { return !sc.timeline.entries.empty(); }};
+  return f;
+}
+// --- end of the dynamics keys.
 }  // namespace
 
 const Schema<Scene>& scene_schema() {
@@ -422,6 +485,10 @@ const Schema<Scene>& scene_schema() {
       object_field("solver", &Scene::solver, solver_schema(),
                    {"", "the defaults below", "see [solver](#scene_solver)", "see the table"})
           .own_table(),
+      optional_object_field("dynamics", &Scene::dynamics, dynamics_schema(),
+                            {"", "none (static scene)", "see [dynamics](#scene_dynamics)", kDynamics})
+          .own_table(),
+      timeline_field(),
   });
   return s;
 }

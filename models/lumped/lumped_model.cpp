@@ -101,6 +101,13 @@ void LumpedProblem::bind(const ModelInput& input) {
   if (banded_ && pattern_J_ != active()) build_pattern();
 }
 
+void LumpedProblem::bind_all(const ModelInput& input) {
+  bind(input);
+  loads_.active = body_.N;
+  banded_ = false;
+  reduced_ = body_.reduced(active());
+}
+
 void LumpedProblem::adjust(bvp::NewtonOptions& options) const {
   options.linear_solver = banded_ ? bvp::LinearSolverKind::SparseKLU : bvp::LinearSolverKind::Dense;
 }

@@ -98,6 +98,10 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   /// Resolve the loads of `input` and choose the formulation (allocation-free after the first
   /// bind of a given J).
   void bind(const ModelInput& input);
+  /// Dynamics (lumped_dynamics.cpp): bind `input` with every subsegment among the unknowns (in
+  /// motion the unloaded ones bend too), in the recursive unknowns; residual() then takes and
+  /// gives the per_subsegment N values of all subsegments.
+  void bind_all(const ModelInput& input);
 
   bvp::ParameterizedSystem* system() override { return this; }
   bvp::NewtonSolver& newton() override { return newton_; }

@@ -22,6 +22,8 @@ void bind_solve(pybind11::module_& m);
 void bind_inverse(pybind11::module_& m);
 /// Calibration data, options and result, read_calibration_data, _calibrate (after bind_solve).
 void bind_calibration(pybind11::module_& m);
+/// tdcr.simulate (dynamics_bindings.cpp).
+void bind_dynamics(pybind11::module_& m);
 /// json.loads(text): a Python object from JSON text.
 pybind11::object json_loads(const std::string& text);
 

@@ -60,4 +60,5 @@ PYBIND11_MODULE(_tdcr, m) {
   tdcr_python::bind_scene(m);
   tdcr_python::bind_solve(m);
   tdcr_python::bind_calibration(m);
+  tdcr_python::bind_dynamics(m);
 }

@@ -53,6 +53,7 @@ from ._tdcr import (  # noqa: F401
     parse_scene,
     read_calibration_data,
     scene_to_json,
+    simulate,
     solution_to_json,
     solve_with,
     validate_scene,

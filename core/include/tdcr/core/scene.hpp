@@ -4,6 +4,7 @@
 /// that (see SceneEffects).
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -191,6 +192,58 @@ struct SceneEffects {
 /// @brief The effects a solve of `robot` with `effects` under `input` turns on.
 SceneEffects active_effects(const Robot& robot, const Effects& effects, const ModelInput& input);
 
+// --- Robots that move (tdcr/models/dynamics.hpp): the scene-file keys `dynamics` and `timeline`.
+
+/// @brief The implicit time scheme of the Cosserat models (the lumped models use CVODE's BDF).
+enum class TimeScheme {
+  BdfAlpha,        ///< BDF-alpha (Till et al. 2019): alpha in [-0.5, 0]; alpha = 0 is BDF2.
+  ImplicitMidpoint ///< Second order, conserves energy without damping (a check, not a default).
+};
+
+/// @brief Scene-file key `dynamics`: what the equations of motion add to the statics.
+/// Mass comes from the robot (`robot.backbone.density` / `mass_per_length`, the disks'
+/// `disk_mass`); a dynamic scene without mass is an input error.
+struct DynamicsSettings {
+  /// Kelvin-Voigt damping of bending and torsion, as a retardation time tau_bt (s): the damping
+  /// moment is tau_bt K_bt du/dt. 0: undamped.
+  double bending_damping_time = 0.0;
+  /// Kelvin-Voigt damping of shear and extension, tau_se (s): tau_se K_se dv/dt. 0: undamped.
+  /// (CCsub and PRB are inextensible: they have no such strain to damp.)
+  double shear_damping_time = 0.0;
+  /// Quadratic air drag per unit length, f = -air_drag |v| v (N s^2 / m^3). 0: none.
+  double air_drag = 0.0;
+  TimeScheme scheme = TimeScheme::BdfAlpha;  ///< Cosserat models only.
+  double alpha = -0.2;                       ///< BDF-alpha parameter, in [-0.5, 0].
+
+  /// @brief Throws InputError naming the field (`dynamics.<key>`) and value: a negative or
+  /// non-finite damping time or drag, alpha outside [-0.5, 0].
+  void validate() const;
+};
+
+/// @brief One entry of a scene's `timeline`: the input from time t on. Inputs between entries
+/// are interpolated linearly (tensions or displacements, loads); an entry without actuation or
+/// loads keeps the previous entry's.
+struct TimelineEntry {
+  double t = 0.0;        ///< s, strictly increasing along the timeline.
+  ModelInput input;      ///< The actuation and loads at t.
+};
+
+/// @brief Scene-file key `timeline`.
+struct Timeline {
+  std::vector<TimelineEntry> entries;  ///< In order of t (strictly increasing).
+  /// @brief The input at time t: linear between entries, the first before the first entry, the
+  /// last after the last. An empty timeline has no input (InputError naming `timeline`).
+  ModelInput at(double t) const;
+  /// @brief at(t) into `out`, reusing its storage (no allocation once `out` has the size).
+  void at(double t, ModelInput& out) const;
+  /// @brief Throws InputError naming `timeline[i].t` (not increasing, not finite) or an input of
+  /// the wrong length for `robot` (`timeline[i].actuation.values`), or entries whose actuation
+  /// kinds differ (`timeline[i].actuation`: tensions cannot be interpolated with displacements).
+  void validate(const Robot& robot) const;
+};
+
+// --- end of the dynamics keys.
+
 /// @brief A complete problem: robot, actuation, loads, effects, model and solver settings.
 struct Scene {
   Robot robot;          ///< The robot (scene-file key `robot`).
@@ -200,6 +253,8 @@ struct Scene {
   Environment environment;  ///< Obstacles and contact settings (`environment`); none by default.
   std::string model = "vc";  ///< "cc", "ccsub", "prb", "vc", "vcref" (or "auto").
   SolverOptions solver;  ///< Numerical settings (`solver`).
+  std::optional<DynamicsSettings> dynamics;  ///< `dynamics`: absent in a static scene.
+  Timeline timeline;                         ///< `timeline`: empty in a static scene.
 
   /// @brief Throws InputError naming the field and value for any unusable entry: the robot's
   /// (Robot::validate), the input's (ModelInput::validate), the effects' (Effects::validate(robot)), an

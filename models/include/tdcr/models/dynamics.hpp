@@ -1,4 +1,6 @@
 /// @file dynamics.hpp
+/// (The scene keys `dynamics` and `timeline`, DynamicsSettings and Timeline, are plain data in
+/// tdcr/core/scene.hpp, so that core reads them.)
 /// @brief Robots that move: the time integration of a static model's equations of motion.
 ///
 /// A DynamicsIntegrator advances one model's state (shape and velocity) in time under a
@@ -29,56 +31,15 @@ namespace tdcr {
 
 class StaticModel;
 
-/// @brief The implicit time scheme of the Cosserat models (the lumped models use CVODE's BDF).
-enum class TimeScheme {
-  BdfAlpha,        ///< BDF-alpha (Till et al. 2019): alpha in [-0.5, 0]; alpha = 0 is BDF2.
-  ImplicitMidpoint ///< Second order, conserves energy without damping (a check, not a default).
-};
-
-/// @brief Scene-file key `dynamics`: what the equations of motion add to the statics.
-/// Mass comes from the robot (`robot.backbone.density` / `mass_per_length`, the disks'
-/// `disk_mass`); a dynamic scene without mass is an input error.
-struct DynamicsSettings {
-  /// Kelvin-Voigt damping of bending and torsion, as a retardation time tau_bt (s): the damping
-  /// moment is tau_bt K_bt du/dt. 0: undamped.
-  double bending_damping_time = 0.0;
-  /// Kelvin-Voigt damping of shear and extension, tau_se (s): tau_se K_se dv/dt. 0: undamped.
-  double shear_damping_time = 0.0;
-  /// Quadratic air drag per unit length, f = -air_drag |v| v (N s^2 / m^3). 0: none.
-  double air_drag = 0.0;
-  TimeScheme scheme = TimeScheme::BdfAlpha;  ///< Cosserat models only.
-  double alpha = -0.2;                       ///< BDF-alpha parameter, in [-0.5, 0].
-
-  /// @brief Throws InputError naming the field (`dynamics.<key>`) and value: a negative or
-  /// non-finite damping time or drag, alpha outside [-0.5, 0].
-  void validate() const;
-};
-
-/// @brief One entry of a scene's `timeline`: the input from time t on. Inputs between entries
-/// are interpolated linearly (tensions or displacements, loads); an entry without actuation or
-/// loads keeps the previous entry's.
-struct TimelineEntry {
-  double t = 0.0;        ///< s, strictly increasing along the timeline.
-  ModelInput input;      ///< The actuation and loads at t.
-};
-
-/// @brief Scene-file key `timeline`.
-struct Timeline {
-  std::vector<TimelineEntry> entries;
-  /// @brief The input at time t: linear between entries, the first before the first entry, the
-  /// last after the last.
-  ModelInput at(double t) const;
-  /// @brief Throws InputError naming `timeline[i].t` (not increasing, not finite) or an input of
-  /// the wrong length for `robot` (`timeline[i].actuation.values`).
-  void validate(const Robot& robot) const;
-};
-
 /// @brief The state of a moving robot reported at one output time.
 struct SimulationStep {
   double t = 0.0;                    ///< s.
   Frame tip;                         ///< Tip frame (base frame).
   TerminationType status = TerminationType::NotSolved;  ///< The step's solve.
   int iterations = 0;                ///< Nonlinear iterations (Cosserat) or CVODE steps (lumped).
+  /// The step's last residual (Cosserat: the boundary-value residual; lumped: CVODE's weighted
+  /// local error estimate of the last internal step, below 1 when accepted).
+  double residual = 0.0;
   double kinetic_energy = 0.0;       ///< J.
   double potential_energy = 0.0;     ///< J: elastic energy plus the potential of conservative loads.
 };
@@ -106,14 +67,15 @@ struct SimulationOptions {
 };
 
 /// @brief The integrator of `model` (InputError naming `model` if the model has no dynamics, or
-/// `robot.backbone.density` if the robot has no mass).
+/// `robot.backbone.density` if the robot has no mass). `solver` sets the accuracy (the lumped
+/// models: CVODE's tolerances, see docs/dynamics.md).
 std::unique_ptr<DynamicsIntegrator> make_dynamics_integrator(const StaticModel& model,
                                                              const DynamicsSettings& settings,
-                                                             double dt);
+                                                             double dt, const SolverOptions& solver = SolverOptions{});
 
 /// @brief The result of a simulation: one step per output time, t = 0 first.
 struct SimulationResult {
-  std::vector<SimulationStep> steps;
+  std::vector<SimulationStep> steps;  ///< One per output time, t = 0 first (up to a failed step).
   bool completed = false;  ///< Every step converged up to `duration`.
   std::string message;     ///< Why it stopped early, with the time, residual and iterations.
 };

@@ -37,6 +37,8 @@ namespace detail {
 class LumpedBody;
 }  // namespace detail
 
+class DynamicsIntegrator;
+
 /// @brief How a lumped model sets up its Newton system (see the file comment).
 enum class LumpedFormulation { Automatic, Recursive, Banded };
 
@@ -63,6 +65,14 @@ class LumpedModel : public StaticModel {
   /// @brief Disk frames (base disk first, tip last) for unknowns x of every subsegment
   /// (Solution::unknowns). Throws InputError on a vector of another size.
   std::vector<Frame> frames(const Eigen::VectorXd& x) const;
+  /// @brief The time integrator of this model (models/lumped/lumped_dynamics.cpp; reached through
+  /// tdcr::make_dynamics_integrator). InputError naming `robot.backbone.density` for a robot
+  /// without mass.
+  std::unique_ptr<DynamicsIntegrator> make_dynamics_integrator(const DynamicsSettings& settings, double dt,
+                                                               const SolverOptions& solver) const;
+  /// @brief Undamped natural frequencies (Hz, ascending) about the shape x (Solution::unknowns) at
+  /// rest under `input` (models/lumped/lumped_dynamics.cpp).
+  Eigen::VectorXd natural_frequencies(const Eigen::VectorXd& x, const ModelInput& input) const;
 
  protected:
   /// @brief Builds a model's subsegments from the (validated) robot, its routing and effects.

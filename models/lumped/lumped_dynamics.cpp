@@ -1,0 +1,384 @@
+// The equations of motion of CCsub and PRB (lumped_dynamics.hpp, docs/dynamics.md), integrated
+// by CVODE (BDF, dense Newton matrices from the model's structured Jacobian).
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "lumped/lumped_dynamics_integrator.hpp"
+#include "physics/tendon_path.hpp"
+#include "tdcr/core/error.hpp"
+#include "tdcr/models/static_model.hpp"
+
+namespace tdcr::detail {
+
+
+LumpedDynamics::LumpedDynamics(const LumpedModel& model, const LumpedBody& body, const DynamicsSettings& settings,
+                               double dt, const SolverOptions& solver)
+    : model_(model), body_(body), settings_(settings), dt_(dt), m_(body.per_subsegment), N_(body.N), n_(m_ * N_) {
+  settings.validate();
+  const Robot& robot = model.robot();
+  const double mu = robot.backbone.linear_mass();
+  // Disks: their own mass, on the routing's disk list (segment by segment).
+  mass_.assign(N_ + 1, 0.0);
+  inertia_.assign(N_ + 1, Vec3::Zero());
+  air_length_.assign(N_ + 1, 0.0);
+  length_.assign(N_ + 2, 0.0);
+  for (int j = 1; j <= N_; ++j) length_[j] = body.statics.length(j);
+  double disk_mass_total = 0.0, hole_radius = 0.0;
+  for (const RoutedTendon& t : body.statics.routing().tendons) hole_radius = std::max(hole_radius, physics::max_offset(t));
+  int k = 1;
+  for (const Segment& s : robot.segments)
+    for (int d = 0; d < s.disks && k <= N_; ++d, ++k) {
+      mass_[k] = s.disk_mass;
+      disk_mass_total += s.disk_mass;
+      // A thin disk out to the tendon holes (the robot gives no disk radius).
+      const double r2 = hole_radius * hole_radius;
+      inertia_[k] = s.disk_mass * Vec3(r2 / 4.0, r2 / 4.0, r2 / 2.0);
+    }
+  if (!(mu > 0.0) && !(disk_mass_total > 0.0))
+    throw InputError("robot.backbone.density", format_value(robot.backbone.density),
+                     "a moving robot needs mass: give robot.backbone.density (or mass_per_length) or the disks' "
+                     "disk_mass");
+  // The backbone: half of each subsegment at each of its disks (the half at the base disk does
+  // not move), with the rotary inertia of the section and of the half-length about the disk.
+  const double ro = robot.backbone.outer_radius, ri = robot.backbone.inner_radius;
+  const double rg2 = 0.25 * (ro * ro + ri * ri);
+  links_ = m_ == 5;
+  link_mass_.assign(kLinks * (N_ + 1), 0.0);
+  link_c_.assign(kLinks * (N_ + 1), Vec3::Zero());
+  for (auto& st : link_stencil_) st.assign(kLinks * (N_ + 1), Vec3::Zero());
+  link_J_.assign(kLinks * (N_ + 1), Eigen::Matrix<double, 3, 5>::Zero());
+  const PrbParameters& prb = model.effects().prb;
+  const double gsum = prb.gamma[0] + prb.gamma[1] + prb.gamma[2] + prb.gamma[3];
+  for (int j = 1; j <= N_; ++j) {
+    for (int side : {j - 1, j}) {
+      if (side == 0) continue;
+      const double h = 0.5 * length_[j], mh = mu * h;
+      // The section's rotary inertia always; CCsub: the half-length's mass and its rotary inertia
+      // about the disk too.
+      inertia_[side] += Vec3(mh * rg2, mh * rg2, 2.0 * mh * rg2);
+      if (!links_) {
+        mass_[side] += mh;
+        inertia_[side] += Vec3(mh * h * h / 3.0, mh * h * h / 3.0, 0.0);
+      }
+      air_length_[side] += h;
+    }
+    if (links_)
+      for (int i = 0; i < kLinks; ++i) link_mass_[kLinks * j + i] = mu * length_[j] * prb.gamma[i] / gsum;
+  }
+  // Accuracy: the static solve's tip tolerance as an angle, CVODE's relative tolerance.
+  const double L = body.length;
+  const double tip_tol = solver.tip_tolerance > 0.0 ? solver.tip_tolerance : SolverOptions::kTipToleranceOverLength * L;
+  rtol_ = std::max(solver.cvode_rtol, 1e-12);
+  atol_q_ = tip_tol / L;
+  atol_v_ = atol_q_ / std::max(dt_, 1e-6);
+
+  problem_ = body.make_problem();
+  frames_.resize(N_ + 1);
+  frames_b_.resize(N_ + 1);
+  poses_.resize(N_ + 1);
+  T_.setZero(6, n_);
+  Tp_.setZero(6, n_);
+  Tm_.setZero(6, n_);
+  r_.setZero(n_);
+  Q_.setZero(n_);
+  b_.setZero(n_);
+  rhs_.setZero(n_);
+  damp_.setZero(n_);
+  q_.setZero(n_);
+  v_.setZero(n_);
+  qs_.setZero(n_);
+  S_.assign(N_ + 1, Mat3::Zero());
+  M_.setZero(n_, n_);
+  Jr_.setZero(n_, n_);
+  K_.setZero(n_, n_);
+  schur_.setZero(n_, n_);
+  schur_A21_.setZero(n_, n_);
+  schur_b_.setZero(n_);
+  schur_lu_ = Eigen::PartialPivLU<Eigen::MatrixXd>(n_);
+  llt_ = Eigen::LLT<Eigen::MatrixXd>(n_);
+  IC_.assign(N_ + 2, Mat6::Zero());
+  Io_.assign(N_ + 1, Mat6::Zero());
+  V_.assign(N_ + 1, Vec6::Zero());
+  A_.assign(N_ + 1, Vec6::Zero());
+}
+
+void LumpedDynamics::free_cvode() {
+  if (cvode_) CVodeFree(&cvode_);
+  if (ls_) SUNLinSolFree(ls_);
+  if (A_mat_) SUNMatDestroy(A_mat_);
+  if (y_) N_VDestroy(y_);
+  if (abstol_) N_VDestroy(abstol_);
+  if (ele_) N_VDestroy(ele_);
+  if (ewt_) N_VDestroy(ewt_);
+  ele_ = nullptr, ewt_ = nullptr;
+  if (ctx_) SUNContext_Free(&ctx_);
+  cvode_ = nullptr, ls_ = nullptr, A_mat_ = nullptr, y_ = nullptr, abstol_ = nullptr, ctx_ = nullptr;
+}
+
+void LumpedDynamics::input_at(double t) {
+  if (timeline_) timeline_->at(t, input_);
+  if (bound_valid_ && input_.actuation.values == bound_.actuation.values && input_.loads.tip_force == bound_.loads.tip_force &&
+      input_.loads.tip_moment == bound_.loads.tip_moment && input_.loads.gravity == bound_.loads.gravity)
+    return;
+  // A new input: binding resolves its loads (this allocates; between constant timeline entries
+  // it happens once per entry).
+  problem_->bind_all(input_);
+  problem_->set_parameter(1.0);
+  bound_ = input_;
+  bound_valid_ = true;
+}
+
+int LumpedDynamics::rhs_fn(sunrealtype t, N_Vector y, N_Vector yd, void* user) {
+  auto& s = *static_cast<LumpedDynamics*>(user);
+  const double* yv = N_VGetArrayPointer(y);
+  double* d = N_VGetArrayPointer(yd);
+  const int n = s.n_;
+  const double* q = yv;
+  const double* v = yv + n;
+  s.input_at(t);
+  s.twists(q, s.T_);
+  if (!s.generalized_force(q)) return 1;  // recoverable: CVODE retries a smaller step
+  s.mass_matrix();
+  s.bias(q, v);
+  Eigen::Map<const Eigen::VectorXd> vv(v, n);
+  for (int i = 0; i < n; ++i) s.damp_[i] = s.settings_.bending_damping_time * s.spring(i, q);
+  s.rhs_ = s.Q_ - s.damp_.cwiseProduct(vv) - s.b_;
+  s.llt_.compute(s.M_);
+  if (s.llt_.info() != Eigen::Success) return 1;
+  Eigen::Map<Eigen::VectorXd> dq(d, n), dv(d + n, n);
+  dq = vv;
+  dv = s.llt_.solve(s.rhs_);
+  return dv.allFinite() ? 0 : 1;
+}
+
+int LumpedDynamics::jac_fn(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix J, void* user, N_Vector tmp1,
+                           N_Vector, N_Vector) {
+  (void)fy;
+  auto& s = *static_cast<LumpedDynamics*>(user);
+  const int n = s.n_;
+  const double* q = N_VGetArrayPointer(y);
+  // Refresh every buffer at this y (rhs_fn's last call may have been elsewhere).
+  if (rhs_fn(t, y, tmp1, user) != 0) return 1;
+  Eigen::Map<const Eigen::VectorXd> x(q, n);
+  if (!s.problem_->jacobian(x, s.r_, s.Jr_)) return 1;
+  // dQ/dq ~ -S dr/dq (S's own derivative meets r, zero at every equilibrium); d(b)/d(q, q') and
+  // dM/dq are left out: the Newton matrix of a modified Newton iteration.
+  for (int j = 1; j <= s.N_; ++j) {
+    const double c = s.body_.EI / s.length_[j];
+    const int r0 = s.m_ * (j - 1);
+    if (s.m_ == 3) {
+      s.K_.middleRows(r0, 3).noalias() = s.S_[j] * s.Jr_.middleRows(r0, 3);
+    } else {
+      s.K_.middleRows(r0, 5) = c * s.Jr_.middleRows(r0, 5);
+      s.K_.row(r0 + 3) *= s.S_[j](0, 0);
+    }
+  }
+  Eigen::Map<Eigen::MatrixXd> Jm(SUNDenseMatrix_Data(J), 2 * n, 2 * n);
+  Jm.setZero();
+  Jm.topRightCorner(n, n).setIdentity();
+  auto J21 = Jm.bottomLeftCorner(n, n);
+  J21 = -s.K_;
+  s.llt_.solveInPlace(J21);
+  auto J22 = Jm.bottomRightCorner(n, n);
+  J22.diagonal() = -s.damp_;
+  s.llt_.solveInPlace(J22);
+  return Jm.allFinite() ? 0 : 1;
+}
+
+// CVODE's Newton matrix A = I - gamma J with J = [0 I; J21 J22] (q' = v exactly) is
+// [I, -gamma I; A21, A22]. Eliminating x1 = b1 + gamma x2 leaves (A22 + gamma A21) x2 =
+// b2 - A21 b1: one n x n LU (Eigen's, blocked) instead of SUNDIALS' unblocked 2n x 2n one, which
+// took 57 % of a CCsub run (perf, bench_dynamics).
+SUNLinearSolver LumpedDynamics::make_schur_solver() {
+  SUNLinearSolver S = SUNLinSolNewEmpty(ctx_);
+  if (!S) throw std::runtime_error("lumped dynamics: SUNLinSolNewEmpty failed");
+  S->content = this;
+  S->ops->gettype = [](SUNLinearSolver) { return SUNLINEARSOLVER_DIRECT; };
+  S->ops->getid = [](SUNLinearSolver) { return SUNLINEARSOLVER_CUSTOM; };
+  S->ops->setup = [](SUNLinearSolver ls, SUNMatrix A) -> int {
+    auto& d = *static_cast<LumpedDynamics*>(ls->content);
+    const int n = d.n_;
+    Eigen::Map<const Eigen::MatrixXd> Am(SUNDenseMatrix_Data(A), 2 * n, 2 * n);
+    d.schur_gamma_ = -Am(0, n);
+    d.schur_A21_ = Am.bottomLeftCorner(n, n);
+    d.schur_ = Am.bottomRightCorner(n, n) + d.schur_gamma_ * d.schur_A21_;
+    d.schur_lu_.compute(d.schur_);
+    // A singular or non-finite block: recoverable, CVODE retries with a smaller step.
+    return d.schur_lu_.rcond() > 1e-300 && d.schur_.allFinite() ? 0 : 1;
+  };
+  S->ops->solve = [](SUNLinearSolver ls, SUNMatrix, N_Vector x, N_Vector b, sunrealtype) -> int {
+    auto& d = *static_cast<LumpedDynamics*>(ls->content);
+    const int n = d.n_;
+    Eigen::Map<const Eigen::VectorXd> bb(N_VGetArrayPointer(b), 2 * n);
+    Eigen::Map<Eigen::VectorXd> xx(N_VGetArrayPointer(x), 2 * n);
+    d.schur_b_.noalias() = bb.tail(n) - d.schur_A21_ * bb.head(n);
+    xx.tail(n) = d.schur_lu_.solve(d.schur_b_);
+    xx.head(n) = bb.head(n) + d.schur_gamma_ * xx.tail(n);
+    return xx.allFinite() ? 0 : 1;
+  };
+  S->ops->free = [](SUNLinearSolver ls) -> int {
+    ls->content = nullptr;
+    SUNLinSolFreeEmpty(ls);
+    return 0;
+  };
+  return S;
+}
+
+void LumpedDynamics::initialize(const Solution& at_rest, const ModelInput& input) {
+  if (!at_rest.converged()) throw InputError("timeline[0]", "", "the static answer at t = 0 did not converge");
+  if (at_rest.unknowns.size() != n_)
+    throw InputError("unknowns", std::to_string(at_rest.unknowns.size()), "not a static answer of this model");
+  timeline_ = nullptr;
+  input_ = input;
+  bound_valid_ = false;
+  input_at(0.0);
+  Eigen::VectorXd y0(2 * n_);
+  y0.head(n_) = at_rest.unknowns;
+  y0.tail(n_).setZero();
+  // PRB's gauge references (the bending planes of straight subsegments) from the rest shape.
+  Eigen::VectorXd ignored;
+  problem_->warm_guess(at_rest, ignored);
+  q_ = at_rest.unknowns;
+  v_.setZero();
+  t_ = 0.0;
+  free_cvode();
+  check(SUNContext_Create(nullptr, &ctx_), "SUNContext_Create");
+  y_ = N_VNew_Serial(2 * n_, ctx_);
+  abstol_ = N_VNew_Serial(2 * n_, ctx_);
+  ele_ = N_VNew_Serial(2 * n_, ctx_);
+  ewt_ = N_VNew_Serial(2 * n_, ctx_);
+  if (!y_ || !abstol_ || !ele_ || !ewt_) throw std::runtime_error("lumped dynamics: N_VNew_Serial failed");
+  std::copy(y0.data(), y0.data() + 2 * n_, N_VGetArrayPointer(y_));
+  double* at = N_VGetArrayPointer(abstol_);
+  for (int i = 0; i < n_; ++i) at[i] = atol_q_, at[n_ + i] = atol_v_;
+  cvode_ = CVodeCreate(CV_BDF, ctx_);
+  if (!cvode_) throw std::runtime_error("lumped dynamics: CVodeCreate failed");
+  check(CVodeInit(cvode_, &rhs_fn, 0.0, y_), "CVodeInit");
+  check(CVodeSetErrHandlerFn(cvode_, &on_error, this), "CVodeSetErrHandlerFn");
+  check(CVodeSetUserData(cvode_, this), "CVodeSetUserData");
+  check(CVodeSVtolerances(cvode_, rtol_, abstol_), "CVodeSVtolerances");
+  // Per output step: a step that needs more has met a singularity (e.g. a CCsub subsegment bent
+  // to 90 deg, where its twist law degenerates), not a hard stretch of motion.
+  check(CVodeSetMaxNumSteps(cvode_, kMaxStepsPerOutput), "CVodeSetMaxNumSteps");
+  A_mat_ = SUNDenseMatrix(2 * n_, 2 * n_, ctx_);
+  ls_ = make_schur_solver();
+  if (!A_mat_ || !ls_) throw std::runtime_error("lumped dynamics: dense matrix or solver creation failed");
+  check(CVodeSetLinearSolver(cvode_, ls_, A_mat_), "CVodeSetLinearSolver");
+  if (problem_->has_jacobian()) check(CVodeSetJacFn(cvode_, &jac_fn), "CVodeSetJacFn");
+  cvode_ready_ = true;
+}
+
+SimulationStep LumpedDynamics::advance(double t_next, const Timeline& timeline) {
+  if (!cvode_ready_) throw std::logic_error("lumped dynamics: advance() before initialize()");
+  timeline_ = &timeline;
+  if (!chart_chosen_) choose_bending_planes(timeline);
+  SimulationStep step;
+  long steps = 0;  // summed per CVode call: CVodeReInit (at timeline entries) resets the count
+  int flag = CV_SUCCESS;
+  while (t_ < t_next) {
+    // Stop at the timeline's entries: the input's slope jumps there, and CVODE restarts.
+    double stop = t_next;
+    for (const TimelineEntry& e : timeline.entries)
+      if (e.t > t_ * (1.0 + 1e-14) + 1e-300 && e.t < stop) stop = e.t;
+    check(CVodeSetStopTime(cvode_, stop), "CVodeSetStopTime");
+    sunrealtype reached = t_;
+    cvode_message_.clear();
+    long n0 = 0, n1 = 0;
+    CVodeGetNumSteps(cvode_, &n0);
+    flag = CVode(cvode_, stop, y_, &reached, CV_NORMAL);
+    CVodeGetNumSteps(cvode_, &n1);
+    steps += n1 - n0;
+    if (flag < 0) {
+      t_ = reached;
+      break;
+    }
+    t_ = reached;
+    if (stop < t_next && t_ >= stop) check(CVodeReInit(cvode_, t_, y_), "CVodeReInit");
+    if (t_ >= stop) t_ = stop;
+  }
+  const double* yv = N_VGetArrayPointer(y_);
+  q_ = Eigen::Map<const Eigen::VectorXd>(yv, n_);
+  v_ = Eigen::Map<const Eigen::VectorXd>(yv + n_, n_);
+  step.iterations = static_cast<int>(steps);
+  step.t = flag < 0 ? t_ : t_next;
+  // CVODE's weighted local error of its last step (RMS norm; below 1 when accepted).
+  if (CVodeGetEstLocalErrors(cvode_, ele_) == CV_SUCCESS && CVodeGetErrWeights(cvode_, ewt_) == CV_SUCCESS)
+    step.residual = N_VWrmsNorm(ele_, ewt_);
+  step.status = flag < 0 ? TerminationType::IntegrationFailed : TerminationType::Converged;
+  // Energies and the tip at the reached state.
+  input_at(step.t);
+  twists(q_.data(), T_);
+  mass_matrix();
+  step.kinetic_energy = 0.5 * v_.dot(M_ * v_);
+  step.potential_energy = potential_energy(q_.data());
+  step.tip = frames_b_[N_];
+  return step;
+}
+
+void LumpedDynamics::choose_bending_planes(const Timeline& timeline) {
+  chart_chosen_ = true;
+  if (m_ != 5) return;
+  double* y = N_VGetArrayPointer(y_);
+  std::vector<bool> open(N_ + 1, false);
+  bool any = false;
+  for (int j = 1; j <= N_; ++j) {
+    const double* x = y + m_ * (j - 1);
+    open[j] = std::abs(x[0]) + std::abs(x[1]) + std::abs(x[2]) < 1e-12;
+    any = any || open[j];
+  }
+  if (!any) return;
+  std::unique_ptr<ModelWorkspace> ws = model_.make_workspace();
+  for (const TimelineEntry& e : timeline.entries) {
+    const Solution s = solve(model_, *ws, e.input);
+    if (!s.converged()) continue;
+    for (int j = 1; j <= N_; ++j) {
+      const double* x = s.unknowns.data() + m_ * (j - 1);
+      if (open[j] && std::abs(x[0]) + std::abs(x[1]) + std::abs(x[2]) > 1e-9) {
+        y[m_ * (j - 1) + 3] = x[3];
+        open[j] = false;
+      }
+    }
+  }
+  Solution chart;
+  chart.unknowns = Eigen::Map<const Eigen::VectorXd>(y, n_);
+  Eigen::VectorXd ignored;
+  problem_->warm_guess(chart, ignored);  // the gauge references follow
+  check(CVodeReInit(cvode_, t_, y_), "CVodeReInit");
+}
+
+Solution LumpedDynamics::shape() const {
+  Solution s;
+  s.unknowns = q_;
+  s.disk_frames = body_.disk_frames(q_);
+  s.summary.termination = TerminationType::Converged;
+  return s;
+}
+
+std::unique_ptr<DynamicsIntegrator> make_lumped_dynamics(const LumpedModel& model, const LumpedBody& body,
+                                                         const DynamicsSettings& settings, double dt,
+                                                         const SolverOptions& solver) {
+  return std::make_unique<LumpedDynamics>(model, body, settings, dt, solver);
+}
+
+Eigen::VectorXd lumped_natural_frequencies(const LumpedModel& model, const LumpedBody& body, const Eigen::VectorXd& x,
+                                           const ModelInput& input) {
+  LumpedDynamics d(model, body, DynamicsSettings{}, 1.0, SolverOptions{});
+  return d.frequencies(x, input);
+}
+
+}  // namespace tdcr::detail
+
+namespace tdcr {
+
+std::unique_ptr<DynamicsIntegrator> LumpedModel::make_dynamics_integrator(const DynamicsSettings& settings, double dt,
+                                                                          const SolverOptions& solver) const {
+  return detail::make_lumped_dynamics(*this, body(), settings, dt, solver);
+}
+
+Eigen::VectorXd LumpedModel::natural_frequencies(const Eigen::VectorXd& x, const ModelInput& input) const {
+  return detail::lumped_natural_frequencies(*this, body(), x, input);
+}
+
+}  // namespace tdcr

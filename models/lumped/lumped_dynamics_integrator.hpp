@@ -1,0 +1,168 @@
+// Private to models/lumped/: the integrator of the lumped models' equations of motion
+// (lumped_dynamics.hpp says what it integrates). Its CVODE side is in lumped_dynamics.cpp, its
+// mechanics (bodies, mass matrix, generalized and velocity forces) in lumped_dynamics_mechanics.cpp.
+#pragma once
+
+#include <cvode/cvode.h>
+#include <nvector/nvector_serial.h>
+#include <sunlinsol/sunlinsol_dense.h>
+#include <sunmatrix/sunmatrix_dense.h>
+
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+#include <Eigen/LU>
+
+#include "lumped/lumped_dynamics.hpp"
+#include "lumped/lumped_problem.hpp"
+#include "tdcr/core/lie.hpp"
+
+namespace tdcr::detail {
+
+using Vec6 = Eigen::Matrix<double, 6, 1>;
+using Mat6 = Eigen::Matrix<double, 6, 6>;
+using Twists = Eigen::Matrix<double, 6, Eigen::Dynamic>;
+
+// Step of the fourth-order differences of a subsegment's local pose in its unknowns (angles,
+// rad): truncation ~h^4 = 1e-12 relative, rounding ~1e-16 / h = 1e-13.
+constexpr double kTwistStep = 1e-3;
+// Step (rad) of the velocity-product terms' differences along q' (bias accelerations).
+constexpr double kBiasStep = 1e-3;
+// PRB: inertia added to the bending-plane angle phi of a subsegment, as a fraction of m l^2 (its
+// disk's mass, its length): that of turning the plane of a bend of sqrt(kPhiInertia) rad. phi
+// has no inertia of its own where the subsegment is straight (a polar angle at zero bend):
+// without it M is singular there. It only slows a plane's turning near straight.
+constexpr double kPhiInertia = 1e-2;
+// CVODE steps allowed per output step.
+constexpr long kMaxStepsPerOutput = 20000;
+
+// The spatial inertia about the base origin, ordering (omega, v_o), of a body with mass m,
+// centre c and rotational inertia Ic about c (base frame).
+inline Mat6 spatial_inertia(double m, const Vec3& c, const Mat3& Ic) {
+  const Mat3 C = lie::hat(c);
+  Mat6 I;
+  I.topLeftCorner<3, 3>() = Ic + m * C.transpose() * C;
+  I.topRightCorner<3, 3>() = m * C;
+  I.bottomLeftCorner<3, 3>() = m * C.transpose();
+  I.bottomRightCorner<3, 3>() = m * Mat3::Identity();
+  return I;
+}
+
+// V x* h: the rate of a spatial momentum h carried along by the spatial velocity V.
+inline Vec6 cross_force(const Vec6& V, const Vec6& h) {
+  Vec6 r;
+  const Vec3 w = V.head<3>(), v = V.tail<3>(), n = h.head<3>(), f = h.tail<3>();
+  r.head<3>() = w.cross(n) + v.cross(f);
+  r.tail<3>() = w.cross(f);
+  return r;
+}
+
+/// The DynamicsIntegrator of CCsub and PRB: CVODE BDF on (q, q'), buffers sized once.
+class LumpedDynamics final : public DynamicsIntegrator {
+ public:
+  LumpedDynamics(const LumpedModel& model, const LumpedBody& body, const DynamicsSettings& settings, double dt,
+                 const SolverOptions& solver);
+  ~LumpedDynamics() override { free_cvode(); }
+
+  void initialize(const Solution& at_rest, const ModelInput& input) override;
+  SimulationStep advance(double t_next, const Timeline& timeline) override;
+  Solution shape() const override;
+
+  // (K, M) about x at rest under input: the natural frequencies (Hz).
+  Eigen::VectorXd frequencies(const Eigen::VectorXd& x, const ModelInput& input);
+
+ private:
+  static int rhs_fn(sunrealtype t, N_Vector y, N_Vector yd, void* user);
+  static int jac_fn(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix J, void* user, N_Vector, N_Vector, N_Vector);
+  static void on_error(int, const char*, const char*, char* msg, void* user) {
+    static_cast<LumpedDynamics*>(user)->cvode_message_ = msg;
+  }
+  void free_cvode();
+  void check(int flag, const char* what) const {
+    if (flag < 0) throw std::runtime_error(std::string("lumped dynamics: ") + what + " failed (" + std::to_string(flag) + ")");
+  }
+  // The input at t (from the timeline once advance() has one), bound to the problem if it changed.
+  void input_at(double t);
+  // Frames and the twist columns (omega; v_o) of every unknown at q into `T`.
+  // With `points`, the link midpoints go there (and the link Jacobians are not computed).
+  void twists(const double* q, Twists& T, std::vector<Vec3>* points = nullptr);
+  // Q = -S r at q (frames_ and T_ must be those of q); S's diagonal blocks kept in S_.
+  bool generalized_force(const double* q);
+  // M at q from T_ (frames_ of q); the composite inertias kept in IC_.
+  void mass_matrix();
+  // b: velocity-product forces minus drag, at (q, v).
+  void bias(const double* q, const double* v);
+  double potential_energy(const double* q);
+  // PRB: m a of link l at q'' = 0 from bias()'s stencil of positions (step h along q').
+  Vec3 link_force(int l, double h) const {
+    const Vec3 acc = (link_stencil_[2][l] - 2.0 * link_c_[l] + link_stencil_[3][l]) / (h * h);
+    return link_mass_[l] * acc;
+  }
+  // PRB: the bending plane phi of a subsegment that is straight at rest is no state (a polar
+  // angle at zero bend) but decides the plane it can start bending in: take it from the first
+  // static answer along the timeline that bends the subsegment (planar motions start right).
+  void choose_bending_planes(const Timeline& timeline);
+  bool chart_chosen_ = false;
+  // Springs' stiffness of unknown i (the diagonal of D / tau_bt) at q.
+  double spring(int i, const double* q) const;
+
+  const LumpedModel& model_;
+  const LumpedBody& body_;
+  DynamicsSettings settings_;
+  double dt_;
+  int m_, N_, n_;
+  double rtol_, atol_q_, atol_v_;
+  std::unique_ptr<LumpedProblem> problem_;
+  const Timeline* timeline_ = nullptr;
+  ModelInput input_, bound_;
+  bool bound_valid_ = false;
+
+  // Bodies: disk k = 1..N with its mass and rotational inertia (disk frame, diagonal).
+  std::vector<double> mass_, air_length_;
+  std::vector<Vec3> inertia_;
+  std::vector<double> length_;  // l_j, j = 1..N
+  // PRB: the backbone of a subsegment as point masses at its four link midpoints (its joints
+  // between two disks would have no inertia of their own otherwise): mass, world position and
+  // the local Jacobian (base frame) of link i of subsegment j at index 4 j + i.
+  static constexpr int kLinks = 4;
+  bool links_ = false;
+  std::vector<double> link_mass_;
+  std::vector<Vec3> link_c_, link_stencil_[4];
+  std::vector<Eigen::Matrix<double, 3, 5>> link_J_;
+
+  // State and buffers, sized once.
+  double t_ = 0.0;
+  Eigen::VectorXd q_, v_;
+  std::vector<Frame> frames_, frames_b_;
+  std::vector<SubsegmentPose> poses_;
+  Twists T_, Tp_, Tm_;
+  Eigen::VectorXd r_, Q_, b_, rhs_, damp_;
+  std::vector<Mat3> S_;  // per subsegment m x m (top-left) of S
+  Eigen::MatrixXd M_, Jr_, K_;
+  Eigen::LLT<Eigen::MatrixXd> llt_;
+  // The Newton systems (I - gamma J) x = b by their Schur complement (lumped_dynamics.cpp,
+  // make_schur_solver): n x n instead of 2n x 2n, since J's first block row is [0 I].
+  Eigen::MatrixXd schur_, schur_A21_;
+  Eigen::PartialPivLU<Eigen::MatrixXd> schur_lu_;
+  Eigen::VectorXd schur_b_;
+  double schur_gamma_ = 0.0;
+  SUNLinearSolver make_schur_solver();
+  std::vector<Mat6> IC_, Io_;
+  std::vector<Vec6> V_, A_;
+  Eigen::VectorXd qs_;
+
+  SUNContext ctx_ = nullptr;
+  N_Vector y_ = nullptr, abstol_ = nullptr;
+  N_Vector ele_ = nullptr, ewt_ = nullptr;  // advance(): CVODE's local errors and their weights
+  void* cvode_ = nullptr;
+  SUNMatrix A_mat_ = nullptr;
+  SUNLinearSolver ls_ = nullptr;
+  bool cvode_ready_ = false;
+  std::string cvode_message_;
+};
+
+}  // namespace tdcr::detail

@@ -1,0 +1,290 @@
+// The mechanics of the lumped models' equations of motion (lumped_dynamics.hpp): the bodies'
+// twists, the mass matrix from composite inertias, the generalized force from the static
+// residual, the velocity-product forces and drag, the springs, the energies, the linearised
+// frequencies.
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/LU>
+
+#include "lumped/lumped_dynamics_integrator.hpp"
+#include "physics/tendon_path.hpp"
+#include "tdcr/core/lie.hpp"
+
+namespace tdcr::detail {
+
+void LumpedDynamics::twists(const double* q, Twists& T, std::vector<Vec3>* points) {
+  body_.compute_frames(q, N_, frames_b_.data(), poses_.data());
+  if (links_) {
+    std::vector<Vec3>& c = points ? *points : link_c_;
+    for (int j = 1; j <= N_; ++j)
+      for (int i = 0; i < kLinks; ++i)
+        c[kLinks * j + i] = frames_b_[j - 1].p + frames_b_[j - 1].R * poses_[j].aux[3 + i];
+  }
+  double xs[8];
+  SubsegmentPose g[4];
+  static constexpr double kOffset[4] = {2.0, 1.0, -1.0, -2.0};
+  static constexpr double kWeight[4] = {-1.0 / 12.0, 8.0 / 12.0, -8.0 / 12.0, 1.0 / 12.0};
+  for (int j = 1; j <= N_; ++j) {
+    const double* xj = q + m_ * (j - 1);
+    const Mat3& R0 = frames_b_[j - 1].R;
+    const Vec3& pj = frames_b_[j].p;
+    for (int i = 0; i < m_; ++i) {
+      // Fourth-order central differences: the mass matrix is ill-conditioned (torsion against
+      // bending), so its columns' noise must stay near rounding.
+      std::copy(xj, xj + m_, xs);
+      for (int k = 0; k < 4; ++k) {
+        xs[i] = xj[i] + kOffset[k] * kTwistStep;
+        body_.local(j, xs, g[k]);
+      }
+      Mat3 dR = Mat3::Zero();
+      Vec3 dp = Vec3::Zero();
+      for (int k = 0; k < 4; ++k) {
+        dR += kWeight[k] * g[k].R;
+        dp += kWeight[k] * g[k].p;
+      }
+      dR /= kTwistStep;
+      dp /= kTwistStep;
+      const Vec3 w_loc = lie::vee(dR * poses_[j].R.transpose());
+      if (links_ && !points)
+        for (int l = 0; l < kLinks; ++l) {
+          Vec3 dc = Vec3::Zero();
+          for (int k = 0; k < 4; ++k) dc += kWeight[k] * g[k].aux[3 + l];
+          link_J_[kLinks * j + l].col(i) = R0 * dc / kTwistStep;
+        }
+      const Vec3 a = R0 * dp;
+      const Vec3 w = R0 * w_loc;
+      T.col(m_ * (j - 1) + i) << w, a - w.cross(pj);
+    }
+  }
+}
+
+bool LumpedDynamics::generalized_force(const double* q) {
+  Eigen::Map<const Eigen::VectorXd> x(q, n_);
+  if (!problem_->residual(x, r_)) return false;
+  const double EI = body_.EI;
+  for (int j = 1; j <= N_; ++j) {
+    const double* rj = r_.data() + m_ * (j - 1);
+    double* Qj = Q_.data() + m_ * (j - 1);
+    const double c = EI / length_[j];
+    Mat3& S = S_[j];
+    if (m_ == 3) {
+      // CCsub: r = B y with B = [e_x e_y z_j] (frame of disk j-1); y's spring part is
+      // (b_x, b_y, (GJ/EI) eps), the gradient of the springs' energy times l/EI.
+      const Vec3 z = poses_[j].R.col(2);
+      Mat3 B = Mat3::Identity();
+      B.col(2) = z;
+      S = c * B.inverse();
+      const Vec3 Qv = -(S * Eigen::Map<const Vec3>(rj));
+      std::copy(Qv.data(), Qv.data() + 3, Qj);
+    } else {
+      // PRB: the joint, twist rows are spring gradients times l/EI; the bending-plane row is the
+      // gradient component divided by the bend angle a (lumped_problem.hpp, set_damping).
+      const double a = q[m_ * (j - 1)] + q[m_ * (j - 1) + 1] + q[m_ * (j - 1) + 2];
+      for (int i = 0; i < m_; ++i) Qj[i] = -c * rj[i];
+      Qj[3] *= a;
+      S.setZero();
+      S(0, 0) = a;  // the phi row's factor (over c), read by jac_fn
+    }
+  }
+  return Q_.allFinite();
+}
+
+void LumpedDynamics::mass_matrix() {
+  // Composite inertias from the tip: IC_j = sum of the disks k >= j.
+  IC_[N_ + 1].setZero();
+  for (int k = N_; k >= 1; --k) {
+    const Frame& f = frames_b_[k];
+    const Mat3 Ic = f.R * inertia_[k].asDiagonal() * f.R.transpose();
+    Io_[k] = spatial_inertia(mass_[k], f.p, Ic);
+    IC_[k] = IC_[k + 1] + Io_[k];
+    // PRB: the links of subsegment k + 1 are rigid with disk k.
+    if (links_ && k < N_)
+      for (int i = 0; i < kLinks; ++i)
+        IC_[k] += spatial_inertia(link_mass_[kLinks * (k + 1) + i], link_c_[kLinks * (k + 1) + i], Mat3::Zero());
+  }
+  // Block (a, b), a <= b: the bodies moving rigidly with both columns are the disks k >= b and
+  // the links of subsegments > b; PRB: the links of b move with its columns through link_J_.
+  for (int bj = 1; bj <= N_; ++bj) {
+    // At most 5 columns: on the stack (no allocation in CVODE's right-hand side).
+    Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::ColMajor, 6, 5> U(6, m_);
+    U.noalias() = IC_[bj] * T_.middleCols(m_ * (bj - 1), m_);
+    if (links_)
+      for (int i = 0; i < kLinks; ++i) {
+        const int l = kLinks * bj + i;
+        const Eigen::Matrix<double, 3, 5>& J = link_J_[l];
+        for (int c = 0; c < m_; ++c) {
+          U.col(c).head<3>() += link_mass_[l] * link_c_[l].cross(Vec3(J.col(c)));
+          U.col(c).tail<3>() += link_mass_[l] * J.col(c);
+        }
+      }
+    for (int aj = 1; aj <= bj; ++aj) {
+      M_.block(m_ * (aj - 1), m_ * (bj - 1), m_, m_).noalias() = T_.middleCols(m_ * (aj - 1), m_).transpose() * U;
+      if (aj != bj) M_.block(m_ * (bj - 1), m_ * (aj - 1), m_, m_) = M_.block(m_ * (aj - 1), m_ * (bj - 1), m_, m_).transpose();
+    }
+  }
+  if (links_)
+    for (int j = 1; j <= N_; ++j) {
+      // The diagonal block's own links: U above holds their rigid part (twist T of b), which
+      // for b's own columns is not their motion: replace it by J^T m J.
+      for (int i = 0; i < kLinks; ++i) {
+        const int l = kLinks * j + i;
+        const Eigen::Matrix<double, 3, 5>& J = link_J_[l];
+        const auto Tj = T_.middleCols(m_ * (j - 1), m_);
+        Eigen::Matrix<double, 5, 5> rigid;
+        for (int c = 0; c < m_; ++c)
+          for (int r = 0; r < m_; ++r)
+            rigid(r, c) = link_mass_[l] * (Tj.col(r).tail<3>() + Tj.col(r).head<3>().cross(link_c_[l])).dot(J.col(c));
+        M_.block(m_ * (j - 1), m_ * (j - 1), m_, m_) += link_mass_[l] * J.transpose() * J - rigid;
+      }
+      M_(m_ * (j - 1) + 3, m_ * (j - 1) + 3) += kPhiInertia * mass_[j] * length_[j] * length_[j];
+    }
+}
+
+void LumpedDynamics::bias(const double* q, const double* v) {
+  Eigen::Map<const Eigen::VectorXd> qv(q, n_), vv(v, n_);
+  const double vn = vv.norm();
+  // The columns' rates T' = dT/dq q' by a central difference along q'.
+  Vec6 Tdot_v_sum = Vec6::Zero();
+  const bool moving = vn > 0.0;
+  double h = 0.0;
+  if (moving) {
+    // Central differences along q' (the twists themselves are fourth order: their noise ~1e-13
+    // over the step 1e-3 leaves ~1e-10; the truncation, ~1e-6 of the velocity terms, is far below
+    // the integration's tolerance). PRB: the links' positions too, for their accelerations.
+    h = kBiasStep / vn;
+    qs_ = qv + h * vv;
+    twists(qs_.data(), Tp_, &link_stencil_[2]);
+    qs_ = qv - h * vv;
+    twists(qs_.data(), Tm_, &link_stencil_[3]);
+    Tp_ -= Tm_;
+    Tp_ /= 2.0 * h;
+    body_.compute_frames(q, N_, frames_b_.data(), poses_.data());  // back to q
+  }
+  // Spatial velocities and bias accelerations of the disks, from the base.
+  Vec6 V = Vec6::Zero(), A = Vec6::Zero();
+  for (int k = 1; k <= N_; ++k) {
+    V.noalias() += T_.middleCols(m_ * (k - 1), m_) * vv.segment(m_ * (k - 1), m_);
+    if (moving) A.noalias() += Tp_.middleCols(m_ * (k - 1), m_) * vv.segment(m_ * (k - 1), m_);
+    V_[k] = V;
+    A_[k] = A;
+  }
+  (void)Tdot_v_sum;
+  // Forces of the disks (momentum rates at q'' = 0, minus drag), summed from the tip, and their
+  // generalized forces.
+  Vec6 F = Vec6::Zero();
+  for (int k = N_; k >= 1; --k) {
+    Vec6 f = Vec6::Zero();
+    if (moving) f = Io_[k] * A_[k] + cross_force(V_[k], Io_[k] * V_[k]);
+    if (settings_.air_drag > 0.0) {
+      const Vec3& p = frames_b_[k].p;
+      const Vec3 vel = V_[k].tail<3>() + V_[k].head<3>().cross(p);
+      const Vec3 drag = -settings_.air_drag * air_length_[k] * vel.norm() * vel;
+      f.head<3>() -= p.cross(drag);
+      f.tail<3>() -= drag;
+    }
+    F += f;
+    Eigen::Matrix<double, 5, 1> own = Eigen::Matrix<double, 5, 1>::Zero();
+    if (links_ && moving) {
+      // The links of subsegment k + 1 are rigid with disk k; those of k move through link_J_.
+      for (int i = 0; i < kLinks && k < N_; ++i) {
+        const int l = kLinks * (k + 1) + i;
+        const Vec3 fl = link_force(l, h);
+        F.head<3>() += link_c_[l].cross(fl);
+        F.tail<3>() += fl;
+      }
+      for (int i = 0; i < kLinks; ++i) {
+        const int l = kLinks * k + i;
+        own += link_J_[l].transpose() * link_force(l, h);
+      }
+    }
+    b_.segment(m_ * (k - 1), m_).noalias() = T_.middleCols(m_ * (k - 1), m_).transpose() * F;
+    if (links_) b_.segment(m_ * (k - 1), m_) += own.head(m_);
+  }
+}
+
+double LumpedDynamics::spring(int i, const double* q) const {
+  const int j = i / m_ + 1, c = i % m_;
+  const double EI = body_.EI, GJ = body_.GJ, l = length_[j];
+  if (m_ == 3) return c == 2 ? GJ / l : EI / l;
+  if (c == 4) return GJ / l;
+  const auto& prb = model_.effects().prb;
+  if (c < 3) return prb.k_theta[c] * EI / l;
+  // phi: turning the plane of a bend a changes the curvature vector's direction at the rate a.
+  const double a = q[m_ * (j - 1)] + q[m_ * (j - 1) + 1] + q[m_ * (j - 1) + 2];
+  return prb.k_theta[1] * EI / l * a * a;
+}
+
+double LumpedDynamics::potential_energy(const double* q) {
+  double U = 0.0;
+  for (int i = 0; i < n_; ++i) {
+    const int c = i % m_;
+    if (m_ == 5 && c == 3) continue;  // phi: no spring of its own
+    U += 0.5 * spring(i, q) * q[i] * q[i];
+  }
+  // Conservative loads: gravity on the lumped masses, the tip force, constant tendon tensions.
+  const Loads& L = input_.loads;
+  for (int k = 1; k <= N_; ++k) U -= mass_[k] * L.gravity.dot(frames_b_[k].p);
+  if (links_)
+    for (int l = kLinks; l < kLinks * (N_ + 1); ++l) U -= link_mass_[l] * L.gravity.dot(link_c_[l]);
+  U -= L.tip_force.dot(frames_b_[N_].p);
+  if (input_.actuation.kind == Actuation::Kind::Tensions && !input_.actuation.mixed()) {
+    const TendonRouting& routing = body_.statics.routing();
+    for (const RoutedTendon& t : routing.tendons) {
+      const double T = input_.actuation.values[t.index];
+      if (T == 0.0) continue;
+      Vec3 prev = physics::hole_position(frames_b_[0], t, routing.disk_s[0]);
+      for (int c = 1; c <= t.end_disk; ++c) {
+        const Vec3 h = physics::hole_position(frames_b_[c], t, routing.disk_s[c]);
+        U += T * (h - prev).norm();
+        prev = h;
+      }
+    }
+  }
+  return U;
+}
+
+Eigen::VectorXd LumpedDynamics::frequencies(const Eigen::VectorXd& x, const ModelInput& input) {
+  timeline_ = nullptr;
+  input_ = input;
+  bound_valid_ = false;
+  input_at(0.0);
+  twists(x.data(), T_);
+  if (!generalized_force(x.data())) throw std::runtime_error("lumped dynamics: residual failed");
+  mass_matrix();
+  // K = -dQ/dq by central differences of Q (the model's Jacobian is a forward difference).
+  Eigen::VectorXd xp = x, Q0(n_);
+  for (int i = 0; i < n_; ++i) {
+    const double h = 1e-6;
+    xp[i] = x[i] + h;
+    twists(xp.data(), T_);
+    generalized_force(xp.data());
+    Q0 = Q_;
+    xp[i] = x[i] - h;
+    twists(xp.data(), T_);
+    generalized_force(xp.data());
+    K_.col(i) = -(Q0 - Q_) / (2.0 * h);
+    xp[i] = x[i];
+  }
+  twists(x.data(), T_);
+  mass_matrix();
+  // PRB: phi is no coordinate of a straight subsegment (a polar angle at zero bend): held fixed.
+  std::vector<int> keep;
+  for (int i = 0; i < n_; ++i)
+    if (!(m_ == 5 && i % m_ == 3)) keep.push_back(i);
+  const int nk = static_cast<int>(keep.size());
+  Eigen::MatrixXd Ks(nk, nk), Mk(nk, nk);
+  for (int a = 0; a < nk; ++a)
+    for (int b = 0; b < nk; ++b) {
+      Ks(a, b) = 0.5 * (K_(keep[a], keep[b]) + K_(keep[b], keep[a]));
+      Mk(a, b) = M_(keep[a], keep[b]);
+    }
+  Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(Ks, Mk);
+  Eigen::VectorXd f = es.eigenvalues().cwiseMax(0.0).cwiseSqrt() / (2.0 * M_PI);
+  std::sort(f.data(), f.data() + f.size());
+  return f;
+}
+
+}  // namespace tdcr::detail
