@@ -8,6 +8,7 @@
 #include "tdcr/models/dynamics.hpp"
 #include "tdcr/models/lumped_model.hpp"
 #include "tdcr/models/static_model.hpp"
+#include "vc/vc_dynamics.hpp"
 
 namespace tdcr {
 
@@ -36,13 +37,11 @@ std::unique_ptr<DynamicsIntegrator> make_dynamics_integrator(const StaticModel& 
       return static_cast<const LumpedModel&>(model).make_dynamics_integrator(settings, dt, solver);
     case ModelKind::VC:
     case ModelKind::VCref:
-      // The Cosserat integrators (models/vc/vc_dynamics.hpp) will be called here:
-      // return make_cosserat_dynamics_integrator(model, settings, dt);
-      break;
+      return make_cosserat_dynamics_integrator(model, settings, dt);
     case ModelKind::CC:
       break;
   }
-  throw InputError("model", model.name(), "has no dynamics yet (CCsub and PRB have)");
+  throw InputError("model", model.name(), "has no dynamics (CCsub, PRB, VC and VCref have)");
 }
 
 SimulationResult simulate(const StaticModel& model, const DynamicsSettings& settings, const Timeline& timeline,

@@ -35,16 +35,8 @@ void CosseratDynamicsOptions::validate() const {
     throw InputError("automatic_threshold", format_value(automatic_threshold), "must be > 0");
 }
 
-void check_settings(const DynamicsSettings& s, double dt) {
-  const auto nonnegative = [](const char* key, double v) {
-    if (!(v >= 0.0) || !std::isfinite(v))
-      throw InputError(std::string("dynamics.") + key, format_value(v), "must be a finite number >= 0");
-  };
-  nonnegative("bending_damping_time", s.bending_damping_time);
-  nonnegative("shear_damping_time", s.shear_damping_time);
-  nonnegative("air_drag", s.air_drag);
-  if (!(s.alpha >= -0.5 && s.alpha <= 0.0))
-    throw InputError("dynamics.alpha", format_value(s.alpha), "must be in [-0.5, 0]");
+void check_settings(const DynamicsSettings& settings, double dt) {
+  settings.validate();
   if (!(dt > 0.0) || !std::isfinite(dt)) throw InputError("dt", format_value(dt), "must be a finite number > 0");
 }
 

@@ -1,4 +1,4 @@
-// Private to models/: the Cosserat rod dynamics of VC (and, later, VCref) behind the shared
+// Private to models/: the Cosserat rod dynamics of VC and VCref behind the shared
 // DynamicsIntegrator interface (tdcr/models/dynamics.hpp). Each time step is VC's static
 // boundary value problem with the time derivatives replaced by an implicit formula (BDF-alpha
 // or implicit midpoint, Till, Aloi and Rucker, IJRR 2019), solved by single shooting with KINSOL
@@ -90,8 +90,8 @@ std::unique_ptr<CosseratDynamics> make_vc_dynamics(const VcModel& model, const D
 std::unique_ptr<CosseratDynamics> make_vcref_dynamics(const StaticModel& model, const DynamicsSettings& settings,
                                                       double dt, const CosseratDynamicsOptions& options = {});
 
-/// @brief DynamicsSettings' checks (the front end's DynamicsSettings::validate does the same;
-/// kept here so that this integrator can be built without the front end).
+/// @brief DynamicsSettings::validate and the time step's check (`dt`, > 0), for integrators built
+/// without tdcr::make_dynamics_integrator (tests, benchmarks).
 void check_settings(const DynamicsSettings& settings, double dt);
 
 }  // namespace vc

@@ -37,5 +37,5 @@ def test_simulate_names_bad_input():
     scene = tdcr.parse_scene(json.dumps(SCENE))
     with pytest.raises(tdcr.InputError, match="dt"):
         tdcr.simulate(scene, 0.1, dt=0.0)
-    with pytest.raises(tdcr.InputError, match="has no dynamics yet"):
-        tdcr.simulate(scene, 0.1, model="vc")
+    with pytest.raises(tdcr.InputError, match="has no dynamics"):
+        tdcr.simulate(scene, 0.1, model="cc")
