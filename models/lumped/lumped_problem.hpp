@@ -153,12 +153,12 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   // (structured_jacobian) solved as a block-banded system by KLU; the iterations are those of
   // the recursive form at a cost linear in J.
   bool has_newton_step() const final { return reduced_; }
-  // With contact candidates the dense Jacobian is KINSOL's finite differences (the structured
-  // one knows no contact forces).
   // Recursive form without friction: the dense Jacobian by structured forward differences
   // (structured_jacobian, then two small products); also what path following's bordered
-  // systems use in the reduced form.
-  bool has_jacobian() const final { return !banded_ && !body_.statics.friction() && contacts_.empty(); }
+  // systems use in the reduced form. With contact candidates the same differences carry the
+  // contact forces, and their columns and the complementarity rows are added
+  // (lumped_contact_jacobian.cpp).
+  bool has_jacobian() const final { return !banded_ && !body_.statics.friction(); }
   // Its diagonal blocks are forward differences (of first-order accuracy): differential
   // kinematics keeps its own central differences.
   bool jacobian_is_forward_difference() const final { return true; }
@@ -282,6 +282,20 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   // complete(): load the robot from rest with the candidates (load factor 0 -> 1 in steps, new
   // contacts added as they close); y the answer at full load; false if a step could not be solved.
   bool load_with_contacts(Eigen::VectorXd& y, const bvp::NewtonOptions& nopt, SolverSummary& work);
+  // lumped_contact_jacobian.cpp: the contact terms of structured_jacobian(). contact_loads():
+  // the contact wrench on every disk at the evaluated state (jac_cf_, jac_cm_ about O_j).
+  // contact_column(): column c (of subsegment k, increment h) moves frame k to fk and every
+  // frame distal of it by (Q, t); adds the contact forces of disk k at fk and the change of those
+  // distal of k beyond the rigid motion to the distal wrench (Fk, Mk about fk.p) of disk k, and
+  // keeps the gaps' change (jac_cg_) and the distal contact forces' change pulled back by Q
+  // (jac_cd_: force, moment about the origin, per candidate) for the rows distal of k.
+  void contact_loads();
+  void contact_column(int k, int c, const Mat3& Q, const Vec3& t, const Frame& fk, const Frame& base_k1, double h,
+                      Vec3& Fk, Vec3& Mk);
+  // jacobian() with candidates: the structured blocks plus the contact terms, dense.
+  bool contact_jacobian(Eigen::Ref<Eigen::MatrixXd> Jm);
+  Eigen::MatrixXd jac_cd_, jac_cg_;
+  std::vector<Vec3> jac_cf_, jac_cm_;
 
   int stride() const { return banded_ ? body_.per_subsegment + 12 : body_.per_subsegment; }
   bool recursive_residual(const double* x, double* f);
