@@ -6,6 +6,8 @@
 // as n grows on a robot bent against a wall and inside a curved lumen.
 #include <gtest/gtest.h>
 
+#include <Eigen/LU>
+
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -502,6 +504,15 @@ TEST_P(ContactLumped, ContactJacobianMatchesDifferences) {
       EXPECT_LT((own - central).rightCols(nc).cwiseAbs().maxCoeff() / cs, 1e-6);
       const double rows_plain = (plain - central).bottomRows(nc).leftCols(nx).cwiseAbs().maxCoeff() / rs;
       EXPECT_LT((own - central).bottomRows(nc).leftCols(nx).cwiseAbs().maxCoeff() / rs, std::max(1e-6, 2.0 * rows_plain));
+      // The structured Newton step (block-banded, KLU) solves the same Jacobian.
+      ASSERT_TRUE(P.has_newton_step());
+      ASSERT_TRUE(P.residual(y, f));
+      ASSERT_TRUE(P.setup_newton_step(y, f));
+      Eigen::VectorXd step = -f;
+      ASSERT_TRUE(P.solve_newton_step(step));
+      ASSERT_TRUE(P.jacobian(y, f, own));
+      const Eigen::VectorXd dense = own.partialPivLu().solve(-f);
+      EXPECT_LT((step - dense).norm(), 1e-8 * dense.norm()) << "structured " << step.norm() << ", dense " << dense.norm();
     }
   }
 }

@@ -30,6 +30,7 @@ constexpr double kReportedForce = 1e-9;
 
 void LumpedProblem::bind_contact(const ModelInput& input) {
   contacts_.clear();
+  contact_step_ = false;
   contact_ = !input.environment.obstacles.empty();
   if (!contact_) return;
   obstacles_ = input.environment.obstacles;  // allocates only when the obstacles grow
@@ -52,6 +53,7 @@ void LumpedProblem::enter_contact_mode() {
   loads_.active = body_.N;  // a contact can load any disk
   banded_ = false;
   reduced_ = false;
+  contact_step_ = !body_.statics.friction();  // structured Newton steps (lumped_contact_jacobian.cpp)
   damping_ = 0.0;
 }
 
@@ -236,7 +238,7 @@ ModelProblem::Completion LumpedProblem::complete(Eigen::VectorXd& y, const bvp::
   // The set of active contacts changes between solves: a Jacobian of another set misleads.
   nopt.reuse_jacobian = false;
   nopt.freeze_jacobian_below = 0.0;
-  nopt.max_setup_calls = 10;
+  nopt.max_setup_calls = 1;
   // A model's bound on the Newton step (PRB: 1, for its bending-plane chart in cold solves) is
   // too short for the step from a penetrating free-space answer: examples/robot_against_wall.json
   // (PRB, a rim 7.5 mm into the wall) diverged with 5 steps of maximum length at 1 and converged

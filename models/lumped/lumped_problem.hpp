@@ -152,7 +152,7 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   // Structured Newton step (lumped_structured.cpp): the recursive form's Jacobian factors
   // (structured_jacobian) solved as a block-banded system by KLU; the iterations are those of
   // the recursive form at a cost linear in J.
-  bool has_newton_step() const final { return reduced_; }
+  bool has_newton_step() const final { return reduced_ || (contact_step_ && !contacts_.empty()); }
   // Recursive form without friction: the dense Jacobian by structured forward differences
   // (structured_jacobian, then two small products); also what path following's bordered
   // systems use in the reduced form. With contact candidates the same differences carry the
@@ -283,19 +283,38 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   // contacts added as they close); y the answer at full load; false if a step could not be solved.
   bool load_with_contacts(Eigen::VectorXd& y, const bvp::NewtonOptions& nopt, SolverSummary& work);
   // lumped_contact_jacobian.cpp: the contact terms of structured_jacobian(). contact_loads():
-  // the contact wrench on every disk at the evaluated state (jac_cf_, jac_cm_ about O_j).
+  // the contact wrench on every disk at the evaluated state (jac_cf_, jac_cm_ about O_j), and
+  // per candidate the response of its force (pulled back by the motion: force, moment about the
+  // origin; jac_A_, 6 x 6) and of its gap (jac_a_) to a rigid twist (w, v) of its disk, with
+  // B_j = sum of jac_A_ over the candidates at disks >= j (jac_B_).
   // contact_column(): column c (of subsegment k, increment h) moves frame k to fk and every
   // frame distal of it by (Q, t); adds the contact forces of disk k at fk and the change of those
   // distal of k beyond the rigid motion to the distal wrench (Fk, Mk about fk.p) of disk k, and
-  // keeps the gaps' change (jac_cg_) and the distal contact forces' change pulled back by Q
-  // (jac_cd_: force, moment about the origin, per candidate) for the rows distal of k.
+  // keeps the column's twist (jac_Xi_) for the rows distal of k and the gaps.
   void contact_loads();
   void contact_column(int k, int c, const Mat3& Q, const Vec3& t, const Frame& fk, const Frame& base_k1, double h,
                       Vec3& Fk, Vec3& Mk);
   // jacobian() with candidates: the structured blocks plus the contact terms, dense.
   bool contact_jacobian(Eigen::Ref<Eigen::MatrixXd> Jm);
-  Eigen::MatrixXd jac_cd_, jac_cg_;
+  // d complementarity residual / d gap and / d b of candidate i at the evaluated state.
+  void contact_derivatives(std::size_t i, double& da, double& db) const;
+  // The structured Newton step with candidates: the block-banded system of lumped_structured.cpp
+  // with the twists' partial sums tau_j (6) in place of the rotations', the force unknowns and
+  // the gap rows; fill(put) emits its entries in a fixed order (pattern, values).
+  template <class Put>
+  void contact_structured_entries(Put&& put) const;
+  bool contact_setup_newton_step(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& f);
+  bool contact_solve_newton_step(Eigen::Ref<Eigen::VectorXd> b);
+  Eigen::MatrixXd jac_A_, jac_a_, jac_B_, jac_Xi_;
   std::vector<Vec3> jac_cf_, jac_cm_;
+  bool contact_step_ = false;  // contact mode solves its Newton steps structured
+  bvp::SparsityPattern cstruct_pattern_;
+  std::vector<int> cstruct_pos_, cstruct_disks_;  // positions; the candidates' disks it was built for
+  std::vector<double> cstruct_values_;
+  Eigen::VectorXd cstruct_rhs_;
+  int cstruct_J_ = -1;
+  bool cstruct_external_ = false;
+  bvp::SparseLu contact_lu_{1e-3};
 
   int stride() const { return banded_ ? body_.per_subsegment + 12 : body_.per_subsegment; }
   bool recursive_residual(const double* x, double* f);
