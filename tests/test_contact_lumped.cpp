@@ -426,7 +426,7 @@ TEST_P(ContactLumped, ProppedCantileverLargeDeflectionMatchesTheElastica) {
 TEST_P(ContactLumped, ContactJacobianMatchesDifferences) {
   std::vector<Scene> scenes;
   {
-    Scene s = robot_scene(GetParam(), 10);
+    Scene s = robot_scene(GetParam(), 20);
     s.loads.tip_force = Vec3(0.004, 0.001, 0);
     const double d = s.robot.backbone.outer_radius + 0.001;
     s.environment.obstacles = {sphere(Vec3(d * std::sqrt(0.5), d * std::sqrt(0.5), 0.05), 0.001),
@@ -434,7 +434,7 @@ TEST_P(ContactLumped, ContactJacobianMatchesDifferences) {
     scenes.push_back(s);
   }
   {
-    Scene s = robot_scene(GetParam(), 10);
+    Scene s = robot_scene(GetParam(), 20);
     s.actuation.values = {1.5, 0, 0.8, 0};
     s.loads.tip_force = Vec3(0.01, 0, -0.01);
     s.loads.gravity = Vec3(0, 0, -9.81);

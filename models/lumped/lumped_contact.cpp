@@ -53,7 +53,12 @@ void LumpedProblem::enter_contact_mode() {
   loads_.active = body_.N;  // a contact can load any disk
   banded_ = false;
   reduced_ = false;
-  contact_step_ = !body_.statics.friction();  // structured Newton steps (lumped_contact_jacobian.cpp)
+  // Structured Newton steps (lumped_contact_jacobian.cpp, KLU on (m + 12) N + candidates
+  // unknowns) where the free-space solve takes them too (LumpedBody::reduced: PRB from 16
+  // subsegments, CCsub from 30), else dense LU on the m N + candidates unknowns. bench_contact
+  // (n = 10, N = 20) cold: PRB 1090 / 450 us structured, 1400 / 690 us dense (wall / point);
+  // CCsub 520 / 310 us either way.
+  contact_step_ = body_.reduced(body_.N);
   damping_ = 0.0;
 }
 
@@ -178,6 +183,11 @@ bool LumpedProblem::warm_contacts(const Solution& previous) {
     c.lambda = p.force / contact_force_scale_;
     contacts_.push_back(c);
   }
+  // A warm solve mostly reuses the last factorisation (modified Newton, adjust_warm): its
+  // solves, cheaper dense at these sizes (bench_contact's trajectory, n = 10: PRB 24 kHz dense,
+  // 18 kHz structured; CCsub 68 kHz, 48 kHz).
+  constexpr int kDenseWarmUnknowns = 120;
+  contact_step_ = contact_step_ && size() > kDenseWarmUnknowns;
   return !contacts_.empty();
 }
 
@@ -238,7 +248,11 @@ ModelProblem::Completion LumpedProblem::complete(Eigen::VectorXd& y, const bvp::
   // The set of active contacts changes between solves: a Jacobian of another set misleads.
   nopt.reuse_jacobian = false;
   nopt.freeze_jacobian_below = 0.0;
-  nopt.max_setup_calls = 1;
+  // Modified Newton: a Jacobian serves up to 10 iterations. With the structured contact Jacobian
+  // (lumped_contact_jacobian.cpp) its factorisation, not its differences, is the cost of a
+  // Jacobian; bench_contact (n = 10) cold: 1 (exact Newton, 5-9 iterations) CCsub 520 / 310 us,
+  // PRB 1100 / 450 us (wall / point); 3: 350 / 220, 650 / 330; 10: 285 / 210, 640 / 295.
+  nopt.max_setup_calls = 10;
   // A model's bound on the Newton step (PRB: 1, for its bending-plane chart in cold solves) is
   // too short for the step from a penetrating free-space answer: examples/robot_against_wall.json
   // (PRB, a rim 7.5 mm into the wall) diverged with 5 steps of maximum length at 1 and converged

@@ -160,7 +160,7 @@ bool LumpedProblem::contact_jacobian(Eigen::Ref<Eigen::MatrixXd> Jm) {
     double da = 0.0, db = 1.0;
     contact_derivatives(static_cast<std::size_t>(i), da, db);
     const int cols = m * std::min(cand.disk, J);
-    Jm.row(nx + i).head(cols).noalias() = da * (jac_a_.col(i).transpose() * jac_Xi_.leftCols(cols));
+    for (int c = 0; c < cols; ++c) Jm(nx + i, c) = da * jac_a_.col(i).dot(jac_Xi_.col(c));
     Jm(nx + i, nx + i) = db;
   }
   return Jm.allFinite();
