@@ -95,6 +95,8 @@ void LumpedProblem::contact_residuals(double* f) const {
     const double a = c.at.gap / contact_length_scale_, b = c.lambda;
     if (contact_stiffness_ > 0.0)
       f[i] = b - contact_stiffness_ * std::max(0.0, -c.at.gap) / contact_force_scale_;
+    else if (contact_min_)
+      f[i] = std::min(a, b);
     else
       f[i] = a + b - std::sqrt(a * a + b * b);
   }
@@ -120,6 +122,7 @@ void LumpedProblem::report_contacts(Solution& solution) const {
 
 bool LumpedProblem::penetrating_pairs(const Eigen::VectorXd& x, bool add) {
   passed_through_ = false;
+  deepest_ = 0.0;
   contact_frames_.resize(body_.N + 1);
   body_.compute_frames(x.data(), body_.N, contact_frames_.data());
   const auto candidate = [&](int j, int o, ContactBody b) {
@@ -141,6 +144,7 @@ bool LumpedProblem::penetrating_pairs(const Eigen::VectorXd& x, bool add) {
           const double gap = contact_point(obstacles_[o], contact_frames_[j], b, radius).gap;
           if (pass == 0 && gap < -kPenetration) {
             penetrates = true;
+            deepest_ = std::max(deepest_, -gap);
             // Deeper than a quarter of a finite obstacle's radius: the free answer may have passed
             // its middle, and the nearest way out is then on its far side.
             const Obstacle& ob = obstacles_[o];
@@ -301,6 +305,27 @@ ModelProblem::Completion LumpedProblem::complete(Eigen::VectorXd& y, const bvp::
       return Completion::FollowAgain;
     }
     const Eigen::VectorXd start = y;
+    if (contact_stiffness_ == 0.0 && deepest_ < 0.1 * body_.length / body_.N) {
+      // A few semismooth Newton steps on min(a, b) first: from b = 0 at a penetrating pair
+      // Fischer-Burmeister's linearisation mixes gap and force (gradient (2, 1)), min's is the
+      // active set's (the gap closes in one step), and a propped cantilever converges in 2
+      // iterations instead of 12. Only where the free answer penetrates less than the candidates'
+      // margin (0.1 L / N): from a rim 7.5 mm deep in a wall (bench_contact's wall, the active set
+      // changing on the way) min took 8 iterations and 22 residuals against Fischer-Burmeister's
+      // 7 and 12; where min does not converge in kMinIterations, Fischer-Burmeister from the free
+      // answer as before.
+      constexpr int kMinIterations = 3;
+      bvp::NewtonOptions mopt = nopt;
+      mopt.max_iterations = kMinIterations;
+      contact_min_ = true;
+      residual_changed();
+      SolverSummary pre;
+      copy_newton_result(newton().solve(*this, y, mopt), pre);
+      add_work(pre, summary);
+      contact_min_ = false;
+      residual_changed();
+      if (!pre.converged()) y = start;
+    }
     copy_newton_result(newton().solve(*this, y, nopt), step);
     if (!step.converged() && contact_stiffness_ == 0.0) {
       // Rigid contact from a deeply penetrating answer can diverge (PRB, a 1.5 N tip force into a

@@ -122,6 +122,11 @@ void LumpedProblem::contact_derivatives(std::size_t i, double& da, double& db) c
   }
   const double rs = contact_length_scale_;
   const double a = cand.at.gap / rs, b = cand.lambda, r = std::sqrt(a * a + b * b);
+  if (contact_min_) {  // min(a, b): the active set's linearisation
+    da = a <= b ? 1.0 / rs : 0.0;
+    db = a <= b ? 0.0 : 1.0;
+    return;
+  }
   // At the corner a = b = 0 an element of the generalised gradient.
   const double ca = r > 0.0 ? a / r : M_SQRT1_2, cb = r > 0.0 ? b / r : M_SQRT1_2;
   da = (1.0 - ca) / rs;

@@ -252,6 +252,7 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   bool contact_ = false;  // the bound input has obstacles
   std::vector<Obstacle> obstacles_;
   double contact_stiffness_ = 0.0;  // N/m; 0: rigid
+  bool contact_min_ = false;        // complete()'s first steps: rigid contact as min(a, b) = 0
   double contact_force_scale_ = 1.0, contact_length_scale_ = 1.0;
   std::vector<ContactCandidate> contacts_;
   Eigen::VectorXd contact_x_;      // complete(): the x_j of all N subsegments
@@ -279,6 +280,7 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   bool swept_pairs(const Eigen::VectorXd& from, const Eigen::VectorXd& to);
   Eigen::VectorXd swept_x_;
   bool passed_through_ = false;  // penetrating_pairs() found a finite obstacle penetrated deeply
+  double deepest_ = 0.0;         // and the deepest penetration (m) of its last shape
   // complete(): load the robot from rest with the candidates (load factor 0 -> 1 in steps, new
   // contacts added as they close); y the answer at full load; false if a step could not be solved.
   bool load_with_contacts(Eigen::VectorXd& y, const bvp::NewtonOptions& nopt, SolverSummary& work);
