@@ -322,6 +322,7 @@ ModelProblem::Completion LumpedProblem::complete(Eigen::VectorXd& y, const bvp::
       SolverSummary pre;
       copy_newton_result(newton().solve(*this, y, mopt), pre);
       add_work(pre, summary);
+      summary.message += "; min(gap, force) steps: " + pre.message;
       contact_min_ = false;
       residual_changed();
       if (!pre.converged()) y = start;
