@@ -10,7 +10,10 @@
 // Trajectory: the wall scene with a tip force along x swept 0 -> 50 mN -> 0 over --steps steps,
 // every solve warm-started from the previous one; reported as solves per second.
 //
-// Usage: bench_contact [--quick] [--reps N] [--steps N] [--n N]
+// --profile: also the work of each contact solve (Newton iterations, residual evaluations,
+// Jacobian evaluations, continuation steps) and the solver's message (fallbacks).
+//
+// Usage: bench_contact [--quick] [--profile] [--reps N] [--steps N] [--n N]
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -54,14 +57,16 @@ Scene point_scene(const std::string& model, int n) {
 
 int main(int argc, char** argv) {
   int reps = 50, steps = 1000, n = 10;
+  bool profile = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--quick") reps = 3, steps = 20;
+    else if (a == "--profile") profile = true;
     else if (a == "--reps" && i + 1 < argc) reps = std::atoi(argv[++i]);
     else if (a == "--steps" && i + 1 < argc) steps = std::atoi(argv[++i]);
     else if (a == "--n" && i + 1 < argc) n = std::atoi(argv[++i]);
     else {
-      std::fprintf(stderr, "usage: bench_contact [--quick] [--reps N] [--steps N] [--n N]\n");
+      std::fprintf(stderr, "usage: bench_contact [--quick] [--profile] [--reps N] [--steps N] [--n N]\n");
       return 2;
     }
   }
@@ -81,6 +86,13 @@ int main(int argc, char** argv) {
       std::printf("%-6s %-6s %9zu %12.1f %12.1f %8.2f %9d %10d\n", model.c_str(), name.c_str(), tc.last.contacts.size(),
                   tf.median_us, tc.median_us, tc.median_us / tf.median_us, tf.last.summary.iterations,
                   tc.last.summary.iterations);
+      if (profile) {
+        const SolverSummary& w = tc.last.summary;
+        std::printf("  work: %d iterations, %d residuals, %d Jacobians, %d continuation steps; free: %d residuals, "
+                    "%d Jacobians\n  message: %s\n",
+                    w.iterations, w.residual_evaluations, w.jacobian_evaluations, w.continuation_steps,
+                    tf.last.summary.residual_evaluations, tf.last.summary.jacobian_evaluations, w.message.c_str());
+      }
     }
   }
   std::printf("\n# trajectory along the wall: %d warm-started steps, tip force x 0 -> 50 mN -> 0\n", steps);
@@ -91,13 +103,15 @@ int main(int argc, char** argv) {
     auto ws = m->make_workspace();
     Solution last = solve(*m, *ws, s.input(), s.solver);
     ok = ok && last.converged();
-    int iterations = 0, failed = 0;
+    int iterations = 0, failed = 0, residuals = 0, jacobians = 0;
     std::size_t contacts = 0;
     const double us = bench::wall_us([&] {
       for (int k = 1; k <= steps; ++k) {
         s.loads.tip_force = Vec3(0.05 * std::sin(M_PI * k / steps), 0, 0);
         Solution next = solve(*m, *ws, s.input(), s.solver, last.converged() ? &last : nullptr);
         iterations += next.summary.iterations;
+        residuals += next.summary.residual_evaluations;
+        jacobians += next.summary.jacobian_evaluations;
         contacts += next.contacts.size();
         if (!next.converged()) ++failed;
         last = std::move(next);
@@ -106,6 +120,9 @@ int main(int argc, char** argv) {
     ok = ok && failed == 0;
     std::printf("%-6s %10.2f %10.0f %12.2f %10.2f%s\n", model.c_str(), us * 1e-3, steps / (us * 1e-6),
                 double(iterations) / steps, double(contacts) / steps, failed ? "  (some steps failed)" : "");
+    if (profile)
+      std::printf("  work per step: %.2f residuals, %.2f Jacobians\n", double(residuals) / steps,
+                  double(jacobians) / steps);
   }
   return ok ? 0 : 1;
 }

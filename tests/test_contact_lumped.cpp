@@ -6,14 +6,18 @@
 // as n grows on a robot bent against a wall and inside a curved lumen.
 #include <gtest/gtest.h>
 
+#include <Eigen/LU>
+
 #include <cmath>
 #include <cstdio>
 #include <string>
 #include <vector>
 
+#include "lumped/lumped_problem.hpp"
 #include "tdcr/core/contact_geometry.hpp"
 #include "tdcr/core/error.hpp"
 #include "tdcr/core/paper_robot.hpp"
+#include "tdcr/bvp/residual_system.hpp"
 #include "tdcr/models/model_registry.hpp"
 #include "tdcr/models/static_model.hpp"
 
@@ -411,4 +415,104 @@ TEST_P(ContactLumped, ProppedCantileverLargeDeflectionMatchesTheElastica) {
     last = error;
   }
   EXPECT_LT(last, GetParam() == "ccsub" ? 0.015 : 0.01 * linear_error);
+}
+
+// The contact system's own Jacobian (LumpedProblem::jacobian with candidates: the structured
+// differences with the contact forces in the loads, their columns and the complementarity rows,
+// lumped_contact_jacobian.cpp) against central differences of the whole contact residual, at an
+// answer with 2+ contacts and off it: two spheres holding the backbone (curved obstacles: the
+// normals turn with the contact points) under a tip force, and a robot pressing a disk rim
+// on a tilted wall under gravity (a rim point turning in their disks, external loads).
+TEST_P(ContactLumped, ContactJacobianMatchesDifferences) {
+  std::vector<Scene> scenes;
+  {
+    Scene s = robot_scene(GetParam(), 20);
+    s.loads.tip_force = Vec3(0.004, 0.001, 0);
+    const double d = s.robot.backbone.outer_radius + 0.001;
+    s.environment.obstacles = {sphere(Vec3(d * std::sqrt(0.5), d * std::sqrt(0.5), 0.05), 0.001),
+                               sphere(Vec3(d * std::sqrt(0.5), -d * std::sqrt(0.5), 0.05), 0.001)};
+    scenes.push_back(s);
+  }
+  {
+    Scene s = robot_scene(GetParam(), 20);
+    s.actuation.values = {1.5, 0, 0.8, 0};
+    s.loads.tip_force = Vec3(0.01, 0, -0.01);
+    s.loads.gravity = Vec3(0, 0, -9.81);
+    for (Segment& g : s.robot.segments) g.disk_radius = 0.01, g.disk_mass = 2e-4;
+    s.environment.obstacles = {plane(Vec3(0, 0.02, 0), Vec3(0, -1, -0.3))};
+    scenes.push_back(s);
+  }
+  for (std::size_t sc = 0; sc < scenes.size(); ++sc) {
+    SCOPED_TRACE(sc);
+    const Scene& s = scenes[sc];
+    const auto model = make_model(parse_model_kind(GetParam()), s);
+    auto ws = model->make_workspace();
+    const Solution sol = solve(*model, *ws, s.input(), s.solver);
+    ASSERT_TRUE(sol.converged()) << sol.summary.message;
+    ASSERT_GE(sol.contacts.size(), sc == 0 ? 2u : 1u) << sol.summary.message;
+    detail::LumpedProblem& P = *static_cast<detail::LumpedWorkspace&>(*ws).problem;
+    P.bind(s.input());
+    P.set_parameter(1.0);
+    Eigen::VectorXd y0;
+    ASSERT_TRUE(P.warm_guess(sol, y0));  // the answer's contacts become the candidates
+    ASSERT_TRUE(P.has_jacobian());
+    const int n = P.size();
+    ASSERT_EQ(n, static_cast<int>(y0.size()));
+    ASSERT_EQ(n, static_cast<int>(sol.unknowns.size() + sol.contacts.size()));
+    for (double offset : {0.0, 0.01, -0.03}) {
+      SCOPED_TRACE(offset);
+      Eigen::VectorXd y = y0;
+      for (int i = 0; i < n; ++i) y[i] += offset * (i % 2 ? -1.0 : 1.0) * (1.0 + 0.1 * (i % 7));
+      Eigen::VectorXd f(n), fp(n), fm(n);
+      ASSERT_TRUE(P.residual(y, f));
+      Eigen::MatrixXd own(n, n), central(n, n);
+      ASSERT_TRUE(P.jacobian(y, f, own));
+      Eigen::VectorXd yp = y;
+      for (int c = 0; c < n; ++c) {
+        const double h = 1e-7 * std::max(1.0, std::abs(y[c]));
+        yp[c] = y[c] + h;
+        ASSERT_TRUE(P.residual(yp, fp));
+        yp[c] = y[c] - h;
+        ASSERT_TRUE(P.residual(yp, fm));
+        yp[c] = y[c];
+        central.col(c) = (fp - fm) / (2.0 * h);
+      }
+      Eigen::MatrixXd plain(n, n);  // KINSOL's forward differences (same increments as own)
+      ASSERT_TRUE(bvp::finite_difference_jacobian(P, y, f, plain));
+      const double scale = central.cwiseAbs().maxCoeff();
+      ASSERT_GT(scale, 0.0);
+      Eigen::Index r = 0, c = 0;
+      const double err = (own - plain).cwiseAbs().maxCoeff() / scale;
+      const double plain_err = (plain - central).cwiseAbs().maxCoeff() / scale;
+      const double own_err = (own - central).cwiseAbs().maxCoeff(&r, &c) / scale;
+      std::printf("%s scene %zu offset %.2f: %d unknowns, %d contacts: |own - forward| %.2e, |own - central| %.2e, "
+                  "|forward - central| %.2e (of the largest entry)\n",
+                  GetParam().c_str(), sc, offset, n, static_cast<int>(sol.contacts.size()), err, own_err, plain_err);
+      // Central differences (h = 1e-7: Fischer-Burmeister's curvature 1 / b at a closed contact
+      // makes larger steps inaccurate) carry about 1e-8 of the largest entry. The structured
+      // differences take KINSOL's forward increments (PRB's bending-plane angle: 1.5e-4), so the
+      // x columns are as accurate as forward differences of the free-space residual (1e-6 of the
+      // largest entry, or twice the forward differences' error of the whole contact residual,
+      // tests/test_lumped_jacobian.cpp); the force columns are exact. A wrong contact term (a
+      // missing moment arm, a normal not turned) is 1e-3 .. 1 of the largest entry.
+      EXPECT_LT(own_err, std::max(1e-6, 2.0 * plain_err))
+          << "at row " << r << ", column " << c << " of " << n << ": own " << own(r, c) << ", forward " << plain(r, c)
+          << ", central " << central(r, c);
+      // The contact columns and rows alone, relative to their own size.
+      const int nc = static_cast<int>(sol.contacts.size()), nx = n - nc;
+      const double cs = central.rightCols(nc).cwiseAbs().maxCoeff(), rs = central.bottomRows(nc).cwiseAbs().maxCoeff();
+      EXPECT_LT((own - central).rightCols(nc).cwiseAbs().maxCoeff() / cs, 1e-6);
+      const double rows_plain = (plain - central).bottomRows(nc).leftCols(nx).cwiseAbs().maxCoeff() / rs;
+      EXPECT_LT((own - central).bottomRows(nc).leftCols(nx).cwiseAbs().maxCoeff() / rs, std::max(1e-6, 2.0 * rows_plain));
+      // The structured Newton step (block-banded, KLU) solves the same Jacobian.
+      ASSERT_TRUE(P.has_newton_step());
+      ASSERT_TRUE(P.residual(y, f));
+      ASSERT_TRUE(P.setup_newton_step(y, f));
+      Eigen::VectorXd step = -f;
+      ASSERT_TRUE(P.solve_newton_step(step));
+      ASSERT_TRUE(P.jacobian(y, f, own));
+      const Eigen::VectorXd dense = own.partialPivLu().solve(-f);
+      EXPECT_LT((step - dense).norm(), 1e-8 * dense.norm()) << "structured " << step.norm() << ", dense " << dense.norm();
+    }
+  }
 }

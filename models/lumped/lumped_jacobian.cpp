@@ -151,7 +151,14 @@ bool LumpedProblem::structured_jacobian(const Eigen::Ref<const Eigen::VectorXd>&
   // frames_, poses_, centroids_, F_, M_ at x: KINSOL asks for the Jacobian where it has just
   // evaluated the residual, and then they are that evaluation's (the perturbations below restore
   // the frames they move).
-  if (banded_ || !evaluated_at(x)) evaluate_from(x.data(), 1);
+  if (banded_ || !evaluated_at(x)) {
+    if (contacts_.empty()) {
+      evaluate_from(x.data(), 1);
+    } else {
+      read_contact_unknowns(x.data());
+      evaluate(x.data());
+    }
+  }
   if (static_cast<int>(jac_FT_.size()) < J + 2) {
     const std::size_t sz = static_cast<std::size_t>(body_.N) + 2;
     jac_FT_.resize(sz);
@@ -162,12 +169,14 @@ bool LumpedProblem::structured_jacobian(const Eigen::Ref<const Eigen::VectorXd>&
     jac_df_.resize(sz);
     jac_dm_.resize(sz);
   }
-  split_external_loads();
+  split_external_loads();  // contact forces are in the part moving with the frames
   load_sensitivities();
-  jac_dW_.resize(6, n);
+  if (!contacts_.empty()) contact_loads();
+  const int nx = m * J;  // the x_j (the contact force unknowns follow them)
+  jac_dW_.resize(6, nx);
   jac_dW_.leftCols(m).setZero();  // subsegment 1 has no proximal rows
-  jac_diag_.resize(m, n);
-  if (jac_external_) jac_Om_.resize(3, n);
+  jac_diag_.resize(m, nx);
+  if (jac_external_) jac_Om_.resize(3, nx);
   SubsegmentPose g;
   for (int k = 1; k <= J; ++k) {
     const Frame& prev = frames_[k - 1];
@@ -209,6 +218,7 @@ bool LumpedProblem::structured_jacobian(const Eigen::Ref<const Eigen::VectorXd>&
           Mk += (Q * (centroids_[k + 1] - base_k.p)).cross(W);
         }
       }
+      if (!contacts_.empty()) contact_column(k, c, Q, t, fk, base_k1, h, Fk, Mk);
       // Residual of subsegment k.
       const Mat3 Rt = prev.R.transpose();
       const Vec3 Wk = bb ? Vec3(Rt * backbone_weight(k)) : Vec3::Zero();
@@ -217,6 +227,10 @@ bool LumpedProblem::structured_jacobian(const Eigen::Ref<const Eigen::VectorXd>&
       // The change of the distal wrench at disk k-1 (base frame, moment about the origin).
       if (k >= 2) {
         Vec3 Fp = jac_df_[k - 1] + Fk, Mp = jac_dm_[k - 1] + Mk + (fk.p - prev.p).cross(Fk);
+        if (!contacts_.empty()) {
+          Fp += jac_cf_[k - 1];
+          Mp += jac_cm_[k - 1];
+        }
         if (bb) {
           const Vec3 W = backbone_weight(k);
           Fp += W;
@@ -270,6 +284,7 @@ void LumpedProblem::offdiagonal_blocks(Eigen::Ref<Eigen::MatrixXd> Jm) const {
 bool LumpedProblem::jacobian(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& f,
                              Eigen::Ref<Eigen::MatrixXd> Jm) {
   if (!undamped_structured_jacobian(x, f)) return false;
+  if (!contacts_.empty()) return contact_jacobian(Jm);
   const int m = body_.per_subsegment, J = active();
   switch (m) {
     case 3: offdiagonal_blocks<3>(Jm); break;

@@ -236,7 +236,7 @@ bool LumpedProblem::final_residual(const Eigen::VectorXd& y, Eigen::Ref<Eigen::V
 }
 
 bool LumpedProblem::set_damping(const Eigen::Ref<const Eigen::VectorXd>& x_ref, double rate) {
-  if (!has_jacobian()) return false;
+  if (!has_jacobian() || !contacts_.empty()) return false;
   residual_changed();
   damping_ = rate;
   if (rate > 0.0) {

@@ -156,13 +156,13 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   // Structured Newton step (lumped_structured.cpp): the recursive form's Jacobian factors
   // (structured_jacobian) solved as a block-banded system by KLU; the iterations are those of
   // the recursive form at a cost linear in J.
-  bool has_newton_step() const final { return reduced_; }
-  // With contact candidates the dense Jacobian is KINSOL's finite differences (the structured
-  // one knows no contact forces).
+  bool has_newton_step() const final { return reduced_ || (contact_step_ && !contacts_.empty()); }
   // Recursive form without friction: the dense Jacobian by structured forward differences
   // (structured_jacobian, then two small products); also what path following's bordered
-  // systems use in the reduced form.
-  bool has_jacobian() const final { return !banded_ && !body_.statics.friction() && contacts_.empty(); }
+  // systems use in the reduced form. With contact candidates the same differences carry the
+  // contact forces, and their columns and the complementarity rows are added
+  // (lumped_contact_jacobian.cpp).
+  bool has_jacobian() const final { return !banded_ && !body_.statics.friction(); }
   // Its diagonal blocks are forward differences (of first-order accuracy): differential
   // kinematics keeps its own central differences.
   bool jacobian_is_forward_difference() const final { return true; }
@@ -256,6 +256,7 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   bool contact_ = false;  // the bound input has obstacles
   std::vector<Obstacle> obstacles_;
   double contact_stiffness_ = 0.0;  // N/m; 0: rigid
+  bool contact_min_ = false;        // complete()'s first steps: rigid contact as min(a, b) = 0
   double contact_force_scale_ = 1.0, contact_length_scale_ = 1.0;
   std::vector<ContactCandidate> contacts_;
   Eigen::VectorXd contact_x_;      // complete(): the x_j of all N subsegments
@@ -283,9 +284,43 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   bool swept_pairs(const Eigen::VectorXd& from, const Eigen::VectorXd& to);
   Eigen::VectorXd swept_x_;
   bool passed_through_ = false;  // penetrating_pairs() found a finite obstacle penetrated deeply
+  double deepest_ = 0.0;         // and the deepest penetration (m) of its last shape
   // complete(): load the robot from rest with the candidates (load factor 0 -> 1 in steps, new
   // contacts added as they close); y the answer at full load; false if a step could not be solved.
   bool load_with_contacts(Eigen::VectorXd& y, const bvp::NewtonOptions& nopt, SolverSummary& work);
+  // lumped_contact_jacobian.cpp: the contact terms of structured_jacobian(). contact_loads():
+  // the contact wrench on every disk at the evaluated state (jac_cf_, jac_cm_ about O_j), and
+  // per candidate the response of its force (pulled back by the motion: force, moment about the
+  // origin; jac_A_, 6 x 6) and of its gap (jac_a_) to a rigid twist (w, v) of its disk, with
+  // B_j = sum of jac_A_ over the candidates at disks >= j (jac_B_).
+  // contact_column(): column c (of subsegment k, increment h) moves frame k to fk and every
+  // frame distal of it by (Q, t); adds the contact forces of disk k at fk and the change of those
+  // distal of k beyond the rigid motion to the distal wrench (Fk, Mk about fk.p) of disk k, and
+  // keeps the column's twist (jac_Xi_) for the rows distal of k and the gaps.
+  void contact_loads();
+  void contact_column(int k, int c, const Mat3& Q, const Vec3& t, const Frame& fk, const Frame& base_k1, double h,
+                      Vec3& Fk, Vec3& Mk);
+  // jacobian() with candidates: the structured blocks plus the contact terms, dense.
+  bool contact_jacobian(Eigen::Ref<Eigen::MatrixXd> Jm);
+  // d complementarity residual / d gap and / d b of candidate i at the evaluated state.
+  void contact_derivatives(std::size_t i, double& da, double& db) const;
+  // The structured Newton step with candidates: the block-banded system of lumped_structured.cpp
+  // with the twists' partial sums tau_j (6) in place of the rotations', the force unknowns and
+  // the gap rows; fill(put) emits its entries in a fixed order (pattern, values).
+  template <class Put>
+  void contact_structured_entries(Put&& put) const;
+  bool contact_setup_newton_step(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& f);
+  bool contact_solve_newton_step(Eigen::Ref<Eigen::VectorXd> b);
+  Eigen::MatrixXd jac_A_, jac_a_, jac_B_, jac_Xi_;
+  std::vector<Vec3> jac_cf_, jac_cm_;
+  bool contact_step_ = false;  // contact mode solves its Newton steps structured
+  bvp::SparsityPattern cstruct_pattern_;
+  std::vector<int> cstruct_pos_, cstruct_disks_;  // positions; the candidates' disks it was built for
+  std::vector<double> cstruct_values_;
+  Eigen::VectorXd cstruct_rhs_;
+  int cstruct_J_ = -1;
+  bool cstruct_external_ = false;
+  bvp::SparseLu contact_lu_{1e-3};
 
   int stride() const { return banded_ ? body_.per_subsegment + 12 : body_.per_subsegment; }
   bool recursive_residual(const double* x, double* f);

@@ -61,6 +61,7 @@ void LumpedProblem::build_structured_pattern() {
 
 bool LumpedProblem::setup_newton_step(const Eigen::Ref<const Eigen::VectorXd>& x,
                                       const Eigen::Ref<const Eigen::VectorXd>& f) {
+  if (!contacts_.empty()) return contact_setup_newton_step(x, f);
   if (!undamped_structured_jacobian(x, f)) return false;
   if (struct_J_ != active() || struct_external_ != jac_external_) build_structured_pattern();
   const int m = body_.per_subsegment, J = active();
@@ -97,6 +98,7 @@ bool LumpedProblem::setup_newton_step(const Eigen::Ref<const Eigen::VectorXd>& x
 }
 
 bool LumpedProblem::solve_newton_step(Eigen::Ref<Eigen::VectorXd> b) {
+  if (!contacts_.empty()) return contact_solve_newton_step(b);
   const int m = body_.per_subsegment, K = m + 6 + (struct_external_ ? 3 : 0);
   struct_rhs_.setZero();
   for (int j = 0; j < active(); ++j) struct_rhs_.segment(K * j, m) = b.segment(m * j, m);
