@@ -76,7 +76,7 @@ int run_simulate(const std::vector<std::string>& args) {
   Scene scene = load_scene(files[0]);
   if (model_name) scene.model = *model_name;
   validate_scene(scene);
-  if (scene.model == "auto") throw InputError("model", "auto", "simulate needs a named model (ccsub or prb)");
+  if (scene.model == "auto") throw InputError("model", "auto", "simulate needs a named model (ccsub, prb, vc or vcref)");
   if (!scene.dynamics) throw InputError("dynamics", "", "missing: a scene to simulate gives a \"dynamics\" object");
   Timeline timeline = scene.timeline;
   if (timeline.entries.empty()) timeline.entries.push_back(TimelineEntry{0.0, scene.input()});  // constant input

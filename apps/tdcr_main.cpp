@@ -95,10 +95,11 @@ std::string usage() {
          "  standard errors, correlations and residuals, writes the calibrated scene with -o;\n"
          "  exit status 1 if the fit did not converge\n"
          "\n"
-         "tdcr simulate: the robot in motion (CCsub, PRB) from rest on the static answer of the\n"
+         "tdcr simulate: the robot in motion (CCsub, PRB, VC, VCref) from rest on the static answer of the\n"
          "  scene's first \"timeline\" entry, with its \"dynamics\" (docs/dynamics.md); one CSV row per\n"
          "  output step of --dt (default 1/60 s): t, tip_x, tip_y, tip_z, rot_x, rot_y, rot_z\n"
-         "  (rotation vector, rad), status, iterations (CVODE steps), kinetic and potential energy;\n"
+         "  (rotation vector, rad), status, iterations (CVODE steps of CCsub, PRB; Newton iterations of\n"
+         "  VC, VCref), kinetic and potential energy;\n"
          "  exit status 1 if a step failed (its time, residual and iterations on standard error)\n"
          "\n"
          "models:\n" + models +
