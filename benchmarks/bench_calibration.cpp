@@ -23,7 +23,7 @@
 // (warm and cold solves).
 //
 // --quick (the ctest smoke run): n = 5 only, small sets; exits 1 if a fit fails or does not lower
-// its training error.
+// its objective (the robust cost of the training set).
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -200,9 +200,12 @@ int accuracy(const Args& a) {
                 100.0 * before_random.first / kLength, 100.0 * after_random.first / kLength,
                 1e3 * r.summary.after.rms_position, r.summary.iterations, r.summary.forward_solves, r.summary.time_s,
                 "\"" + fitted + "\"", "\"" + nonid + "\"", failures);
-        // The fit must lower the training error; the test error is reported, not checked (a
-        // model can fit the training set's distribution better and extrapolate worse).
-        if (!r.converged() || !(r.summary.after.rms_position < r.summary.before.rms_position)) {
+        // The fit must lower its objective, the robust (Huber) cost of the training set. Not its
+        // RMS: where the error is structure (the helical scenario: residuals 8-22 times the noise,
+        // all in Huber's linear part) the robust fit lowers the sum of |r|, and the RMS may rise.
+        // The test error is reported, not checked (a model can fit the training set's
+        // distribution better and extrapolate worse).
+        if (!r.converged() || !(r.summary.final_cost < r.summary.initial_cost)) {
           std::fprintf(stderr, "\n%s scenario %d n %d: %s, test error %.3g -> %.3g m\n", to_string(kind).c_str(),
                        scenario, n, r.summary.brief_report().c_str(), before.first, after.first);
           ++bad;
