@@ -140,3 +140,15 @@ def test_mp4_with_ffmpeg(tmp_path):
     assert tdcr.plot.main([_write(tmp_path, SCENE), "--animate", str(mp4), "--duration", "0.05",
                            "--dt", "0.01", "--fps", "10"]) == 0
     assert mp4.read_bytes()[4:8] == b"ftyp"
+
+
+def test_through_the_tdcr_program(tmp_path, cli):
+    # `tdcr plot` forwards to python3 -m tdcr.plot (apps/plot_command.cpp): the GIF and a bad --fps.
+    scene, gif = _write(tmp_path, SCENE), tmp_path / "robot.gif"
+    run = subprocess.run([cli, "plot", scene, "--animate", str(gif), "--duration", "0.05", "--dt", "0.01"],
+                         capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    with Image.open(gif) as im:
+        assert im.n_frames == 6
+    run = subprocess.run([cli, "plot", scene, "--animate", str(gif), "--fps", "0"], capture_output=True, text=True)
+    assert run.returncode == 2 and run.stderr == "error: --fps: must be a positive number of frames per second (got 0.0)\n"
