@@ -60,6 +60,7 @@ std::string usage() {
          "       tdcr sweep SWEEP.json -o OUT.csv [--threads N] [--shard i/N]   (tdcr sweep --help)\n"
          "       tdcr sweep-merge OUT.csv SHARD.csv...\n"
          "       tdcr plot SCENE.json [--model NAME[,NAME...]] -o FILE.png|svg   (tdcr plot --help)\n"
+         "       tdcr plot SCENE.json --animate OUT.gif|mp4 [--trajectory TIP.png] [--duration T] [--dt H] [--fps F]\n"
          "       tdcr view SCENE.json [--port P] [--open]   interactive viewer in the browser (tdcr view --help)\n"
          "       tdcr --help | --version\n"
          "\n"

@@ -1,6 +1,8 @@
 """Pictures of solved robots: a 3-D view, a side view and a top view, several models overlaid.
 
     python3 -m tdcr.plot SCENE.json [--model NAME[,NAME...]] -o FILE.png|svg     (also: tdcr plot)
+    python3 -m tdcr.plot SCENE.json --animate OUT.gif|OUT.mp4 [--trajectory TIP.png] [--model NAME]
+                         [--duration T] [--dt H] [--fps F]       (a simulation, docs/dynamics.md)
 
 Draws the backbone, the disks as rings, the tendons through their holes, the base and tip frames
 and the external tip force; axes in mm with equal aspect. From Python:
@@ -10,8 +12,9 @@ and the external tip force; axes in mm with equal aspect. From Python:
     fig = tdcr.plot.figure(scene, [tdcr.solve(scene, model=m) for m in ("cc", "vc")])
     fig.savefig("robot.png")
 
-Exit status of the command: 0 every model converged, 1 some did not (still drawn, dashed),
-2 bad input, 3 matplotlib missing.
+Exit status of the command: 0 every model converged, 1 some did not (still drawn, dashed) or the
+simulation stopped early (the steps up to there drawn), 2 bad input (also: an .mp4 without
+ffmpeg), 3 matplotlib missing.
 """
 
 import argparse
@@ -274,6 +277,22 @@ def _output_problem(path):
     ext = os.path.splitext(path)[1].lower()
     if ext not in (".png", ".svg", ".pdf"):
         return "the file must end in .png, .svg or .pdf"
+    return _folder_problem(path)
+
+
+# Longest simulation drawn: frames are drawn one per output step.
+MAX_FRAMES = 5000
+
+
+def _animation_problem(path):
+    """Why the animation cannot be written to `path` (None if it can)."""
+    ext = os.path.splitext(path)[1].lower()
+    if ext not in (".gif", ".mp4"):
+        return "the file must end in .gif or .mp4"
+    return _folder_problem(path)
+
+
+def _folder_problem(path):
     if os.path.isdir(path):
         return "is a folder, not a picture file"
     folder = os.path.dirname(os.path.abspath(path))
@@ -286,20 +305,231 @@ def _output_problem(path):
     return None
 
 
+def simulate_shapes(scene, duration, dt=1.0 / 60.0, model=None):
+    """tdcr.simulate with the disk positions of every step (`disks`, steps x disks x 3, m)."""
+    return tdcr.simulate(scene, duration, dt=dt, model=model, shapes=True)
+
+
+def _tip_panel(ax, r):
+    t, tip = r["t"], r["tip"] * 1e3
+    for i, (name, color) in enumerate(zip("xyz", ("r", "g", "b"))):
+        ax.plot(t, tip[:, i], color=color, lw=1.5, label="tip %s" % name)
+    ax.set_xlabel("t (s)")
+    ax.set_ylabel("tip position (mm)")
+    ax.set_title("tip trajectory")
+    ax.grid(True, lw=0.3)
+    ax.legend(loc="best", fontsize=8)
+    if len(t) > 1:
+        ax.set_xlim(t[0], t[-1])
+
+
+def trajectory_figure(r, title=None):
+    """A matplotlib Figure of a simulation's tip trajectory: tip x, y, z (mm) against t, and the
+    tip's path in the side and top views. `r` is a dict of tdcr.simulate."""
+    plt = _pyplot()
+    fig = plt.figure(figsize=(12, 4.5))
+    _tip_panel(fig.add_subplot(1, 3, 1), r)
+    tip = r["tip"] * 1e3
+    spread = np.ptp(tip, axis=0) if len(tip) else np.zeros(3)
+    pairs, titles = _views(0 if spread[0] >= spread[1] else 1)
+    names = "xyz"
+    for k, ((i, j), name) in enumerate(zip(pairs, titles)):
+        ax = fig.add_subplot(1, 3, k + 2)
+        ax.plot(tip[:, i], tip[:, j], color="k", lw=1.2)
+        if len(tip):
+            ax.plot(tip[0, i], tip[0, j], "o", color="0.4", label="t = 0")
+            ax.plot(tip[-1, i], tip[-1, j], "s", color="m", label="t = %.3g s" % r["t"][-1])
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.set_xlabel("tip %s (mm)" % names[i])
+        ax.set_ylabel("tip %s (mm)" % names[j])
+        ax.set_title("tip path, " + name)
+        ax.grid(True, lw=0.3)
+        ax.legend(loc="best", fontsize=8)
+    if title:
+        fig.suptitle(title)
+    fig.tight_layout()
+    return fig
+
+
+def write_animation(r, path, fps, title=None, dpi=80):
+    """Write the simulation `r` (tdcr.simulate(..., shapes=True)) as a GIF (PillowWriter) or an
+    MP4 (FFMpegWriter, needs ffmpeg), one frame per step: the backbone through the disk centres in
+    a 3-D, a side and a top view, the time, and the tip trajectory with a cursor at that time."""
+    plt = _pyplot()
+    from matplotlib import animation
+    if path.lower().endswith(".mp4"):
+        writer = animation.FFMpegWriter(fps=fps)
+    else:
+        writer = animation.PillowWriter(fps=fps)
+    disks = r["disks"] * 1e3  # steps x disks x 3, mm
+    t = r["t"]
+    fig = plt.figure(figsize=(12, 7))
+    grid = fig.add_gridspec(2, 3, height_ratios=(3, 2))
+    ax3 = fig.add_subplot(grid[0, 0], projection="3d")
+    pts = disks.reshape(-1, 3)
+    pts = pts[np.all(np.isfinite(pts), axis=1)]
+    pts = np.vstack([np.zeros((1, 3)), pts])
+    spread = np.ptp(pts, axis=0)
+    pairs, view_titles = _views(0 if spread[0] >= spread[1] else 1)
+    ax2 = [fig.add_subplot(grid[0, k + 1]) for k in range(2)]
+    axt = fig.add_subplot(grid[1, :])
+    _tip_panel(axt, r)
+    cursor = axt.axvline(t[0], color="k", lw=1.0)
+    center = 0.5 * (pts.max(axis=0) + pts.min(axis=0))
+    half = 0.55 * max(np.ptp(pts, axis=0).max(), 1e-9)
+    for k, setlim in enumerate((ax3.set_xlim, ax3.set_ylim, ax3.set_zlim)):
+        setlim(center[k] - half, center[k] + half)
+    ax3.set_box_aspect((1, 1, 1))
+    ax3.set_xlabel("x (mm)")
+    ax3.set_ylabel("y (mm)")
+    ax3.set_zlabel("z (mm)")
+    ax3.set_title("3-D view")
+    names = "xyz"
+    for ax, (i, j), vt in zip(ax2, pairs, view_titles):
+        ax.set_xlim(center[i] - half, center[i] + half)
+        ax.set_ylim(center[j] - half, center[j] + half)
+        ax.set_aspect("equal", adjustable="box")
+        ax.set_xlabel("%s (mm)" % names[i])
+        ax.set_ylabel("%s (mm)" % names[j])
+        ax.set_title(vt)
+        ax.grid(True, lw=0.3)
+    # The tip's path so far (thin) under the robot (backbone through the disks, disks as dots).
+    line3, = ax3.plot([], [], [], color="#1f77b4", lw=2.5, marker="o", ms=3)
+    path3, = ax3.plot([], [], [], color="m", lw=0.8)
+    lines2 = [ax.plot([], [], color="#1f77b4", lw=2.5, marker="o", ms=3)[0] for ax in ax2]
+    paths2 = [ax.plot([], [], color="m", lw=0.8)[0] for ax in ax2]
+    label = fig.text(0.01, 0.97, "", fontsize=12, family="monospace", va="top")
+    if title:
+        fig.suptitle(title)
+    fig.tight_layout(rect=(0, 0, 1, 0.95))
+    with writer.saving(fig, path, dpi):
+        for k in range(len(t)):
+            P = disks[k]
+            P = P[np.all(np.isfinite(P), axis=1)]
+            tip = disks[: k + 1, -1]
+            line3.set_data_3d(P[:, 0], P[:, 1], P[:, 2])
+            path3.set_data_3d(tip[:, 0], tip[:, 1], tip[:, 2])
+            for line, tpath, (i, j) in zip(lines2, paths2, pairs):
+                line.set_data(P[:, i], P[:, j])
+                tpath.set_data(tip[:, i], tip[:, j])
+            cursor.set_xdata([t[k], t[k]])
+            label.set_text("t = %.3f s  (%s)" % (t[k], r["status"][k]))
+            writer.grab_frame()
+    plt.close(fig)
+    return len(t)
+
+
+def _scene_problem(path):
+    """(field, value, reason) if the scene file cannot be simulated (None if it can, or if the
+    file is not JSON: the scene reader then names the problem)."""
+    import json
+    try:
+        with open(path) as f:
+            doc = json.load(f)
+    except (OSError, ValueError):
+        return None
+    if not isinstance(doc, dict):
+        return None
+    if "timeline" not in doc:
+        return ("timeline", "missing", "a scene to animate gives a \"timeline\" of inputs over time "
+                "(docs/scene-file.md)")
+    if "dynamics" not in doc:
+        return ("dynamics", "missing", "a scene to animate gives a \"dynamics\" object (docs/dynamics.md)")
+    return None
+
+
+def _run_simulation(args, plt):
+    """`tdcr plot --animate/--trajectory`: the exit status."""
+    if args.animate:
+        problem = _animation_problem(args.animate)
+        if problem:
+            return _bad("--animate", args.animate, problem)
+        if args.animate.lower().endswith(".mp4"):
+            from matplotlib import animation
+            if not animation.FFMpegWriter.isAvailable():
+                return _bad("--animate", args.animate, "an .mp4 needs ffmpeg, which is missing (Debian: apt-get "
+                            "install ffmpeg); write a .gif instead")
+    if args.trajectory:
+        problem = _output_problem(args.trajectory)
+        if problem:
+            return _bad("--trajectory", args.trajectory, problem)
+    if not (args.duration > 0 and math.isfinite(args.duration)):
+        return _bad("--duration", args.duration, "must be a positive number of seconds")
+    if not (args.dt > 0 and math.isfinite(args.dt)):
+        return _bad("--dt", args.dt, "must be a positive number of seconds")
+    if args.fps is not None and not (args.fps > 0 and math.isfinite(args.fps)):
+        return _bad("--fps", args.fps, "must be a positive number of frames per second")
+    frames = math.ceil(args.duration / args.dt - 1e-9) + 1
+    if args.animate and frames > MAX_FRAMES:
+        return _bad("--dt", args.dt, "gives %d frames over --duration %g; at most %d (a larger --dt)"
+                    % (frames, args.duration, MAX_FRAMES))
+    if args.model and "," in args.model:
+        return _bad("--model", args.model, "an animation shows one model")
+    bad = _scene_problem(args.scene)
+    if bad:
+        sys.stderr.write("error: %s: %s (got %s)\n" % (bad[0], bad[2], bad[1]))
+        return 2
+    try:
+        scene = tdcr.Scene.from_file(args.scene)
+        r = simulate_shapes(scene, args.duration, dt=args.dt, model=args.model.strip() if args.model else None)
+    except tdcr.InputError as e:
+        sys.stderr.write("error: %s\n" % e)
+        return 2
+    if not r["completed"]:
+        sys.stderr.write("warning: the simulation stopped early: %s (the steps up to there are drawn)\n"
+                         % r["message"])
+    title = args.title or "%s, %s" % (os.path.basename(args.scene), (args.model or scene.model).strip())
+    fps = args.fps if args.fps is not None else min(50.0, max(1.0, round(1.0 / args.dt)))
+    try:
+        if args.animate:
+            n = write_animation(r, args.animate, fps, title, dpi=args.dpi if args.dpi_given else 80)
+            print("%d frames (t = 0 to %.4g s, %g fps) -> %s" % (n, r["t"][-1], fps, args.animate))
+        if args.trajectory:
+            fig = trajectory_figure(r, title)
+            try:
+                fig.savefig(args.trajectory, dpi=args.dpi)
+            finally:
+                plt.close(fig)
+            print("tip trajectory (t = 0 to %.4g s) -> %s" % (r["t"][-1], args.trajectory))
+    except OSError as e:
+        return _bad("--animate" if args.animate else "--trajectory", args.animate or args.trajectory,
+                    "cannot be written (%s)" % (e.strerror or e))
+    return 0 if r["completed"] else 1
+
+
 def main(argv=None):
-    parser = _Parser(prog="tdcr plot", description="Draw the solved robot of a scene file.")
+    parser = _Parser(prog="tdcr plot", description="Draw the solved robot of a scene file, or animate its "
+                     "simulation (--animate, --trajectory).")
     parser.add_argument("scene", help="scene file (JSON)")
     parser.add_argument("--model", help="model name(s), comma separated (default: the scene's model)")
-    parser.add_argument("-o", "--output", required=True, help="picture file: .png, .svg or .pdf, in a writable folder")
+    parser.add_argument("-o", "--output", help="picture file: .png, .svg or .pdf, in a writable folder")
     parser.add_argument("--title", help="figure title (default: the scene file name)")
-    parser.add_argument("--dpi", type=int, default=120, help="resolution of a .png, 1 to %d (default 120)" % MAX_DPI)
+    parser.add_argument("--dpi", type=int, default=None, help="resolution of a .png, 1 to %d (default 120; "
+                        "an animation's frames 80)" % MAX_DPI)
+    parser.add_argument("--animate", metavar="OUT.gif|OUT.mp4", help="simulate the scene (its timeline and "
+                        "dynamics) and write the motion as a GIF or an MP4 (needs ffmpeg)")
+    parser.add_argument("--trajectory", metavar="OUT.png", help="simulate the scene and draw the tip "
+                        "trajectory over time (.png, .svg or .pdf)")
+    parser.add_argument("--duration", type=float, default=1.0, help="simulated time, s (default 1)")
+    parser.add_argument("--dt", type=float, default=1.0 / 60.0, help="output step = one frame, s (default 1/60)")
+    parser.add_argument("--fps", type=float, default=None, help="frames per second of the animation "
+                        "(default 1/dt, real time, at most 50)")
     args = parser.parse_args(argv)
+    args.dpi_given = args.dpi is not None
+    if args.dpi is None:
+        args.dpi = 120
+    if not (args.output or args.animate or args.trajectory):
+        parser.error("one of -o, --animate or --trajectory is required")
+    if args.output and (args.animate or args.trajectory):
+        parser.error("-o draws the static answer; give it alone or --animate/--trajectory without it")
     # The options first: a bad one is reported before any solve.
-    problem = _output_problem(args.output)
+    problem = _output_problem(args.output) if args.output else None
     if problem:
         return _bad("-o", args.output, problem)
     if not 1 <= args.dpi <= MAX_DPI:
         return _bad("--dpi", args.dpi, "must be a whole number from 1 to %d" % MAX_DPI)
+    if args.animate or args.trajectory:
+        return _run_simulation(args, _pyplot())
     plt = _pyplot()
     try:
         scene = tdcr.Scene.from_file(args.scene)
