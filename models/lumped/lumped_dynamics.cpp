@@ -97,7 +97,9 @@ LumpedDynamics::LumpedDynamics(const LumpedModel& model, const LumpedBody& body,
   schur_A21_.setZero(n_, n_);
   schur_b_.setZero(n_);
   schur_lu_ = Eigen::PartialPivLU<Eigen::MatrixXd>(n_);
-  llt_ = Eigen::LLT<Eigen::MatrixXd>(n_);
+  // Sized by a first factorisation (of the identity): assigning LLT(n_) would copy its
+  // uninitialised status (Eigen 3.4 leaves LLT(Index)'s m_info unset; UBSan names the load).
+  llt_.compute(Eigen::MatrixXd::Identity(n_, n_));
   IC_.assign(N_ + 2, Mat6::Zero());
   Io_.assign(N_ + 1, Mat6::Zero());
   V_.assign(N_ + 1, Vec6::Zero());
