@@ -45,7 +45,8 @@ std::unique_ptr<DynamicsIntegrator> make_dynamics_integrator(const StaticModel& 
 }
 
 SimulationResult simulate(const StaticModel& model, const DynamicsSettings& settings, const Timeline& timeline,
-                          const SimulationOptions& options, const SolverOptions& solver) {
+                          const SimulationOptions& options, const SolverOptions& solver,
+                          const SimulationObserver& observer) {
   options.validate();
   settings.validate();
   timeline.validate(model.robot());
@@ -67,6 +68,7 @@ SimulationResult simulate(const StaticModel& model, const DynamicsSettings& sett
   if (!rest.disk_frames.empty()) s0.tip = rest.disk_frames.back();
   if (!rest.converged()) {
     result.steps.push_back(s0);
+    if (observer) observer(s0, rest);
     std::ostringstream m;
     m << "the static answer at t = 0 did not converge (" << to_string(rest.summary.termination) << ", residual "
       << rest.summary.residual_norm << ", " << rest.summary.iterations << " iterations)";
@@ -80,11 +82,13 @@ SimulationResult simulate(const StaticModel& model, const DynamicsSettings& sett
     // The reported energies of the start come from the integrator's first (empty) advance.
     s0.kinetic_energy = 0.0;
     result.steps.push_back(s0);
+    if (observer) observer(s0, rest);
   }
   for (long k = 1; k <= steps; ++k) {
     const double t = std::min(options.duration, static_cast<double>(k) * options.dt);
     SimulationStep s = integrator->advance(t, timeline);
     result.steps.push_back(s);
+    if (observer) observer(s, integrator->shape());
     if (s.status != TerminationType::Converged) {
       std::ostringstream m;
       m << "step to t = " << t << " s failed at t = " << s.t << " s (" << to_string(s.status) << ", residual "

@@ -124,6 +124,90 @@ EIGEN_ALWAYS_INLINE void spd_block_solve(const Mat3& P, const Mat3& Q, const Mat
   SpdBlocks(P, Q, S).solve(Q, b1, b2, x1, x2);
 }
 
+/// The tendons' sums of the rod's balance at one point, for the linear system in (v_s, u_s).
+/// With t_k = q_k / |q_k|, c_k = T_k / |q_k| and w_k = r_k x t_k: A_k = c_k (I - t_k t_k^T),
+/// A_k [r_k]x = c_k ([r_k]x + t_k w_k^T), [r_k]x A_k [r_k]x = c_k ([r_k]x^2 + w_k w_k^T), [r]x^2 =
+/// r r^T - |r|^2 I: sums of scaled symmetric outer products instead of 3x3 matrix products. G
+/// holds the lower triangle (row by row) of sum c_k g_k g_k^T, g_k = (t_k, w_k); H that of
+/// sum c_k [r_k]x^2. Shared by the statics (rod_rhs) and VC's time steps (models/vc/vc_dynamics_rod.cpp).
+template <typename T>
+struct TendonSums {
+  T G[21], H[6];
+  T sum_c;
+  Vec3T<T> sum_cr;  ///< sum c_k r_k
+  Vec3T<T> suma;    ///< sum a_k
+  Vec3T<T> sumra;   ///< sum r_k x a_k
+
+  /// sum A_k [r_k]x = hat(sum c_k r_k) + sum c_k t_k w_k^T.
+  EIGEN_ALWAYS_INLINE Mat3T<T> sum_a_r() const {
+    Mat3T<T> out = hat(sum_cr);
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) out(i, j) += G[(3 + j) * (4 + j) / 2 + i];
+    return out;
+  }
+  /// K_bt - sum [r_k]x A_k [r_k]x.
+  EIGEN_ALWAYS_INLINE Mat3T<T> k22(const Vec3& kbt) const {
+    Mat3T<T> K;
+    for (int i = 0, e = 0; i < 3; ++i)
+      for (int j = 0; j <= i; ++j, ++e) K(i, j) = K(j, i) = -(H[e] + G[(3 + i) * (4 + i) / 2 + 3 + j]);
+    K.diagonal() += kbt;
+    return K;
+  }
+  /// K_se + sum A_k.
+  EIGEN_ALWAYS_INLINE Mat3T<T> k11(const Vec3& kse) const {
+    Mat3T<T> K;
+    for (int i = 0, e = 0; i < 3; ++i)
+      for (int j = 0; j <= i; ++j, ++e) K(i, j) = K(j, i) = -G[e];
+    K.diagonal().array() += sum_c;
+    K.diagonal() += kse;
+    return K;
+  }
+};
+
+/// The tendon sums of `count` tendons at strains (v, u). Routed: see rod_rhs.
+template <bool Routed, typename T>
+EIGEN_ALWAYS_INLINE void tendon_sums(const TendonLoad* tendons, int count, const Vec3T<T>& v, const Vec3T<T>& u,
+                                     TendonSums<T>& S) {
+  using V3 = Vec3T<T>;
+  for (T& g : S.G) g = T(0.0);
+  for (T& h : S.H) h = T(0.0);
+  S.sum_c = T(0.0);
+  S.sum_cr = V3::Zero();
+  S.suma = V3::Zero();
+  S.sumra = V3::Zero();
+  for (int k = 0; k < count; ++k) {
+    const TendonLoad& t = tendons[k];
+    V3 q = tangent(v, u, t.r);
+    if constexpr (Routed) q += t.dr;
+    const T inv_q = 1.0 / q.norm();
+    const V3 tk = q * inv_q;
+    const T c = t.T * inv_q;
+    const V3 w = -cross(tk, t.r);  // r_k x t_k
+    const T g[6] = {tk.x(), tk.y(), tk.z(), w.x(), w.y(), w.z()};
+    for (int i = 0, e = 0; i < 6; ++i) {
+      const T cg = c * g[i];
+      for (int j = 0; j <= i; ++j, ++e) S.G[e] += cg * g[j];
+    }
+    const Vec3& r = t.r;
+    const double r2 = r.squaredNorm();
+    const double rr[6] = {r.x() * r.x() - r2, r.y() * r.x(), r.y() * r.y() - r2,
+                          r.z() * r.x(), r.z() * r.y(), r.z() * r.z() - r2};
+    for (int e = 0; e < 6; ++e) S.H[e] += c * rr[e];
+    S.sum_c += c;
+    S.sum_cr += c * r;
+    V3 a = c * u.cross(q);  // = A_k (u x q_k): u x q_k is normal to q_k
+    if constexpr (Routed) {
+      const V3 z = cross(u, t.dr) + t.ddr;
+      a += c * (z - tk * tk.dot(z));  // A_k z
+    }
+    S.suma += a;
+    if constexpr (std::is_same_v<T, double>)
+      S.sumra += r.cross(a);
+    else
+      S.sumra -= cross(a, r);  // r_k x a_k
+  }
+}
+
 /// cosserat::rod_rhs for one combination of the section's shear/extension and gravity flags.
 /// Routed: the tendons' offsets vary along s (TendonLoad::dr, ddr, evaluated by the caller at
 /// s): the general fully constrained path of Rucker & Webster 2011, tangent q_k = v + u x r_k +
@@ -155,68 +239,16 @@ EIGEN_ALWAYS_INLINE StrainsT<T> rod_rhs(const Section& S, const TendonLoad* tend
     dm_out = -dp.cross(n);
     return {u, v};
   }
-  // With t_k = q_k / |q_k|, c_k = T_k / |q_k| and w_k = r_k x t_k: A_k = c_k (I - t_k t_k^T),
-  // A_k [r_k]x = c_k ([r_k]x + t_k w_k^T), [r_k]x A_k [r_k]x = c_k ([r_k]x^2 + w_k w_k^T), [r]x^2 =
-  // r r^T - |r|^2 I: sums of scaled symmetric outer products instead of 3x3 matrix products. G
-  // holds the lower triangle (row by row) of sum c_k g_k g_k^T, g_k = (t_k, w_k); H that of
-  // sum c_k [r_k]x^2.
-  T G[21], H[6];
-  for (T& g : G) g = T(0.0);
-  for (T& h : H) h = T(0.0);
-  T sum_c(0.0);
-  V3 sum_cr = V3::Zero();  // sum c_k r_k
-  V3 suma = V3::Zero();    // sum a_k
-  V3 sumra = V3::Zero();   // sum r_k x a_k
-  for (int k = 0; k < count; ++k) {
-    const TendonLoad& t = tendons[k];
-    V3 q = tangent(v, u, t.r);
-    if constexpr (Routed) q += t.dr;
-    const T inv_q = 1.0 / q.norm();
-    const V3 tk = q * inv_q;
-    const T c = t.T * inv_q;
-    const V3 w = -cross(tk, t.r);  // r_k x t_k
-    const T g[6] = {tk.x(), tk.y(), tk.z(), w.x(), w.y(), w.z()};
-    for (int i = 0, e = 0; i < 6; ++i) {
-      const T cg = c * g[i];
-      for (int j = 0; j <= i; ++j, ++e) G[e] += cg * g[j];
-    }
-    const Vec3& r = t.r;
-    const double r2 = r.squaredNorm();
-    const double rr[6] = {r.x() * r.x() - r2, r.y() * r.x(), r.y() * r.y() - r2,
-                          r.z() * r.x(), r.z() * r.y(), r.z() * r.z() - r2};
-    for (int e = 0; e < 6; ++e) H[e] += c * rr[e];
-    sum_c += c;
-    sum_cr += c * r;
-    V3 a = c * u.cross(q);  // = A_k (u x q_k): u x q_k is normal to q_k
-    if constexpr (Routed) {
-      const V3 z = cross(u, t.dr) + t.ddr;
-      a += c * (z - tk * tk.dot(z));  // A_k z
-    }
-    suma += a;
-    if constexpr (std::is_same_v<T, double>)
-      sumra += r.cross(a);
-    else
-      sumra -= cross(a, r);  // r_k x a_k
-  }
-  // G's blocks: t t^T rows/columns 0-2 (entries 0-5), w t^T rows 3-5 x columns 0-2, w w^T rows and
-  // columns 3-5.
-  M3 sumAr = hat(sum_cr);  // sum A_k [r_k]x = hat(sum c_k r_k) + sum c_k t_k w_k^T
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) sumAr(i, j) += G[(3 + j) * (4 + j) / 2 + i];
-  M3 K22;  // Kbt - sum [r_k]x A_k [r_k]x
-  for (int i = 0, e = 0; i < 3; ++i)
-    for (int j = 0; j <= i; ++j, ++e) K22(i, j) = K22(j, i) = -(H[e] + G[(3 + i) * (4 + i) / 2 + 3 + j]);
-  K22.diagonal() += S.kbt;
+  TendonSums<T> sums;
+  tendon_sums<Routed>(tendons, count, v, u, sums);
+  const M3 sumAr = sums.sum_a_r();
+  const M3 K22 = sums.k22(S.kbt);
   V3 fe_b = V3::Zero();
   if constexpr (Gravity) fe_b = R.transpose() * S.weight;
-  const V3 b_m = -u.cross(mb) - v.cross(nb) - sumra;
+  const V3 b_m = -u.cross(mb) - v.cross(nb) - sums.sumra;
   if constexpr (Shear) {
-    M3 K11;  // Kse + sum A_k
-    for (int i = 0, e = 0; i < 3; ++i)
-      for (int j = 0; j <= i; ++j, ++e) K11(i, j) = K11(j, i) = -G[e];
-    K11.diagonal().array() += sum_c;
-    K11.diagonal() += S.kse;
-    const V3 b_n = -u.cross(nb) - suma - fe_b;
+    const M3 K11 = sums.k11(S.kse);
+    const V3 b_n = -u.cross(nb) - sums.suma - fe_b;
     V3 vs, us;
     spd_block_solve(K11, M3(-sumAr), K22, b_n, b_m, vs, us);
     dn_out = R * (S.kse.cwiseProduct(vs) + u.cross(nb));
@@ -224,7 +256,7 @@ EIGEN_ALWAYS_INLINE StrainsT<T> rod_rhs(const Section& S, const TendonLoad* tend
   } else {
     const V3 us = spd_solve(K22, b_m);
     // Body-frame tendon force sum a_k + A_k (u_s x r_k) = sum a_k - (sum A_k [r_k]x) u_s.
-    const V3 fb = suma - sumAr * us;
+    const V3 fb = sums.suma - sumAr * us;
     V3 dn = -(R * fb);
     if constexpr (Gravity) dn -= S.weight;
     dn_out = dn;

@@ -63,58 +63,23 @@ void rhs(const StepSection& X, const cosserat::TendonLoad* tendons, int count, b
     if (shear) vs = X.Seff.inv_kse.cwiseProduct(dnb - u.cross(nb) - X.bse.cwiseProduct(vhs));
     us = X.Seff.inv_kbt.cwiseProduct(dmb - u.cross(mb) - X.bbt.cwiseProduct(uhs));
   } else {
-    // The tendon sums of cosserat::detail::rod_rhs (see there for the algebra).
-    double G[21] = {}, H[6] = {};
-    double sum_c = 0.0;
-    Vec3 sum_cr = Vec3::Zero(), suma = Vec3::Zero(), sumra = Vec3::Zero();
-    for (int k = 0; k < count; ++k) {
-      const cosserat::TendonLoad& t = tendons[k];
-      Vec3 qk = v + u.cross(t.r);
-      if (routed) qk += t.dr;
-      const double inv_q = 1.0 / qk.norm();
-      const Vec3 tk = qk * inv_q;
-      const double c = t.T * inv_q;
-      const Vec3 wk = t.r.cross(tk);
-      const double g[6] = {tk.x(), tk.y(), tk.z(), wk.x(), wk.y(), wk.z()};
-      for (int i = 0, e = 0; i < 6; ++i) {
-        const double cg = c * g[i];
-        for (int j = 0; j <= i; ++j, ++e) G[e] += cg * g[j];
-      }
-      const Vec3& r = t.r;
-      const double r2 = r.squaredNorm();
-      const double rr[6] = {r.x() * r.x() - r2, r.y() * r.x(), r.y() * r.y() - r2,
-                            r.z() * r.x(),      r.z() * r.y(), r.z() * r.z() - r2};
-      for (int e = 0; e < 6; ++e) H[e] += c * rr[e];
-      sum_c += c;
-      sum_cr += c * r;
-      Vec3 a = c * u.cross(qk);
-      if (routed) {
-        const Vec3 z = u.cross(t.dr) + t.ddr;
-        a += c * (z - tk * tk.dot(z));
-      }
-      suma += a;
-      sumra += r.cross(a);
-    }
-    Mat3 sumAr = lie::hat(sum_cr);
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j) sumAr(i, j) += G[(3 + j) * (4 + j) / 2 + i];
-    Mat3 K22;
-    for (int i = 0, e = 0; i < 3; ++i)
-      for (int j = 0; j <= i; ++j, ++e) K22(i, j) = K22(j, i) = -(H[e] + G[(3 + i) * (4 + i) / 2 + 3 + j]);
-    K22.diagonal() += X.Seff.kbt;
-    const Vec3 b_m = -u.cross(mb) - v.cross(nb) - sumra + in_m - X.bbt.cwiseProduct(uhs);
+    // The tendon sums of the statics (cosserat::detail::tendon_sums, see there for the algebra).
+    cosserat::detail::TendonSums<double> sums;
+    if (routed)
+      cosserat::detail::tendon_sums<true>(tendons, count, v, u, sums);
+    else
+      cosserat::detail::tendon_sums<false>(tendons, count, v, u, sums);
+    const Mat3 sumAr = sums.sum_a_r();
+    const Mat3 K22 = sums.k22(X.Seff.kbt);
+    const Vec3 b_m = -u.cross(mb) - v.cross(nb) - sums.sumra + in_m - X.bbt.cwiseProduct(uhs);
     if (shear) {
-      Mat3 K11;
-      for (int i = 0, e = 0; i < 3; ++i)
-        for (int j = 0; j <= i; ++j, ++e) K11(i, j) = K11(j, i) = -G[e];
-      K11.diagonal().array() += sum_c;
-      K11.diagonal() += X.Seff.kse;
-      const Vec3 b_n = -u.cross(nb) - suma - fe + in_n - X.bse.cwiseProduct(vhs);
+      const Mat3 K11 = sums.k11(X.Seff.kse);
+      const Vec3 b_n = -u.cross(nb) - sums.suma - fe + in_n - X.bse.cwiseProduct(vhs);
       spd_block_solve(K11, Mat3(-sumAr), K22, b_n, b_m, vs, us);
       out3(12) = R * (X.Seff.kse.cwiseProduct(vs) + X.bse.cwiseProduct(vhs) + u.cross(nb));
     } else {
       us = spd_solve(K22, b_m);
-      const Vec3 fb = suma - sumAr * us;  // tendon force, body frame
+      const Vec3 fb = sums.suma - sumAr * us;  // tendon force, body frame
       out3(12) = R * (in_n - fe - fb);
     }
     out3(15) = R * (X.Seff.kbt.cwiseProduct(us) + X.bbt.cwiseProduct(uhs) + u.cross(mb));

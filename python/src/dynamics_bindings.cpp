@@ -4,11 +4,9 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
-#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <optional>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -25,64 +23,12 @@ namespace tdcr_python {
 
 namespace {
 
-/// tdcr::simulate (models/dynamics/simulate.cpp), step for step the same, that also keeps the disk
-/// positions of each output step (the integrator's shape()): what `tdcr plot --animate` draws.
-/// Kept here, not in SimulationStep, so the CLI's CSV run and the C++ API pay nothing for it.
-tdcr::SimulationResult simulate_with_shapes(const tdcr::StaticModel& model, const tdcr::DynamicsSettings& settings,
-                                            const tdcr::Timeline& timeline, const tdcr::SimulationOptions& options,
-                                            const tdcr::SolverOptions& solver,
-                                            std::vector<std::vector<tdcr::Vec3>>& disks) {
-  options.validate();
-  settings.validate();
-  timeline.validate(model.robot());
-  for (std::size_t i = 0; i < timeline.entries.size(); ++i)
-    if (timeline.entries[i].input.actuation.kind != tdcr::Actuation::Kind::Tensions)
-      throw tdcr::InputError("timeline[" + std::to_string(i) + "].actuation", "displacements",
-                             "simulation takes tension input only so far (displacement input and tendon slack are "
-                             "not supported yet)");
-  auto positions = [](const tdcr::Solution& s) {
-    std::vector<tdcr::Vec3> p;
-    p.reserve(s.disk_frames.size());
-    for (const tdcr::Frame& f : s.disk_frames) p.push_back(f.p);
-    return p;
-  };
-  std::unique_ptr<tdcr::DynamicsIntegrator> integrator =
-      tdcr::make_dynamics_integrator(model, settings, options.dt, solver);
-  tdcr::SimulationResult result;
-  const tdcr::ModelInput first = timeline.at(0.0);
-  std::unique_ptr<tdcr::ModelWorkspace> ws = model.make_workspace();
-  const tdcr::Solution rest = tdcr::solve(model, *ws, first, solver);
-  tdcr::SimulationStep s0;
-  s0.status = rest.summary.termination;
-  s0.iterations = rest.summary.iterations;
-  s0.residual = rest.summary.residual_norm;
-  if (!rest.disk_frames.empty()) s0.tip = rest.disk_frames.back();
-  result.steps.push_back(s0);
-  disks.push_back(positions(rest));
-  if (!rest.converged()) {
-    std::ostringstream msg;
-    msg << "the static answer at t = 0 did not converge (" << tdcr::to_string(rest.summary.termination)
-        << ", residual " << rest.summary.residual_norm << ", " << rest.summary.iterations << " iterations)";
-    result.message = msg.str();
-    return result;
-  }
-  integrator->initialize(rest, first);
-  const long steps = std::lround(std::ceil(options.duration / options.dt - 1e-9));
-  for (long k = 1; k <= steps; ++k) {
-    const double t = std::min(options.duration, static_cast<double>(k) * options.dt);
-    tdcr::SimulationStep s = integrator->advance(t, timeline);
-    result.steps.push_back(s);
-    disks.push_back(positions(integrator->shape()));
-    if (s.status != tdcr::TerminationType::Converged) {
-      std::ostringstream msg;
-      msg << "step to t = " << t << " s failed at t = " << s.t << " s (" << tdcr::to_string(s.status)
-          << ", residual " << s.residual << ", " << s.iterations << " iterations)";
-      result.message = msg.str();
-      return result;
-    }
-  }
-  result.completed = true;
-  return result;
+/// The disk positions of a shape: what `tdcr plot --animate` draws of each step.
+std::vector<tdcr::Vec3> disk_positions(const tdcr::Solution& s) {
+  std::vector<tdcr::Vec3> p;
+  p.reserve(s.disk_frames.size());
+  for (const tdcr::Frame& f : s.disk_frames) p.push_back(f.p);
+  return p;
 }
 
 }  // namespace
@@ -106,10 +52,12 @@ void bind_dynamics(py::module_& m) {
         std::vector<std::vector<tdcr::Vec3>> disks;  // shapes=True: the disk positions of each step
         {
           py::gil_scoped_release release;
+          tdcr::SimulationObserver keep_shapes;
           if (shapes)
-            r = simulate_with_shapes(*m, *sc.dynamics, timeline, options, sc.solver, disks);
-          else
-            r = tdcr::simulate(*m, *sc.dynamics, timeline, options, sc.solver);
+            keep_shapes = [&disks](const tdcr::SimulationStep&, const tdcr::Solution& shape) {
+              disks.push_back(disk_positions(shape));
+            };
+          r = tdcr::simulate(*m, *sc.dynamics, timeline, options, sc.solver, keep_shapes);
         }
         const auto n = static_cast<py::ssize_t>(r.steps.size());
         py::array_t<double> t(n), tip({n, py::ssize_t{3}}), rot({n, py::ssize_t{3}}), ke(n), pe(n);

@@ -18,6 +18,7 @@
 /// Python's `tdcr.simulate`) calls.
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -80,10 +81,16 @@ struct SimulationResult {
   std::string message;     ///< Why it stopped early, with the time, residual and iterations.
 };
 
+/// @brief What `simulate` shows an observer after every reported step: the step and the shape
+/// it reports (at t = 0 the static answer; then DynamicsIntegrator::shape()). The shapes are
+/// made only for an observer: a simulation without one pays nothing for them.
+using SimulationObserver = std::function<void(const SimulationStep& step, const Solution& shape)>;
+
 /// @brief Simulate `model` from rest on the static answer of the timeline's first input
-/// (solved with `solver`), to `options.duration`.
+/// (solved with `solver`), to `options.duration`; `observer`, if given, sees every reported step
+/// with its shape (Python's `tdcr.simulate(..., shapes=True)` keeps the disk positions).
 SimulationResult simulate(const StaticModel& model, const DynamicsSettings& settings,
                           const Timeline& timeline, const SimulationOptions& options,
-                          const SolverOptions& solver);
+                          const SolverOptions& solver, const SimulationObserver& observer = {});
 
 }  // namespace tdcr
