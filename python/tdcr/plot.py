@@ -150,6 +150,21 @@ def obstacle_curves(obstacle, near, size):
     return []
 
 
+def _cube_3d(ax3, pts):
+    """Equal aspect in mm: a cube around the points `pts`, and the 3-D view's labels. Returns the
+    cube's centre and half side (the 2-D views use the same)."""
+    center = 0.5 * (pts.max(axis=0) + pts.min(axis=0))
+    half = 0.55 * max(np.ptp(pts, axis=0).max(), 1e-9)
+    for k, setlim in enumerate((ax3.set_xlim, ax3.set_ylim, ax3.set_zlim)):
+        setlim(center[k] - half, center[k] + half)
+    ax3.set_box_aspect((1, 1, 1))
+    ax3.set_xlabel("x (mm)")
+    ax3.set_ylabel("y (mm)")
+    ax3.set_zlabel("z (mm)")
+    ax3.set_title("3-D view")
+    return center, half
+
+
 def figure(scene, solutions, title=None):
     """A matplotlib Figure of `solutions` (one per model) of `scene`'s robot."""
     plt = _pyplot()
@@ -229,15 +244,7 @@ def figure(scene, solutions, title=None):
 
     # Equal aspect in mm: a cube around everything drawn.
     allpts = np.vstack([pts] + [g["rings"][k] for _, g in geoms if g is not None for k in range(len(g["rings"]))])
-    center = 0.5 * (allpts.max(axis=0) + allpts.min(axis=0))
-    half = 0.55 * max(np.ptp(allpts, axis=0).max(), 1e-9)
-    for k, setlim in enumerate((ax3.set_xlim, ax3.set_ylim, ax3.set_zlim)):
-        setlim(center[k] - half, center[k] + half)
-    ax3.set_box_aspect((1, 1, 1))
-    ax3.set_xlabel("x (mm)")
-    ax3.set_ylabel("y (mm)")
-    ax3.set_zlabel("z (mm)")
-    ax3.set_title("3-D view")
+    center, half = _cube_3d(ax3, allpts)
     names = "xyz"
     for ax, (i, j), t in zip(ax2, pairs, view_titles):
         ax.set_aspect("equal", adjustable="datalim")
@@ -375,15 +382,7 @@ def write_animation(r, path, fps, title=None, dpi=80):
     axt = fig.add_subplot(grid[1, :])
     _tip_panel(axt, r)
     cursor = axt.axvline(t[0], color="k", lw=1.0)
-    center = 0.5 * (pts.max(axis=0) + pts.min(axis=0))
-    half = 0.55 * max(np.ptp(pts, axis=0).max(), 1e-9)
-    for k, setlim in enumerate((ax3.set_xlim, ax3.set_ylim, ax3.set_zlim)):
-        setlim(center[k] - half, center[k] + half)
-    ax3.set_box_aspect((1, 1, 1))
-    ax3.set_xlabel("x (mm)")
-    ax3.set_ylabel("y (mm)")
-    ax3.set_zlabel("z (mm)")
-    ax3.set_title("3-D view")
+    center, half = _cube_3d(ax3, pts)
     names = "xyz"
     for ax, (i, j), vt in zip(ax2, pairs, view_titles):
         ax.set_xlim(center[i] - half, center[i] + half)
