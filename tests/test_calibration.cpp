@@ -14,6 +14,8 @@
 #include "tdcr/models/calibration.hpp"
 #include "tdcr/models/static_model.hpp"
 
+#include "calibration_scenes.hpp"
+
 namespace {
 
 using tdcr::CalibrationData;
@@ -23,21 +25,8 @@ using tdcr::ModelKind;
 using tdcr::Scene;
 using tdcr::Vec3;
 
-// The paper robot (n disks per segment) with tension input, scene-file defaults otherwise.
-Scene paper_scene(int n) {
-  Scene s = tdcr::paper::scene(n, 1, "vc");
-  s.effects = tdcr::paper::effects();
-  return s;
-}
-
-// The forward solves the calibration makes (calibration.hpp): tight Newton, RK4 on a fixed mesh.
-tdcr::SolverOptions data_solver(const Scene& s) {
-  tdcr::SolverOptions o = s.solver;
-  o.function_tolerance = 1e-12;
-  o.integrator = tdcr::IntegratorKind::FixedStepRK4;
-  o.stability = tdcr::StabilityCheck::Never;
-  return o;
-}
+using tdcr_test::data_solver;
+using tdcr_test::paper_scene;
 
 // `count` measurements of `truth` solved by `kind`: random tensions up to 40 % of T_M on each
 // tendon and, with `force`, a random transverse tip force up to `force` N; tip position and

@@ -15,6 +15,8 @@
 #include "tdcr/models/calibration.hpp"
 #include "tdcr/models/static_model.hpp"
 
+#include "calibration_scenes.hpp"
+
 namespace {
 
 using tdcr::CalibrationData;
@@ -24,20 +26,8 @@ using tdcr::ModelKind;
 using tdcr::Scene;
 using tdcr::Vec3;
 
-Scene paper_scene(int n) {
-  Scene s = tdcr::paper::scene(n, 1, "vc");
-  s.effects = tdcr::paper::effects();
-  return s;
-}
-
-// The forward solves the calibration makes: tight Newton, RK4 on a fixed mesh.
-tdcr::SolverOptions data_solver(const Scene& s) {
-  tdcr::SolverOptions o = s.solver;
-  o.function_tolerance = 1e-12;
-  o.integrator = tdcr::IntegratorKind::FixedStepRK4;
-  o.stability = tdcr::StabilityCheck::Never;
-  return o;
-}
+using tdcr_test::data_solver;
+using tdcr_test::paper_scene;
 
 // Random inputs: tensions up to 40 % of T_M, a transverse tip force up to `force` N and a tip
 // moment about the base's z axis up to `moment` N m.
