@@ -58,8 +58,10 @@ std::map<std::pair<std::string, int>, double> paper_code_times() {
 // (InputError, e.g. CC with a tip force).
 class Runner {
  public:
-  // The paper's effects by default (its Eq. 58 at the disks): scenarios 1-2 reproduce its case study.
-  Runner(ModelKind kind, const Robot& robot, const Effects& effects = paper::effects()) {
+  // The paper's effects by default (its Eq. 58 at the disks, its inextensible CCsub and PRB):
+  // scenarios 1-2 reproduce its case study.
+  Runner(ModelKind kind, const Robot& robot) : Runner(kind, robot, paper::effects(to_string(kind))) {}
+  Runner(ModelKind kind, const Robot& robot, const Effects& effects) {
     try {
       model_ = make_model(kind, robot, effects);
       ws_ = model_->make_workspace();

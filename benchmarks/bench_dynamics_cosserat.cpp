@@ -174,7 +174,7 @@ int main(int argc, char** argv) {
 
   // The same step by multiple shooting: VC (the formulation for short time steps), and VCref
   // (the paper's disk force, Eq. 58 removed; the paper's robot with its effects).
-  const std::unique_ptr<StaticModel> vcref = make_model(ModelKind::VCref, robot, paper::effects());
+  const std::unique_ptr<StaticModel> vcref = make_model(ModelKind::VCref, robot, paper::effects("vcref"));
   struct Other {
     const char* name;
     const StaticModel* model;

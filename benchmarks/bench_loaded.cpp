@@ -242,7 +242,7 @@ void loaded(const Settings& cfg, std::map<ModelKind, Candidate>& matched, const 
     // One model per case, built once; the reference on the branch of the default cold solve.
     std::vector<CaseModel> cm(cases.size());
     for (size_t i = 0; i < cases.size(); ++i) {
-      cm[i].model = make_model(kind, paper::robot(cases[i].n), paper::effects());
+      cm[i].model = make_model(kind, paper::robot(cases[i].n), paper::effects(to_string(kind)));
       cm[i].ws = cm[i].model->make_workspace();
       cm[i].aux = cm[i].model->make_workspace();
       const Solution first = solve(*cm[i].model, *cm[i].aux, cases[i].input, SolverOptions());
@@ -251,7 +251,7 @@ void loaded(const Settings& cfg, std::map<ModelKind, Candidate>& matched, const 
       if (kind == ModelKind::VC) {
         VcOptions paper_form;
         paper_form.kink_forces = false;
-        const VcModel vc(paper::robot(cases[i].n), paper::effects(), paper_form);
+        const VcModel vc(paper::robot(cases[i].n), paper::effects("vc"), paper_form);
         auto ws = vc.make_workspace();
         const Solution s = solve(vc, *ws, cases[i].input, tight_options(kind));
         if (s.converged()) cm[i].paper_form_tip = s.tip().p;
@@ -351,7 +351,7 @@ void trajectory(const Settings& cfg, const std::map<ModelKind, Candidate>& match
   // solved once, warm-started from the answers of its first run (the defaults), and shared by
   // its other runs: a candidate that lands on another branch shows as a large error.
   auto run = [&](ModelKind kind, const SolverOptions& options, std::map<int, Solution>& refs) {
-    auto model = make_model(kind, robot, paper::effects());
+    auto model = make_model(kind, robot, paper::effects(to_string(kind)));
     auto ws = model->make_workspace();
     std::optional<Solution> prev;
     std::map<int, Solution> kept;

@@ -12,7 +12,7 @@ namespace tdcr_test {
 // The paper robot (n disks per segment) with tension input, scene-file defaults otherwise.
 inline tdcr::Scene paper_scene(int n) {
   tdcr::Scene s = tdcr::paper::scene(n, 1, "vc");
-  s.effects = tdcr::paper::effects();
+  s.effects = tdcr::paper::effects("vc");  // every model with shear and extension
   return s;
 }
 

@@ -10,9 +10,10 @@
 // geometry warning (a shape the robot can take). Criterion for each displacement solve, cold,
 // default options: converged; the tip within 1e-9 m of the tension solve's; every tension within
 // 1e-8 T_M of the tension solve's, T_M the tension of Eq. 55 at the scene's stiffness, except
-// along co-contraction the displacements barely decide: with an inextensible backbone (CCsub,
-// PRB) pulling both tendons of a pair harder moves their displacements by 1e-11 to 1e-7 m per
-// newton (against 1e-3 m per newton for one of them), so the displacement solve's tolerance
+// along co-contraction the displacements barely decide: pulling both tendons of a pair harder
+// moves their displacements only by the backbone's compression, L / EA ~ 2e-6 m per newton on
+// the paper robot (an inextensible backbone: 1e-11 to 1e-7 m per newton through the loads'
+// lever; against 1e-3 m per newton for one of them), so the displacement solve's tolerance
 // decides that common tension only to tolerance / sensitivity. The test measures it on the scene
 // (round_trip: the singular directions of the tension solve's dd/dT) and allows it.
 // Where the tension solve's answer has a tendon near its geometric limit (curvature x offset
@@ -279,37 +280,15 @@ struct Listed {
   bool mixed;
   const char* why;
 };
-// CCsub's backbone is inextensible and its tendons pass straight chords, so co-contraction of a
-// pair moves the pulls only through the tip force's lever on the bent shape; under the small tip
-// forces of these scenes (0.01-0.06 N, except s1012 0.48 N and s1054 1.5 N) a pair at lower
-// co-tension, with one tendon slack or nearly, meets the same pulls (a slack path at most as long
-// as commanded).
-// The tension solve carried co-tension; the displacement solve, started at the linear guess's
-// tensions (no co-tension), reaches less (tendon_slack names the slack ones).
-const std::vector<Listed> kOtherEquilibria = {
-    {"s1012", ModelKind::CCsub, false, "T (3.12, 9.47, 6.12, 1.57) N back as (0, 6.45, 4.55, 0), tip 0.36 mm away"},
-    {"s1022", ModelKind::CCsub, false, "T (1.05, 6.77, 13.31, 0) N back as (0, 5.72, 13.31, 0), tip 14 um away"},
-    {"s1040", ModelKind::CCsub, false, "T (33.94, 9.15, 24.88, 0) N back as (25.01, 0.19, 24.88, 0), tip 15 um away"},
-    {"s1054", ModelKind::CCsub, false, "T (0, 22.44, 5.10, 10.03) N back as (0, 21.05, 0, 4.94), tip 1 mm away"},
-    {"d23(s2092, friction)", ModelKind::CCsub, true, "T1 and T3 by displacement, back with T1 slack, tip 0.12 m away"},
-};
+// None today: with shear and extension (the default) CCsub's and PRB's subsegments shorten under
+// the tendons' compression as VC's rod does, so the displacements decide an antagonistic pair's
+// co-tension (its common pull shortens the backbone); before, CCsub reached another equilibrium
+// of the same pulls on s1012, s1022, s1040, s1054 and d23 and failed on s1016, s1018, s1037,
+// s1048.
+const std::vector<Listed> kOtherEquilibria = {};
 // Pairs that fail today for the reason given (the test asserts that they still fail: remove a
 // pair once it passes).
-const std::vector<Listed> kKnownFailures = {
-    // CCsub, nearly unloaded (|F| 0.01-0.06 N) with co-tension on both pairs: where the least-
-    // tension answer leaves a tendon's path too long and it is made taut again, the co-tension
-    // that tendon needs is decided by the pulls to 1e-7 of a differential pull; Newton, also
-    // through the taut tendons' compliance taken to zero, runs to several times the tension
-    // solve's tensions and stops (s1037: max_iterations) or the slack and taut tendons cycle
-    // (s1048). Reported as failed, never as converged.
-    {"s1037", ModelKind::CCsub, false, "no convergence (co-tension decided to 1e-7, 0.06 N tip force)"},
-    {"s1048", ModelKind::CCsub, false, "slack and taut tendons cycling (0.03 N tip force)"},
-    // With the disk force kept (the default since the tendon force at a disk was derived,
-    // docs/models.md) two more: s1016 (with Eq. 58 it reached another equilibrium, T (0, 7.36,
-    // 6.22, 0) N for (0.66, 8.01, 6.22, 0), tip 7 um away) and s1018 cycle too.
-    {"s1016", ModelKind::CCsub, false, "slack and taut tendons cycling (disk force kept)"},
-    {"s1018", ModelKind::CCsub, false, "slack and taut tendons cycling (disk force kept)"},
-};
+const std::vector<Listed> kKnownFailures = {};
 
 const Listed* listed(const std::vector<Listed>& list, const std::string& scene, ModelKind model, bool mixed) {
   for (const Listed& l : list)
@@ -334,6 +313,7 @@ TEST_P(DisplacementRoundTrip, GivesTheTensionsAndTheTipBack) {
       }
       if (const Listed* l = listed(kOtherEquilibria, s.name, kind, mixed)) {
         EXPECT_TRUE(o.equilibrium) << l->why << "; " << o.message;
+        EXPECT_FALSE(back) << "listed as another equilibrium (" << l->why << ") but gives the tensions back: remove it";
         continue;
       }
       // At the edge of feasibility the commanded pulls, brought on from rest, may run a tendon

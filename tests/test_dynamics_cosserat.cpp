@@ -157,7 +157,7 @@ TEST(DynamicsCosserat, DampedStepWithWeightsSettlesOnTheStaticAnswer) {
 
 // VCref with the paper's disk force (Eq. 58: the pass-through force's normal component removed).
 TEST(DynamicsCosserat, DampedStepSettlesOnVcrefsStaticAnswer) {
-  settles_on_static_answer(ModelKind::VCref, paper::effects());
+  settles_on_static_answer(ModelKind::VCref, paper::effects("vcref"));
 }
 
 // Free vibration of the straight cantilever (no tension, no gravity) released from a small

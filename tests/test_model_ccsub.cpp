@@ -14,6 +14,7 @@
 #include "tdcr/core/paper_robot.hpp"
 #include "lumped_reference.hpp"
 #include "tdcr/models/ccsub.hpp"
+#include "tdcr/models/model_registry.hpp"
 #include "tdcr/models/tendon_physics.hpp"
 
 using namespace tdcr;
@@ -84,6 +85,33 @@ TEST(CcsubModel, PureTorsionTwistsStraightRobot) {
   ASSERT_TRUE(sol.converged());
   EXPECT_NEAR((sol.tip().p - Vec3(0, 0, 0.1)).norm(), 0.0, 1e-12);
   EXPECT_LT(lie::rotation_angle(sol.tip().R, lie::rot_z(twist)), 1e-9);
+}
+
+// 2c. Axial compression (effects.shear_extension, the default): one segment bent by one tendon,
+// its antagonist pulled too, so every subsegment carries T1 + T2 and shortens by (T1 + T2) / EA of
+// its length. The tendons' moment in the frame of each disk does not depend on the shape (straight
+// routing, no external load), so the bend is the inextensible one's and the compressed tip is the
+// inextensible tip scaled towards the base by 1 - (T1 + T2) / EA, to rounding (measured 7e-18 m).
+TEST(CcsubModel, TendonsCompressTheSubsegmentsAlongTheArc) {
+  Robot r = paper::robot(10);
+  r.segments.resize(1);
+  const std::vector<double> T = {4.0, 1.5};
+  Effects on, off;
+  off.shear_extension = false;
+  ModelInput in;
+  in.actuation.values = T;
+  const auto a = make_model(ModelKind::CCsub, r, on), b = make_model(ModelKind::CCsub, r, off);
+  auto wa = a->make_workspace(), wb = b->make_workspace();
+  const Solution sa = tdcr::solve(*a, *wa, in, SolverOptions{}), sb = tdcr::solve(*b, *wb, in, SolverOptions{});
+  ASSERT_TRUE(sa.converged() && sb.converged());
+  const double eps = (T[0] + T[1]) / r.backbone.effective_stiffness().EA, L = r.total_length();
+  const double shift = (sa.tip().p - sb.tip().p).norm();
+  const double scaled = (sa.tip().p - (1.0 - eps) * sb.tip().p).norm();
+  std::printf("compression eps %.3g: tip moved %.4g m (eps L = %.4g m), off the scaled tip by %.3g m\n", eps, shift,
+              eps * L, scaled);
+  EXPECT_GT(shift, 0.5 * eps * L);
+  EXPECT_LT(shift, 2.0 * eps * L);
+  EXPECT_LT(scaled, 1e-15);
 }
 
 // 3. Mirror symmetry about the x-z plane: T1 <-> T2 (and T3 <-> T4) with the transverse force
@@ -194,11 +222,17 @@ TEST(CcsubModel, GlobalEquilibriumWithGravityAndTipForce) {
     m_loads += sol.disk_frames[j].p.cross(mass * s.loads.gravity);
     const double l = routing.disk_s[j] - routing.disk_s[j - 1];
     const Vec3 u(sol.unknowns[3 * (j - 1)] / l, sol.unknowns[3 * (j - 1) + 1] / l, 0.0);
+    // Shear and extension (the default): the tendons through subsegment j shorten it by their
+    // tensions over EA, its bend unchanged, so its points scale.
+    double through = 0.0;
+    for (const RoutedTendon& t : routing.tendons)
+      if (t.end_disk >= j) through += s.actuation.values[static_cast<std::size_t>(t.index)];
+    const double stretch = 1.0 - through / k.EA;
     const int K = 64;
     for (int q = 0; q <= K; ++q) {
       const double t = l * q / K;
       const double wq = (q == 0 || q == K) ? 1.0 : (q % 2 ? 4.0 : 2.0);
-      const Vec3 p = sol.disk_frames[j - 1].transform(lie::exp_se3(u * t, Vec3(0, 0, t)).p);
+      const Vec3 p = sol.disk_frames[j - 1].transform(stretch * lie::exp_se3(u * t, Vec3(0, 0, t)).p);
       m_loads += (wq * l / (3.0 * K)) * p.cross(rhoA * s.loads.gravity);
     }
   }

@@ -175,7 +175,7 @@ TEST(PrbModel, GlobalEquilibriumWithGravityAndTipForce) {
   auto ws = model.make_workspace();
   const Solution sol = tdcr::solve(model, *ws, s.input(), s.solver);
   ASSERT_TRUE(sol.converged()) << sol.summary.message;
-  const std::vector<Vec3> pts = model.joint_points(sol.unknowns);
+  const std::vector<Vec3> pts = model.joint_points(sol.unknowns, s.input());
   const TendonRouting routing = TendonRouting::from(s.robot);
   const int N = routing.disk_count() - 1;
   const double gamma[4] = {0.125 / 0.999, 0.35 / 0.999, 0.388 / 0.999, 0.136 / 0.999};

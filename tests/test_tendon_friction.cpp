@@ -38,7 +38,7 @@ Robot one_tendon_robot(int disks) {
 }
 
 Effects friction(double mu, TendonFriction::Motion motion) {
-  Effects e = paper::effects();  // the disk force of paper::scene, whose answers these compare with
+  Effects e = paper::effects("vcref");  // paper::scene(..., "vcref")'s, whose answers these compare with
   e.tendon_friction.coefficient = mu;
   e.tendon_friction.motion = motion;
   return e;

@@ -12,7 +12,7 @@
 // 10, 20 in turn, tensions U[0, 1.5 T_M], tip force |F| <= 0.5 N in any direction, base frame);
 // --cases N takes the first N. Models: VC, CCsub, VCref, PRB (--models: a comma-separated subset).
 // Per case and model, set up once and outside the timing:
-//   - tdcr: make_model(kind, paper::robot(n), paper::effects()) (Eq. 58, as the paper code) and one workspace; each timed solve is tdcr::solve
+//   - tdcr: make_model(kind, paper::robot(n), paper::effects(kind)) (Eq. 58, inextensible CCsub and PRB, as the paper code) and one workspace; each timed solve is tdcr::solve
 //     without a warm start (a cold solve, the model's own cold rule) with tdcr's default
 //     SolverOptions, whatever they are in this build, or those of --solver;
 //   - the paper's code: one object of its model class (CosseratRodModel = VC,
@@ -213,7 +213,8 @@ int run(const Settings& cfg) {
   for (const auto& c : cases) {
     const tdcr::Robot robot = tdcr::paper::robot(c.n);
     for (ModelKind kind : cfg.models) {
-      const auto model = tdcr::make_model(kind, robot, tdcr::paper::effects());  // the paper code's Eq. 58
+      // The paper code's Eq. 58 and its inextensible CCsub and PRB.
+      const auto model = tdcr::make_model(kind, robot, tdcr::paper::effects(tdcr::to_string(kind)));
       const auto ws = model->make_workspace();
       const auto paper = make_paper_model(kind, robot);
       std::vector<double> t_tdcr, t_paper, cpu_tdcr, cpu_paper;

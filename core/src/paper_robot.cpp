@@ -1,5 +1,6 @@
 #include "tdcr/core/paper_robot.hpp"
 
+#include <cctype>
 #include <cmath>
 
 namespace tdcr::paper {
@@ -40,8 +41,12 @@ std::vector<double> configuration_tensions(int c, double t_max) {
   return t;
 }
 
-Effects effects() {
+Effects effects(const std::string& model) {
   Effects e;
+  std::string m = model;
+  for (char& c : m) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  // The paper's lumped models (Eq. 43-51) keep their subsegments' lengths.
+  if (m == "ccsub" || m == "prb") e.shear_extension = false;
   // The paper's case study removes the normal component at the disks (its Eq. 58); the library's
   // default keeps it (docs/models.md, "The tendon force at a disk"). Unloaded, the two coincide.
   e.disk_normal_force = DiskNormalForce::Removed;
@@ -54,7 +59,7 @@ Scene scene(int disks_per_segment, int configuration, const std::string& model) 
   s.actuation.kind = Actuation::Kind::Tensions;
   s.actuation.values = configuration_tensions(configuration, max_tension(s.robot));
   s.model = model;
-  s.effects = effects();
+  s.effects = effects(model);
   return s;
 }
 

@@ -49,7 +49,12 @@ constexpr int kColdGuessPasses = 3;
 class CcsubBody final : public detail::LumpedBody {
  public:
   CcsubBody(const Robot& robot, const TendonRouting& routing, const Effects& effects, LumpedFormulation formulation)
-      : LumpedBody(robot, routing, effects, 3, formulation, kBandedFrom) {}
+      : LumpedBody(robot, routing, effects, 3, formulation, kBandedFrom) {
+    // With shear and extension, the tendons' compression shortens each subsegment as CC's arc
+    // (N / EA with N the tensions through it): the co-tension of an antagonistic pair then moves
+    // the tendons' pulls, so displacement input decides it as in VC.
+    if (effects.shear_extension) statics.set_axial_compression(robot.backbone.effective_stiffness().EA);
+  }
 
   std::unique_ptr<detail::LumpedProblem> make_problem() const override;
 

@@ -63,7 +63,7 @@ bool LumpedProblem::banded_residual(const double* y, double* f) {
     const double* yj = y + K * (j - 1);
     frames_[j].p = Eigen::Map<const Vec3>(yj + n.P());
     frames_[j].R = rotation_exp(Eigen::Map<const Vec3>(yj + n.T()));
-    body_.local(j, yj, poses_[j]);
+    body_.pose(j, yj, loads_.stretch_of(j), poses_[j]);
   }
   body_.statics.disk_loads(loads_, frames_.data(), disk_f_.data(), disk_m_.data());
   for (int j = 1; j <= J; ++j) {

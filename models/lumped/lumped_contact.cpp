@@ -124,7 +124,7 @@ bool LumpedProblem::penetrating_pairs(const Eigen::VectorXd& x, bool add) {
   passed_through_ = false;
   deepest_ = 0.0;
   contact_frames_.resize(body_.N + 1);
-  body_.compute_frames(x.data(), body_.N, contact_frames_.data());
+  body_.compute_frames(x.data(), body_.N, loads_.stretch_data(), contact_frames_.data());
   const auto candidate = [&](int j, int o, ContactBody b) {
     for (const ContactCandidate& c : contacts_)
       if (c.disk == j && c.obstacle == o && c.body == b) return true;

@@ -353,7 +353,7 @@ void LumpedDynamics::choose_bending_planes(const Timeline& timeline) {
 Solution LumpedDynamics::shape() const {
   Solution s;
   s.unknowns = q_;
-  s.disk_frames = body_.disk_frames(q_);
+  s.disk_frames = body_.disk_frames(q_, problem_->stretch());
   s.summary.termination = TerminationType::Converged;
   return s;
 }

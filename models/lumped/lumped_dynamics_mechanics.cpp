@@ -16,7 +16,7 @@
 namespace tdcr::detail {
 
 void LumpedDynamics::twists(const double* q, Twists& T, std::vector<Vec3>* points) {
-  body_.compute_frames(q, N_, frames_b_.data(), poses_.data());
+  body_.compute_frames(q, N_, problem_->stretch(), frames_b_.data(), poses_.data());
   if (links_) {
     std::vector<Vec3>& c = points ? *points : link_c_;
     for (int j = 1; j <= N_; ++j)
@@ -37,7 +37,7 @@ void LumpedDynamics::twists(const double* q, Twists& T, std::vector<Vec3>* point
       std::copy(xj, xj + m_, xs);
       for (int k = 0; k < 4; ++k) {
         xs[i] = xj[i] + kOffset[k] * kTwistStep;
-        body_.local(j, xs, g[k]);
+        body_.pose(j, xs, problem_->stretch() ? problem_->stretch()[j] : 1.0, g[k]);
       }
       Mat3 dR = Mat3::Zero();
       Vec3 dp = Vec3::Zero();
@@ -161,7 +161,7 @@ void LumpedDynamics::bias(const double* q, const double* v) {
     twists(qs_.data(), Tm_, &link_stencil_[3]);
     Tp_ -= Tm_;
     Tp_ /= 2.0 * h;
-    body_.compute_frames(q, N_, frames_b_.data(), poses_.data());  // back to q
+    body_.compute_frames(q, N_, problem_->stretch(), frames_b_.data(), poses_.data());  // back to q
   }
   // Spatial velocities and bias accelerations of the disks, from the base.
   Vec6 V = Vec6::Zero(), A = Vec6::Zero();

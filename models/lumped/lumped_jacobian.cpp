@@ -188,7 +188,7 @@ bool LumpedProblem::structured_jacobian(const Eigen::Ref<const Eigen::VectorXd>&
       const double h = bvp::finite_difference_step(x[c], jac_uscale_[c], noise);
       jac_x_[c] = x[c] + h;
       const double* xk = jac_x_.data() + m * (k - 1);
-      body_.local(k, xk, g);
+      body_.pose(k, xk, loads_.stretch_of(k), g);
       // The perturbed frame k, the rigid motion (Q, t) of everything distal of it, frame k+1.
       Frame& fk = frames_[k];
       fk.R = prev.R * g.R;

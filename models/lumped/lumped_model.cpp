@@ -46,15 +46,23 @@ bool LumpedBody::reduced(int J) const {
   return formulation == LumpedFormulation::Automatic && J >= banded_from && !statics.friction();
 }
 
-void LumpedBody::compute_frames(const double* x, int J, Frame* frames, SubsegmentPose* poses, Vec3* centroids,
-                                int from) const {
+void LumpedBody::pose(int j, const double* xj, double stretch, SubsegmentPose& g) const {
+  local(j, xj, g);
+  if (stretch == 1.0) return;
+  g.p *= stretch;
+  g.c *= stretch;
+  for (Vec3& a : g.aux) a *= stretch;
+}
+
+void LumpedBody::compute_frames(const double* x, int J, const double* stretch, Frame* frames, SubsegmentPose* poses,
+                                Vec3* centroids, int from) const {
   if (from <= 1) {
     frames[0] = Frame{};
     from = 1;
   }
   SubsegmentPose tmp;
   for (int j = from; j <= N; ++j) {
-    const double l = statics.length(j);
+    const double l = stretch ? stretch[j] * statics.length(j) : statics.length(j);
     const Frame& prev = frames[j - 1];
     Frame& f = frames[j];
     if (j > J) {
@@ -64,19 +72,19 @@ void LumpedBody::compute_frames(const double* x, int J, Frame* frames, Subsegmen
       continue;
     }
     SubsegmentPose& g = poses ? poses[j] : tmp;
-    local(j, x + per_subsegment * (j - 1), g);
+    pose(j, x + per_subsegment * (j - 1), stretch ? stretch[j] : 1.0, g);
     f.R = prev.R * g.R;
     f.p = prev.p + prev.R * g.p;
     if (centroids) centroids[j] = prev.p + prev.R * g.c;
   }
 }
 
-std::vector<Frame> LumpedBody::disk_frames(const Eigen::VectorXd& x) const {
+std::vector<Frame> LumpedBody::disk_frames(const Eigen::VectorXd& x, const double* stretch) const {
   if (x.size() != per_subsegment * N)
     throw InputError("unknowns", std::to_string(x.size()),
                      "expected " + std::to_string(per_subsegment) + " unknowns per subsegment");
   std::vector<Frame> f(N + 1);
-  compute_frames(x.data(), N, f.data());
+  compute_frames(x.data(), N, stretch, f.data());
   return f;
 }
 
@@ -205,7 +213,8 @@ bool LumpedProblem::warm_guess(const Solution& previous, Eigen::VectorXd& y) {
 
 void LumpedProblem::evaluate(const double* x) {
   last_valid_ = false;
-  body_.compute_frames(x, active(), frames_.data(), poses_.data(), backbone_weight_on() ? centroids_.data() : nullptr);
+  body_.compute_frames(x, active(), loads_.stretch_data(), frames_.data(), poses_.data(),
+                       backbone_weight_on() ? centroids_.data() : nullptr);
   if (body_.statics.friction()) body_.statics.update_friction(loads_, frames_.data());
   if (!contacts_.empty()) return evaluate_contacts();
   body_.statics.distal_wrenches(loads_, frames_.data(), centroids_.data(), F_.data(), M_.data());
@@ -257,7 +266,8 @@ bool LumpedProblem::recursive_residual(const double* x, double* f) {
 
 void LumpedProblem::evaluate_from(const double* x, int k) {
   last_valid_ = false;
-  body_.compute_frames(x, active(), frames_.data(), poses_.data(), backbone_weight_on() ? centroids_.data() : nullptr, k);
+  body_.compute_frames(x, active(), loads_.stretch_data(), frames_.data(), poses_.data(),
+                       backbone_weight_on() ? centroids_.data() : nullptr, k);
   body_.statics.disk_loads(loads_, frames_.data(), disk_f_.data(), disk_m_.data(), k - 1);
   body_.statics.distal_wrenches(loads_, frames_.data(), centroids_.data(), disk_f_.data(), disk_m_.data(), F_.data(),
                                 M_.data());
@@ -287,7 +297,7 @@ void LumpedProblem::extract(const Eigen::VectorXd& y, bool evaluated, Solution& 
     solution.disk_frames.assign(frames_.begin(), frames_.end());
   else {
     solution.disk_frames.resize(body_.N + 1);
-    body_.compute_frames(full.data(), active(), solution.disk_frames.data());
+    body_.compute_frames(full.data(), active(), loads_.stretch_data(), solution.disk_frames.data());
   }
   solution.tendon_displacements = tendon::chord_displacements(solution.disk_frames, body_.statics.routing(), convention_);
   if (body_.statics.friction()) {
@@ -318,7 +328,7 @@ bool LumpedProblem::tendon_pulls(const Eigen::VectorXd& y, Eigen::VectorXd& d) {
   pull_x_.setZero(body_.per_subsegment * body_.N);
   pull_x_.head(x_.size()) = x_;
   pull_frames_.resize(body_.N + 1);
-  body_.compute_frames(pull_x_.data(), active(), pull_frames_.data());
+  body_.compute_frames(pull_x_.data(), active(), loads_.stretch_data(), pull_frames_.data());
   const std::vector<double> pulls = tendon::chord_displacements(pull_frames_, body_.statics.routing(), convention_);
   d = Eigen::Map<const Eigen::VectorXd>(pulls.data(), static_cast<Eigen::Index>(pulls.size()));
   return d.allFinite();
@@ -338,7 +348,11 @@ std::unique_ptr<ModelWorkspace> LumpedModel::make_workspace() const {
 
 int LumpedModel::unknowns_per_subsegment() const { return body_->per_subsegment; }
 
-std::vector<Frame> LumpedModel::frames(const Eigen::VectorXd& x) const { return body_->disk_frames(x); }
+std::vector<Frame> LumpedModel::frames(const Eigen::VectorXd& x, const ModelInput& input) const {
+  detail::SubsegmentLoads loads;
+  body_->statics.bind(input, loads);
+  return body_->disk_frames(x, loads.stretch_data());
+}
 
 detail::ModelProblem& LumpedModel::bind(ModelWorkspace& workspace, const ModelInput& input,
                                         const SolverOptions&) const {

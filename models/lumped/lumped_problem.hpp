@@ -50,17 +50,22 @@ class LumpedBody {
 
   /// Geometry of subsegment j (1-based) from its unknowns xj (per_subsegment values).
   virtual void local(int j, const double* xj, SubsegmentPose& g) const = 0;
+  /// The same at axial stretch `stretch` (SubsegmentLoads::stretch): the tendons' compression
+  /// shortens a subsegment uniformly and leaves its bend and twist, so its points scale.
+  void pose(int j, const double* xj, double stretch, SubsegmentPose& g) const;
   /// The problem of a new workspace.
   virtual std::unique_ptr<LumpedProblem> make_problem() const = 0;
   /// Disk frames 0..N (base disk first) from the unknowns of subsegments 1..J (x holds at least
   /// per_subsegment J values); subsegments beyond J are straight. Poses (if given, index 1..J)
   /// and centroids (if given, base frame, index 1..N) receive the subsegment geometry.
   /// With from > 1, frames 0..from-1 (and poses, centroids below from) are taken as they are and
-  /// only frames from..N are computed.
-  void compute_frames(const double* x, int J, Frame* frames, SubsegmentPose* poses = nullptr,
+  /// only frames from..N are computed. `stretch`: the subsegments' stretches of the bound input
+  /// (SubsegmentLoads::stretch_data(); nullptr when inextensible).
+  void compute_frames(const double* x, int J, const double* stretch, Frame* frames, SubsegmentPose* poses = nullptr,
                       Vec3* centroids = nullptr, int from = 1) const;
-  /// Disk frames for a full unknown vector (per_subsegment N values; InputError otherwise).
-  std::vector<Frame> disk_frames(const Eigen::VectorXd& x) const;
+  /// Disk frames for a full unknown vector (per_subsegment N values; InputError otherwise) at the
+  /// stretches `stretch` (nullptr: inextensible).
+  std::vector<Frame> disk_frames(const Eigen::VectorXd& x, const double* stretch) const;
   /// True if solved in the banded formulation (LumpedFormulation::Banded).
   bool banded() const;
   /// True if J loaded subsegments are solved in the recursive unknowns with reduced Newton
@@ -102,6 +107,8 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   /// motion the unloaded ones bend too), in the recursive unknowns; residual() then takes and
   /// gives the per_subsegment N values of all subsegments.
   void bind_all(const ModelInput& input);
+  /// The subsegments' stretches of the bound input (SubsegmentLoads::stretch_data()).
+  const double* stretch() const { return loads_.stretch_data(); }
 
   bvp::ParameterizedSystem* system() override { return this; }
   bvp::NewtonSolver& newton() override { return newton_; }

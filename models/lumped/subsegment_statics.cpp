@@ -10,6 +10,20 @@ namespace tdcr::detail {
 void SubsegmentLoads::set_load_factor(double lambda) {
   loads.set_load_factor(lambda);
   for (std::size_t k = 0; k < tensions.size(); ++k) tensions[k] = loads.tension(static_cast<int>(k));
+  if (!stretch.empty()) update_stretch();
+}
+
+void SubsegmentLoads::update_stretch() {
+  // N_j = the tensions of the tendons ending at disk j or beyond: their sum from the tip down.
+  const int N = static_cast<int>(stretch.size()) - 1;
+  std::fill(stretch.begin(), stretch.end(), 0.0);
+  for (std::size_t k = 0; k < tendon_end.size(); ++k) stretch[static_cast<std::size_t>(tendon_end[k])] += tensions[k];
+  double through = 0.0;
+  for (int j = N; j >= 1; --j) {
+    through += stretch[static_cast<std::size_t>(j)];
+    stretch[static_cast<std::size_t>(j)] = 1.0 - through * axial_compliance;
+  }
+  stretch[0] = 1.0;
 }
 
 SubsegmentStatics::SubsegmentStatics(const Robot& robot, const TendonRouting& routing, const Effects& effects)
@@ -29,6 +43,15 @@ void SubsegmentStatics::bind(const ModelInput& input, SubsegmentLoads& out) cons
   const std::size_t slots = routing_->tendons.size() * static_cast<std::size_t>(routing_->disk_count());
   out.holes.resize(slots);
   out.chords.resize(slots);
+  if (axial_compliance_ > 0.0) {
+    out.axial_compliance = axial_compliance_;
+    out.tendon_end.assign(out.tensions.size(), 0);
+    for (const RoutedTendon& t : routing_->tendons) out.tendon_end[static_cast<std::size_t>(t.index)] = t.end_disk;
+    out.stretch.assign(static_cast<std::size_t>(n_) + 1, 1.0);
+    out.update_stretch();
+  } else {
+    out.stretch.clear();
+  }
   // Last disk that carries any load: beyond it the robot is straight.
   if (out.loads.has_tip_wrench() || out.loads.has_gravity()) {
     out.active = n_;

@@ -27,8 +27,23 @@ struct SubsegmentLoads {
   /// directions (towards the previous disk) by tendon and disk.
   std::vector<Vec3> holes, chords;
 
+  /// With the tendons' axial compression (CCsub with effects.shear_extension, as CC): the stretch
+  /// 1 + eps_j = 1 - N_j / EA of subsegment j (index 0..N), N_j the tensions of the tendons that
+  /// pass through it, taken along the backbone (the compression of CC's Eq. 12 per subsegment);
+  /// empty: inextensible. Follows the tensions (set_load_factor, driven tensions).
+  std::vector<double> stretch;
+  /// 1 / EA (1/N) with the compression, and the last subsegment of each tendon (global index).
+  double axial_compliance = 0.0;
+  std::vector<int> tendon_end;
+
   /// @brief Scale every load by lambda (continuation); allocation-free.
   void set_load_factor(double lambda);
+  /// @brief The stretches of subsegments 0..N, or nullptr when inextensible.
+  const double* stretch_data() const { return stretch.empty() ? nullptr : stretch.data(); }
+  /// @brief The stretch of subsegment j (1 when inextensible).
+  double stretch_of(int j) const { return stretch.empty() ? 1.0 : stretch[static_cast<std::size_t>(j)]; }
+  /// @brief stretch from the current tensions; allocation-free.
+  void update_stretch();
 };
 
 /// @brief A robot cut into subsegments (decided once per model) and the allocation-free
@@ -56,6 +71,11 @@ class SubsegmentStatics {
 
   /// @brief Resolve the loads of `input` (tension input) at load factor 1 and its J.
   void bind(const ModelInput& input, SubsegmentLoads& out) const;
+  /// @brief Shorten the subsegments under the tendons' compression (axial stiffness EA, N):
+  /// every bind then fills SubsegmentLoads::stretch.
+  void set_axial_compression(double EA) { axial_compliance_ = 1.0 / EA; }
+  /// @brief True if the subsegments shorten under the tendons' compression.
+  bool axial_compression() const { return axial_compliance_ > 0.0; }
   /// @brief Weight of the backbone of subsegment j (N, base frame) at the current load factor.
   Vec3 backbone_weight(const SubsegmentLoads& b, int j) const { return length_[j] * b.loads.backbone_weight(); }
 
@@ -108,6 +128,7 @@ class SubsegmentStatics {
   bool remove_normal_ = true;
   bool friction_on_ = false;
   TendonFriction friction_;
+  double axial_compliance_ = 0.0;  // 1 / EA with the tendons' compression, else 0
 };
 
 }  // namespace tdcr::detail

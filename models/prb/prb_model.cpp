@@ -49,6 +49,9 @@ class PrbBody final : public detail::LumpedBody {
       gamma_sum += gamma[i];
     }
     for (int q = 0; q < 3; ++q) k_theta[q] = effects.prb.k_theta[q];
+    // With shear and extension the tendons' compression shortens every link of a subsegment
+    // alike (as CCsub's arcs and CC's): the four models then shorten the same way.
+    if (effects.shear_extension) statics.set_axial_compression(robot.backbone.effective_stiffness().EA);
   }
 
   std::unique_ptr<detail::LumpedProblem> make_problem() const override;
@@ -297,14 +300,16 @@ std::unique_ptr<detail::LumpedProblem> PrbBody::make_problem() const { return st
 PrbModel::PrbModel(const Robot& robot, const Effects& effects, LumpedFormulation formulation)
     : LumpedModel(robot, effects, formulation, detail::make_body<PrbBody>) {}
 
-std::vector<Vec3> PrbModel::joint_points(const Eigen::VectorXd& x) const {
-  const std::vector<Frame> f = frames(x);
+std::vector<Vec3> PrbModel::joint_points(const Eigen::VectorXd& x, const ModelInput& input) const {
   const auto& b = static_cast<const PrbBody&>(body());
+  detail::SubsegmentLoads loads;
+  b.statics.bind(input, loads);
+  const std::vector<Frame> f = b.disk_frames(x, loads.stretch_data());
   std::vector<Vec3> pts;
   pts.reserve(4 * b.N);
   detail::SubsegmentPose g;
   for (int j = 1; j <= b.N; ++j) {
-    b.local(j, x.data() + kU * (j - 1), g);
+    b.pose(j, x.data() + kU * (j - 1), loads.stretch_of(j), g);
     for (int q = 0; q < 3; ++q) pts.push_back(f[j - 1].transform(g.aux[kJoint + q]));
     pts.push_back(f[j].p);
   }

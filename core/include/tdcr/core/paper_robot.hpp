@@ -17,12 +17,16 @@ double max_tension(const Robot& robot);
 /// @brief Tensions of case-study configuration c in 1..16: T_k = T_M if bit k-1 of c-1 is set.
 std::vector<double> configuration_tensions(int c, double t_max);
 
-/// @brief The paper's effects: its case study removes the tendon force's normal component at the
-/// disks (Eq. 58, `effects.disk_normal_force` "removed"); otherwise the library's defaults.
-Effects effects();
+/// @brief The paper's effects for `model` (a model name as in scene files, any case): its case
+/// study removes the tendon force's normal component at the disks (Eq. 58,
+/// `effects.disk_normal_force` "removed"), and its CCsub and PRB are inextensible (Eq. 43-51:
+/// `effects.shear_extension` false for "ccsub" and "prb"; its CC shortens under the tendons'
+/// compression as tdcr's does, its VC and VCref shear and extend); otherwise the library's
+/// defaults.
+Effects effects(const std::string& model);
 
 /// @brief A tension-driven scene of the paper robot for configuration c (no loads), with the
-/// paper's disk force (Eq. 58, `effects.disk_normal_force` "removed").
+/// paper's effects for `model` (effects(model)).
 Scene scene(int disks_per_segment, int configuration, const std::string& model = "vcref");
 
 }  // namespace tdcr::paper

@@ -102,9 +102,10 @@ struct TendonFriction {
 /// @brief What the scene asks to simulate. Part of a model's description (a model is built from
 /// a Robot and its Effects); defaults are the paper's code.
 struct Effects {
-  bool shear_extension = true;  ///< Cosserat rod with shear and extension (VC, VCref; CC with
-                                ///< tension input: axial strain); else inextensible,
-                                ///< unshearable Kirchhoff rod. CCsub and PRB are inextensible.
+  bool shear_extension = true;  ///< Cosserat rod with shear and extension (VC, VCref); CC, CCsub
+                                ///< and PRB shorten under the tendons' compression (axial strain
+                                ///< -sum T / EA per segment or subsegment); else inextensible,
+                                ///< unshearable Kirchhoff rod (the paper's CCsub and PRB).
   DiskNormalForce disk_normal_force = DiskNormalForce::Kept;  ///< Eq. 32-33 or Eq. 58 (VCref, CCsub, PRB).
   /// VC: the point force T_k R (t_k+ - t_k-) of a tensioned tendon passing a disk where the
   /// strains jump (VcOptions::kink_forces). False: the paper code's formulation, which omits it.
@@ -183,7 +184,7 @@ struct SceneEffects {
   bool gravity = false;          ///< Nonzero gravity and nonzero backbone or disk mass.
   bool backbone_weight = false;  ///< Gravity and nonzero backbone mass per length.
   bool disk_weight = false;      ///< Gravity and nonzero disk mass.
-  bool shear_extension = true;            ///< Effects::shear_extension (CC, VC, VCref).
+  bool shear_extension = true;            ///< Effects::shear_extension (every model).
   bool disk_normal_force_removed = false;  ///< Effects::disk_normal_force is Removed (Eq. 58).
   bool tendon_friction = false;           ///< Effects::tendon_friction is on (some mu > 0).
   bool contact = false;                   ///< The environment has obstacles (CCsub, PRB).

@@ -63,8 +63,10 @@ class LumpedModel : public StaticModel {
   /// @brief Unknowns per subsegment (3 for CCsub, 5 for PRB).
   int unknowns_per_subsegment() const;
   /// @brief Disk frames (base disk first, tip last) for unknowns x of every subsegment
-  /// (Solution::unknowns). Throws InputError on a vector of another size.
-  std::vector<Frame> frames(const Eigen::VectorXd& x) const;
+  /// (Solution::unknowns) under the tension input `input` (whose tensions shorten CCsub's
+  /// subsegments with effects.shear_extension; for a displacement solve's answer pass its
+  /// Solution::tensions as tensions). Throws InputError on a vector of another size.
+  std::vector<Frame> frames(const Eigen::VectorXd& x, const ModelInput& input) const;
   /// @brief The time integrator of this model (models/lumped/lumped_dynamics.cpp; reached through
   /// tdcr::make_dynamics_integrator). InputError naming `robot.backbone.density` for a robot
   /// without mass.

@@ -64,8 +64,10 @@ class PrbModel final : public LumpedModel {
 
   /// @brief Joint centres and link ends of the rigid-link body, base frame: for every
   /// subsegment its 3 joint centres followed by the disk centre that ends it (4N points), for
-  /// plotting the 3R shape. `x` as Solution::unknowns (5N values).
-  std::vector<Vec3> joint_points(const Eigen::VectorXd& x) const;
+  /// plotting the 3R shape. `x` as Solution::unknowns (5N values), `input` the tension input it
+  /// answers (its tensions shorten the links with effects.shear_extension; for a displacement
+  /// solve's answer pass its Solution::tensions as tensions).
+  std::vector<Vec3> joint_points(const Eigen::VectorXd& x, const ModelInput& input) const;
 };
 
 }  // namespace tdcr
