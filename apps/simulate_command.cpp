@@ -29,15 +29,22 @@ double number(const std::string& name, const std::string& text) {
   return v;
 }
 
-void write_csv(std::ostream& out, const SimulationResult& r) {
-  out << "t,tip_x,tip_y,tip_z,rot_x,rot_y,rot_z,status,iterations,kinetic_energy,potential_energy\n";
+void write_csv(std::ostream& out, const SimulationResult& r, std::size_t tendons) {
+  out << "t,tip_x,tip_y,tip_z,rot_x,rot_y,rot_z,status,iterations,kinetic_energy,potential_energy";
+  for (std::size_t k = 0; k < tendons; ++k) out << ",T_" << k + 1;
+  out << "\n";
   char line[512];
   for (const SimulationStep& s : r.steps) {
     const Vec3 w = lie::log_so3(s.tip.R);
-    std::snprintf(line, sizeof line, "%.10g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%s,%d,%.9g,%.9g\n", s.t, s.tip.p.x(),
+    std::snprintf(line, sizeof line, "%.10g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%s,%d,%.9g,%.9g", s.t, s.tip.p.x(),
                   s.tip.p.y(), s.tip.p.z(), w.x(), w.y(), w.z(), to_string(s.status).c_str(), s.iterations,
                   s.kinetic_energy, s.potential_energy);
     out << line;
+    for (std::size_t k = 0; k < tendons; ++k) {
+      std::snprintf(line, sizeof line, ",%.12g", k < s.tensions.size() ? s.tensions[k] : NAN);
+      out << line;
+    }
+    out << "\n";
   }
 }
 
@@ -85,9 +92,9 @@ int run_simulate(const std::vector<std::string>& args) {
   if (output) {
     std::ofstream f(*output);
     if (!f) throw InputError("-o", *output, "cannot be written");
-    write_csv(f, r);
+    write_csv(f, r, model->robot().tendon_count());
   } else {
-    write_csv(std::cout, r);
+    write_csv(std::cout, r, model->robot().tendon_count());
   }
   if (!r.completed) {
     std::fprintf(stderr, "simulation stopped: %s\n", r.message.c_str());

@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "physics/cosserat_rhs.hpp"
+#include "physics/tendon_path.hpp"
 #include "tdcr/models/tendon_physics.hpp"
 
 namespace tdcr::vc::dyn {
@@ -189,6 +190,42 @@ void reconstruct(const Mesh& M, const ValuesList& values, std::vector<Frame>& fr
   }
 }
 
+namespace {
+/// Arc length of point i of interval I (its RK4 stage).
+double point_s(const Interval& I, int i) {
+  const int step = (i - I.first) / 4, stage = (i - I.first) % 4;
+  return I.s0 + (step + (stage == 0 ? 0.0 : stage == 3 ? 1.0 : 0.5)) * I.h;
+}
+}  // namespace
+
+void path_pulls(const VcWorkspace::Impl& W, const Mesh& M, const ValuesList& values, std::vector<double>& lengths,
+                std::vector<double>& pulls) {
+  const TendonRouting& rt = W.model->routing();
+  const int K = W.tendon_count;
+  const std::size_t nseg = W.segments.size();
+  lengths.assign(nseg * static_cast<std::size_t>(K), 0.0);
+  pulls.assign(static_cast<std::size_t>(K), 0.0);  // running lengths from the base
+  for (const Interval& I : M.intervals) {
+    const SegmentLoads& seg = W.segments[I.segment];
+    for (int i = I.first; i < I.first + 4 * I.steps; ++i) {
+      const Vec3 v = values[i].segment<3>(kV), u = values[i].segment<3>(kU);
+      const double wgt = M.weight[i];
+      if (seg.all_straight) {
+        for (const LengthTerm& t : seg.lengths) pulls[t.index] += wgt * physics::tendon_tangent(v, u, t.r).norm();
+      } else {
+        const double s = point_s(I, i);
+        for (const LengthTerm& t : seg.lengths) {
+          const physics::TendonPoint p = physics::tendon_path(*t.tendon, s);
+          pulls[t.index] += wgt * physics::tendon_tangent(v, u, p.r, p.dr).norm();
+        }
+      }
+    }
+    if (I.disk == rt.segment_end_disk[I.segment])
+      for (int k = 0; k < K; ++k) lengths[static_cast<std::size_t>(I.segment * K + k)] = pulls[k];
+  }
+  tendon_displacements(W, lengths, pulls);
+}
+
 void energies(const VcWorkspace::Impl& W, bool chords, const StepSection& X, const Mesh& M, const ValuesList& values,
               const std::vector<Frame>& frames, const std::vector<Vec3>& points, double& kinetic, double& potential) {
   const cosserat::Section& S = X.S;
@@ -210,8 +247,7 @@ void energies(const VcWorkspace::Impl& W, bool chords, const StepSection& X, con
       potential += 0.5 * wgt * e;
       if (S.gravity) potential -= wgt * S.weight.dot(points[i]);
       // Constant tensions: T times the tendon's path length (the point's share of it).
-      const int step = (i - I.first) / 4, stage = (i - I.first) % 4;
-      const double s = I.s0 + (step + (stage == 0 ? 0.0 : stage == 3 ? 1.0 : 0.5)) * I.h;
+      const double s = point_s(I, i);
       if (!chords)
         for (const cosserat::TendonLoad& t : seg.tendons_at(s))
           potential += wgt * t.T * (v + u.cross(t.r) + t.dr).norm();
