@@ -403,8 +403,32 @@ class VcDynamics final : public CosseratDynamics {
       y_.head(n) = x_;
     y_.tail(driven_) = tau_;
     bvp::NewtonOptions o = newton_options(reuse);
+    y_start_ = y_;
     bvp::NewtonResult r = D.newton().solve(D, y_, o);
     int changes = 0, iterations = r.iterations;
+    if (!r.converged()) {
+      // A taut tendon released faster than the robot follows: its taut equations ask for a
+      // pushing tendon, which Newton may not reach. Again from the step's start, with the taut
+      // tendons commanded below the last state's pull slack (complementarity corrects the guess).
+      y_ = y_start_;
+      bool released = false;
+      for (int i = 0; i < driven_; ++i) {
+        const auto k = static_cast<std::size_t>(driven_index_[i]);
+        if (D.taut()[static_cast<std::size_t>(i)] && k < pulls_report_.size() &&
+            input_.actuation.values[k] < pulls_report_[k]) {
+          y_[n + i] = -1.0;  // marks it for update_slack
+          released = true;
+        }
+      }
+      if (released) {
+        D.update_slack(y_);
+        for (int i = 0; i < driven_; ++i) y_[n + i] = std::max(0.0, y_[n + i]);
+        o.reuse_jacobian = false;
+        o.max_setup_calls = 1;
+        r = D.newton().solve(D, y_, o);
+        iterations += r.iterations;
+      }
+    }
     while (r.converged() && D.update_slack(y_)) {
       if (++changes > kMaxSlackChanges) {
         r.termination = TerminationType::NoConvergence;
@@ -612,7 +636,7 @@ class VcDynamics final : public CosseratDynamics {
   ModelInput tension_form_;
   std::unique_ptr<StepProblem> step_problem_;
   std::unique_ptr<detail::DisplacementProblem> displacement_;
-  Eigen::VectorXd tau_, tau_start_, tau_previous_, y_, fy_;
+  Eigen::VectorXd tau_, tau_start_, tau_previous_, y_, y_start_, fy_;
   std::vector<double> lengths_, pulls_;                   ///< path_pulls' scratch and result.
   std::vector<double> tensions_, pulls_report_;            ///< Reported with the published shape.
   std::vector<bool> slack_;
