@@ -363,6 +363,22 @@ class VcDynamics final : public CosseratDynamics {
   // Displacement input: the statics' DisplacementProblem on the step's shooting, its tendons taut
   // or slack as the start's.
   void start_displacement(const Solution& at_rest, const ModelInput& input) {
+    if (chords_) {
+      // VCref's pulls: each tendon's chords from its first disk (the base, or with the
+      // per-segment convention its segment's start) and their length on the straight robot,
+      // read off chord_displacements (pull + chords' length) once.
+      const TendonRouting& rt = model_.routing();
+      const std::vector<double> p = tendon::chord_displacements(at_rest.disk_frames, rt, input.actuation.convention);
+      chord_first_.assign(rt.tendons.size(), 0);
+      chord_rest_.assign(rt.tendons.size(), 0.0);
+      for (std::size_t k = 0; k < rt.tendons.size(); ++k) {
+        const RoutedTendon& t = rt.tendons[k];
+        if (input.actuation.convention == Actuation::DisplacementConvention::PerSegment && t.segment > 0)
+          chord_first_[k] = rt.segment_end_disk[static_cast<std::size_t>(t.segment - 1)];
+        chord_rest_[k] =
+            p[k] + tendon::chord_length(at_rest.disk_frames.data(), rt, static_cast<int>(k), chord_first_[k]);
+      }
+    }
     bvp::ResidualSystem& sys = multiple_ ? static_cast<bvp::ResidualSystem&>(*multiple_system_) : system_;
     step_problem_ = std::make_unique<StepProblem>(W_, sys, [this](Eigen::VectorXd& d) { step_pulls(d); });
     step_problem_->current = multiple_ ? xm_ : Eigen::VectorXd(x_);
@@ -379,10 +395,12 @@ class VcDynamics final : public CosseratDynamics {
 
   // Every tendon's pull of the last residual's shape (the displacement problem's rows).
   void step_pulls(Eigen::VectorXd& d) {
-    if (chords_) {
-      const std::vector<double> p =
-          tendon::chord_displacements(multiple_system_->frames(), model_.routing(), input_.actuation.convention);
-      d = Eigen::Map<const Eigen::VectorXd>(p.data(), static_cast<Eigen::Index>(p.size()));
+    if (chords_) {  // pull = the straight chords' length minus the chords' (allocation-free)
+      const TendonRouting& rt = model_.routing();
+      d.resize(static_cast<Eigen::Index>(rt.tendons.size()));
+      for (std::size_t k = 0; k < rt.tendons.size(); ++k)
+        d[static_cast<Eigen::Index>(k)] = chord_rest_[k] - tendon::chord_length(multiple_system_->frames().data(), rt,
+                                                                                static_cast<int>(k), chord_first_[k]);
       return;
     }
     dyn::path_pulls(W_, mesh_, values_, lengths_, pulls_);
@@ -638,6 +656,8 @@ class VcDynamics final : public CosseratDynamics {
   std::unique_ptr<detail::DisplacementProblem> displacement_;
   Eigen::VectorXd tau_, tau_start_, tau_previous_, y_, y_start_, fy_;
   std::vector<double> lengths_, pulls_;                   ///< path_pulls' scratch and result.
+  std::vector<int> chord_first_;                           ///< VCref: each tendon's first disk of its pull.
+  std::vector<double> chord_rest_;                         ///< VCref: its chords' length on the straight robot.
   std::vector<double> tensions_, pulls_report_;            ///< Reported with the published shape.
   std::vector<bool> slack_;
   dyn::Mesh mesh_;
