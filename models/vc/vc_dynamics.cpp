@@ -409,9 +409,44 @@ class VcDynamics final : public CosseratDynamics {
 
   // Newton on the step with the driven tensions as unknowns (the displacement problem's bordered
   // system), then complementarity: a tendon that would push goes slack, a slack one pulled past
-  // its path goes taut, and the step is solved again (at most kMaxSlackChanges times).
-  bvp::NewtonResult solve_driven(bool reuse) {
+  // its path goes taut, and the step is solved again (at most kMaxSlackChanges times). The
+  // re-solves are exact Newton with full steps: KINSOL's line search stalled on the bordered
+  // multiple-shooting system (paper robot, tendon 1 pulled 2 mm within 10 ms from slack, VCref:
+  // 50 iterations at a scaled residual of 0.13; full steps: 4 iterations).
+  bvp::NewtonResult bordered_solve(bvp::NewtonOptions o, int& iterations) {
     constexpr int kMaxSlackChanges = 8;
+    detail::DisplacementProblem& D = *displacement_;
+    bvp::NewtonResult r = D.newton().solve(D, y_, o);
+    iterations += r.iterations;
+    o.reuse_jacobian = false;  // other equations: exact Newton from the last answer
+    o.max_setup_calls = 1;
+    o.line_search = false;
+    int changes = 0;
+    while (r.converged() && D.update_slack(y_)) {
+      if (++changes > kMaxSlackChanges) {
+        r.termination = TerminationType::NoConvergence;
+        r.message += "; slack and taut tendons changed more than " + std::to_string(kMaxSlackChanges) + " times";
+        break;
+      }
+      y_flip_ = y_;
+      r = D.newton().solve(D, y_, o);
+      iterations += r.iterations;
+      if (!r.converged()) {  // full steps failed: with the line search from the same start
+        y_ = y_flip_;
+        o.line_search = true;
+        r = D.newton().solve(D, y_, o);
+        iterations += r.iterations;
+        o.line_search = false;
+      }
+    }
+    return r;
+  }
+
+  // The step with displacement input: bordered_solve from the predicted unknowns; where that
+  // fails, from the step's start by exact Newton with full steps; where that fails too and a taut
+  // tendon is commanded below the last state's pull (released faster than the robot follows:
+  // its taut equations ask for a pushing tendon), from the start with those tendons slack.
+  bvp::NewtonResult solve_driven(bool reuse) {
     detail::DisplacementProblem& D = *displacement_;
     const int n = multiple_ ? static_cast<int>(xm_.size()) : 6;
     y_.resize(n + driven_);
@@ -420,14 +455,17 @@ class VcDynamics final : public CosseratDynamics {
     else
       y_.head(n) = x_;
     y_.tail(driven_) = tau_;
-    bvp::NewtonOptions o = newton_options(reuse);
     y_start_ = y_;
-    bvp::NewtonResult r = D.newton().solve(D, y_, o);
-    int changes = 0, iterations = r.iterations;
+    int iterations = 0;
+    bvp::NewtonResult r = bordered_solve(newton_options(reuse), iterations);
+    bvp::NewtonOptions exact = newton_options(false);
+    exact.max_setup_calls = 1;
+    exact.line_search = false;
     if (!r.converged()) {
-      // A taut tendon released faster than the robot follows: its taut equations ask for a
-      // pushing tendon, which Newton may not reach. Again from the step's start, with the taut
-      // tendons commanded below the last state's pull slack (complementarity corrects the guess).
+      y_ = y_start_;
+      r = bordered_solve(exact, iterations);
+    }
+    if (!r.converged()) {
       y_ = y_start_;
       bool released = false;
       for (int i = 0; i < driven_; ++i) {
@@ -441,22 +479,8 @@ class VcDynamics final : public CosseratDynamics {
       if (released) {
         D.update_slack(y_);
         for (int i = 0; i < driven_; ++i) y_[n + i] = std::max(0.0, y_[n + i]);
-        o.reuse_jacobian = false;
-        o.max_setup_calls = 1;
-        r = D.newton().solve(D, y_, o);
-        iterations += r.iterations;
+        r = bordered_solve(exact, iterations);
       }
-    }
-    while (r.converged() && D.update_slack(y_)) {
-      if (++changes > kMaxSlackChanges) {
-        r.termination = TerminationType::NoConvergence;
-        r.message += "; slack and taut tendons changed more than " + std::to_string(kMaxSlackChanges) + " times";
-        break;
-      }
-      o.reuse_jacobian = false;  // other equations: exact Newton from the last answer
-      o.max_setup_calls = 1;
-      r = D.newton().solve(D, y_, o);
-      iterations += r.iterations;
     }
     r.iterations = iterations;
     message_ = r.message;
@@ -654,7 +678,7 @@ class VcDynamics final : public CosseratDynamics {
   ModelInput tension_form_;
   std::unique_ptr<StepProblem> step_problem_;
   std::unique_ptr<detail::DisplacementProblem> displacement_;
-  Eigen::VectorXd tau_, tau_start_, tau_previous_, y_, y_start_, fy_;
+  Eigen::VectorXd tau_, tau_start_, tau_previous_, y_, y_start_, y_flip_, fy_;
   std::vector<double> lengths_, pulls_;                   ///< path_pulls' scratch and result.
   std::vector<int> chord_first_;                           ///< VCref: each tendon's first disk of its pull.
   std::vector<double> chord_rest_;                         ///< VCref: its chords' length on the straight robot.
