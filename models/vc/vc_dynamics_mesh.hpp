@@ -40,6 +40,10 @@ struct Mesh {
   int points = 0;
   std::vector<double> weight;     ///< Quadrature weight per point (RK4's h/6 (1, 2, 2, 1); 0 at disks).
   std::vector<double> disk_mass;  ///< kg, per disk (index 0 unused).
+  /// kg m^2, per disk (index 0 unused): its rotary inertia about its centre in the disk frame,
+  /// a thin disk of the segment's disk_radius (0: out to the farthest tendon hole, as the lumped
+  /// models take it), m r^2 (1/4, 1/4, 1/2).
+  std::vector<Vec3> disk_inertia;
 
   /// Build for `W`'s model with the RK4 settings.
   void build(const VcWorkspace::Impl& W, int rk4_steps, double rk4_max_step);
