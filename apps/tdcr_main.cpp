@@ -100,7 +100,9 @@ std::string usage() {
          "  scene's first \"timeline\" entry, with its \"dynamics\" (docs/dynamics.md); one CSV row per\n"
          "  output step of --dt (default 1/60 s): t, tip_x, tip_y, tip_z, rot_x, rot_y, rot_z\n"
          "  (rotation vector, rad), status, iterations (CVODE steps of CCsub, PRB; Newton iterations of\n"
-         "  VC, VCref), kinetic and potential energy;\n"
+         "  VC, VCref), kinetic and potential energy, T_1..T_m (tensions, N; solved for tendons given\n"
+         "  by displacement: VC, VCref); -o OUT.npz: NumPy arrays instead (with the disk positions);\n"
+         "  a progress bar on a terminal (--quiet: none);\n"
          "  exit status 1 if a step failed (its time, residual and iterations on standard error)\n"
          "\n"
          "models:\n" + models +

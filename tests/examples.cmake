@@ -12,3 +12,7 @@ endforeach()
 add_test(NAME example_paper_robot_dynamics_simulate
          COMMAND tdcr_cli simulate ${PROJECT_SOURCE_DIR}/examples/paper_robot_dynamics.json --duration 2
                  -o ${CMAKE_CURRENT_BINARY_DIR}/paper_robot_dynamics.csv)
+# And its displacement-driven twin (VC: tendon 1 pulled by 2 mm within 50 ms, held).
+add_test(NAME example_dynamics_displacement_simulate
+         COMMAND tdcr_cli simulate ${PROJECT_SOURCE_DIR}/examples/dynamics_displacement.json --duration 2
+                 -o ${CMAKE_CURRENT_BINARY_DIR}/dynamics_displacement.npz)

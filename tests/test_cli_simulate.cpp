@@ -2,6 +2,7 @@
 // fails (apps/simulate_command.cpp).
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -49,8 +50,12 @@ TEST_F(CliSimulate, WritesOneRowPerStep) {
   ASSERT_EQ(r.status, 0) << r.err;
   const auto rows = lines(tdcr_test::read_file(out));
   ASSERT_EQ(rows.size(), 12u);  // header, t = 0, 0.01, ..., 0.1
-  EXPECT_EQ(rows[0].rfind("t,tip_x,tip_y,tip_z,rot_x,rot_y,rot_z,status,iterations", 0), 0u) << rows[0];
+  EXPECT_EQ(rows[0], "t,tip_x,tip_y,tip_z,rot_x,rot_y,rot_z,status,iterations,kinetic_energy,potential_energy,T_1,T_2,"
+                     "T_3,T_4");
   EXPECT_EQ(rows[1].rfind("0,0,0,0.1,", 0), 0u) << rows[1];  // at rest, straight
+  // The tensions of the timeline (tension input): 0 at rest, tendon 1 ramped to 2 N by 10 ms.
+  EXPECT_NE(rows[1].find(",0,0,0,0,0,0"), std::string::npos) << rows[1];  // energies and tensions 0
+  EXPECT_EQ(rows[11].substr(rows[11].size() - 8), ",2,0,0,0") << rows[11];
   EXPECT_EQ(rows[11].rfind("0.1,", 0), 0u) << rows[11];
   EXPECT_NE(rows[11].find(",converged,"), std::string::npos) << rows[11];
   // Standard output when no -o is given.
@@ -100,6 +105,54 @@ TEST_F(CliSimulate, FailedStepExitsOneWithTimeResidualIterations) {
   EXPECT_NE(r.err.find("iterations"), std::string::npos) << r.err;
   const std::string csv = tdcr_test::read_file(out);
   EXPECT_NE(csv.find("integration_failed"), std::string::npos) << csv;
+}
+
+// Displacement input is refused per model: CCsub's dynamics take tensions only so far (VC's
+// take displacements: the same timeline runs there).
+TEST_F(CliSimulate, DisplacementInputOnlyWhereTheModelTakesIt) {
+  const std::string text =
+      R"({"model": "ccsub", "robot": {"backbone": {"density": 6450}, "segments": [{"length": 0.05, "disks": 3,
+         "tendons": [{"x": 0, "y": 0.008}, {"x": 0, "y": -0.008}]}]},
+         "actuation": {"displacements": [0, -0.001]}, "dynamics": {"bending_damping_time": 0.01, "shear_damping_time": 0.01},
+         "timeline": [{"t": 0}, {"t": 0.02, "actuation": {"displacements": [0.0005, -0.001]}}]})";
+  const std::string path = scene(text);
+  auto r = run(path + " --duration 0.04 --dt 0.01");
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_NE(r.err.find("timeline[0].actuation"), std::string::npos) << r.err;
+  r = run(path + " --duration 0.04 --dt 0.01 --model vc");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto rows = lines(r.out);
+  ASSERT_EQ(rows.size(), 6u);
+  // The tendons' solved tensions: tendon 1 pulled taut; tendon 2, its antagonist, let out by
+  // 1 mm, more than the bend lengthens its path (about 0.5 mm): slack, exactly 0.
+  EXPECT_EQ(rows[5].substr(rows[5].size() - 2), ",0") << rows[5];
+  const double T1 = std::stod(rows[5].substr(rows[5].rfind(',', rows[5].size() - 3) + 1));
+  EXPECT_GT(T1, 0.1) << rows[5];
+}
+
+// The progress bar: on a terminal (a pseudo-terminal by `script`), the time, the steps and the
+// real-time ratio on standard error; nothing with --quiet, and nothing when standard error is no
+// terminal (the other tests: their standard error is a file).
+TEST_F(CliSimulate, ProgressBarOnATerminalOnly) {
+  if (std::system("script -qec true /dev/null >/dev/null 2>&1") != 0) GTEST_SKIP() << "no `script` (util-linux)";
+  const std::string small = tdcr_test::quote(kData + "small_step.json");
+  const std::string out = tdcr_test::quote((dir_ / "out.csv").string());
+  const auto tty = [&](const std::string& extra) {
+    return tdcr_test::run_program("script", "-qec " + tdcr_test::quote(tdcr_test::quote(kBinary) + " simulate " + small +
+                                                                    " --duration 0.1 --dt 0.01 -o " + out + extra) +
+                                                " /dev/null",
+                                  dir_ / "stderr.txt");
+  };
+  auto r = tty("");
+  ASSERT_EQ(r.status, 0) << r.out;
+  EXPECT_NE(r.out.find("t = 0.1 / 0.1 s, 11 steps"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("real time"), std::string::npos) << r.out;
+  r = tty(" --quiet");
+  ASSERT_EQ(r.status, 0) << r.out;
+  EXPECT_EQ(r.out.find("steps"), std::string::npos) << r.out;
+  r = run(small + " --duration 0.1 --dt 0.01 -o " + out);
+  ASSERT_EQ(r.status, 0);
+  EXPECT_EQ(r.err, "");
 }
 
 }  // namespace

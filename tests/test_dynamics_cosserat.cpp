@@ -416,3 +416,253 @@ TEST(DynamicsCosserat, AdvanceReadsTheTimeline) {
     EXPECT_GT(b->shape().tip().p.head<2>().norm(), 1e-4);  // it moved
   }
 }
+
+// --- Displacement input (the tensions of the driven tendons are unknowns of every step) ---
+
+namespace {
+
+// Tendon 1 by displacement `d` (m), the others by tension 0 (mixed input).
+ModelInput pull_tendon_1(const Robot& r, double d) {
+  ModelInput in = tensions(r, {});
+  in.actuation.kind = Actuation::Kind::Displacements;
+  in.actuation.kinds.assign(r.tendon_count(), Actuation::Kind::Tensions);
+  in.actuation.kinds[0] = Actuation::Kind::Displacements;
+  in.actuation.values[0] = d;
+  return in;
+}
+
+DynamicsSettings damped() {
+  DynamicsSettings set;
+  set.bending_damping_time = 0.01;
+  set.shear_damping_time = 0.01;
+  set.alpha = 0.0;
+  return set;
+}
+
+// Tendon 1 pulled by 1 mm within 10 ms, then held: after 0.5 s the tip is on the static
+// displacement solve's answer of the same model on the same mesh (to 1e-8 m), with its tension.
+void displacement_settles(ModelKind kind, Effects effects) {
+  const Robot robot = steel_robot(5);
+  const std::unique_ptr<StaticModel> owner = make_model(kind, robot, effects);
+  const StaticModel& model = *owner;
+  const int steps = 2;
+  vc::CosseratDynamicsOptions o;
+  o.rk4_steps = steps;
+  o.function_tolerance = 1e-12;
+  const double dt = 0.005, d = 1e-3;
+  auto dyn = kind == ModelKind::VC ? vc::make_vc_dynamics(static_cast<const VcModel&>(model), damped(), dt, o)
+                                   : vc::make_vcref_dynamics(model, damped(), dt, o);
+  const ModelInput rest = pull_tendon_1(robot, 0.0), held = pull_tendon_1(robot, d);
+  dyn->initialize(static_answer(model, rest, steps), rest);
+  const Solution target = static_answer(model, held, steps);
+  SimulationStep s;
+  double early = 0.0;
+  for (int k = 1; k <= 100; ++k) {
+    s = dyn->advance_with_input(k * dt, pull_tendon_1(robot, d * std::min(1.0, k * dt / 0.01)));
+    ASSERT_EQ(s.status, TerminationType::Converged) << "step " << k << ": " << dyn->last_message();
+    if (k == 2) early = (s.tip.p - target.tip().p).norm();
+  }
+  const double err = (s.tip.p - target.tip().p).norm();
+  std::printf("%s: tip error %.3e m after 0.5 s (%.3e m at 10 ms); T1 %.9g N (static %.9g N); pull %.3e m\n",
+              to_string(kind).c_str(), err, early, s.tensions[0], target.tensions[0], s.tendon_displacements[0]);
+  EXPECT_LT(err, 1e-8);
+  // It moved (the tip far from the straight start), and by dynamics: when the pull is complete
+  // (10 ms) the robot is still on its way (measured 3.6e-5 m: a pulled tendon drives the robot
+  // stiffly, it follows closely).
+  EXPECT_GT(s.tip.p.head<2>().norm(), 1e-3);
+  EXPECT_GT(early, 1e-6);
+  EXPECT_NEAR(s.tensions[0], target.tensions[0], 1e-6 * target.tensions[0]);
+  EXPECT_GT(s.tensions[0], 0.1);
+  EXPECT_EQ(s.tensions[1], 0.0);
+  // The path meets the command (VCref: its chords of the published shape, whose disks meet the
+  // solve's nodes to the continuity tolerance; measured 6e-12 m).
+  EXPECT_NEAR(s.tendon_displacements[0], d, 1e-10);
+}
+
+}  // namespace
+
+TEST(DynamicsCosserat, HeldDisplacementSettlesOnTheStaticDisplacementSolve) {
+  displacement_settles(ModelKind::VC, Effects{});
+  Effects removed;
+  removed.disk_normal_force = DiskNormalForce::Removed;
+  displacement_settles(ModelKind::VCref, removed);
+}
+
+// A displacement timeline made of a tension run's reported pulls of tendon 1 (one entry per
+// output step) moves the robot as the tension run did, and its solved tension is the tension
+// run's: both runs solve the same step equations at every step (BDF2, the same mesh), one with
+// T_1 given, the other with the pull given, each to Newton's tolerance 1e-10 (scaled); the
+// differences are that tolerance carried through the steps (measured: below 1e-9 m, 1e-6 N).
+TEST(DynamicsCosserat, DisplacementsOfATensionRunReproduceIt) {
+  const Robot robot = steel_robot(5);
+  for (const ModelKind kind : {ModelKind::VC, ModelKind::VCref}) {
+    const std::unique_ptr<StaticModel> model = make_model(kind, robot, Effects{});
+    Timeline pulled;
+    pulled.entries.push_back(TimelineEntry{0.0, tensions(robot, {})});
+    pulled.entries.push_back(TimelineEntry{0.02, tensions(robot, {2.0, 0.0, 0.0, 0.0})});
+    pulled.entries.push_back(TimelineEntry{0.05, tensions(robot, {0.5, 0.0, 0.0, 0.0})});
+    SimulationOptions opt;
+    opt.duration = 0.1;
+    opt.dt = 0.005;
+    const SolverOptions solver = test::fixed_mesh_settings();
+    const SimulationResult a = simulate(*model, damped(), pulled, opt, solver);
+    ASSERT_TRUE(a.completed) << a.message;
+    Timeline driven;
+    for (const SimulationStep& s : a.steps) {
+      ASSERT_EQ(s.tendon_displacements.size(), 4u);
+      driven.entries.push_back(TimelineEntry{s.t, pull_tendon_1(robot, s.tendon_displacements[0])});
+    }
+    const SimulationResult b = simulate(*model, damped(), driven, opt, solver);
+    ASSERT_TRUE(b.completed) << b.message;
+    ASSERT_EQ(a.steps.size(), b.steps.size());
+    double tip = 0.0, tension = 0.0, moved = 0.0;
+    for (std::size_t k = 0; k < a.steps.size(); ++k) {
+      tip = std::max(tip, (a.steps[k].tip.p - b.steps[k].tip.p).norm());
+      tension = std::max(tension, std::abs(a.steps[k].tensions[0] - b.steps[k].tensions[0]));
+      moved = std::max(moved, a.steps[k].tip.p.head<2>().norm());
+      EXPECT_EQ(b.steps[k].tensions[1], 0.0);
+    }
+    std::printf("%s: largest tip difference %.3e m, tension difference %.3e N (tip moved %.3e m)\n",
+                to_string(kind).c_str(), tip, tension, moved);
+    EXPECT_GT(moved, 1e-3);
+    EXPECT_LT(tip, 1e-8);
+    EXPECT_LT(tension, 1e-5);
+    EXPECT_GT(b.steps.back().potential_energy, 0.0);
+  }
+}
+
+// Tendon 1 pulled by 1 mm, then released within 5 ms to 1 mm beyond its straight length: the
+// robot cannot follow a release that fast, so the tendon goes slack with exactly zero tension
+// while the robot swings back, and stays slack once the robot is straight again (the command is
+// longer than its path), the tip back on the straight robot's.
+TEST(DynamicsCosserat, ReleasedTendonGoesSlackWithZeroTension) {
+  const Robot robot = steel_robot(5);
+  for (const ModelKind kind : {ModelKind::VC, ModelKind::VCref}) {
+    const std::unique_ptr<StaticModel> model = make_model(kind, robot, Effects{});
+    Timeline timeline;
+    timeline.entries.push_back(TimelineEntry{0.0, pull_tendon_1(robot, 0.0)});
+    timeline.entries.push_back(TimelineEntry{0.01, pull_tendon_1(robot, 1e-3)});
+    timeline.entries.push_back(TimelineEntry{0.2, pull_tendon_1(robot, 1e-3)});
+    timeline.entries.push_back(TimelineEntry{0.205, pull_tendon_1(robot, -1e-3)});
+    SimulationOptions opt;
+    opt.duration = 0.6;
+    opt.dt = 0.005;
+    const SimulationResult r = simulate(*model, damped(), timeline, opt, test::fixed_mesh_settings());
+    ASSERT_TRUE(r.completed) << r.message;
+    const SimulationStep& held = r.steps[40];  // t = 0.2 s
+    const SimulationStep& released = r.steps[42];  // t = 0.21 s, just after the release
+    const SimulationStep& end = r.steps.back();
+    std::printf("%s: T1 %.6g N held, %.3g N released (pull %.3e m, command -1e-3 m), %.3g N at the end; tip %.3e m "
+                "off the axis\n",
+                to_string(kind).c_str(), held.tensions[0], released.tensions[0], released.tendon_displacements[0],
+                end.tensions[0], end.tip.p.head<2>().norm());
+    EXPECT_GT(held.tensions[0], 0.1);
+    EXPECT_GT(held.tip.p.head<2>().norm(), 1e-3);
+    EXPECT_EQ(released.tensions[0], 0.0);
+    EXPECT_GT(released.tendon_displacements[0], -1e-3);  // the path is shorter than the command: slack
+    EXPECT_EQ(end.tensions[0], 0.0);
+    EXPECT_LT(end.tip.p.head<2>().norm(), 1e-8);
+    EXPECT_NEAR(end.tip.p.z(), robot.total_length(), 1e-8);
+    EXPECT_NEAR(end.tendon_displacements[0], 0.0, 1e-9);
+  }
+}
+
+// The start's energies, every model with dynamics: kinetic 0 at rest, potential the start's true
+// one, the same as the next step's at rest under the same input (each integrator's own
+// expression). A constant tension's potential is T times its path length, so the straight robot
+// under 1 N on tendon 1 (path 0.05 m) has 0.05 J; bent, the elastic energy U_e and the pull d
+// give 0.05 J + U_e - T d = 0.05 J - U_e (linear: T d = 2 U_e), measured 0.0496 J by all four
+// models, 1.5e-5 apart (their shapes differ).
+TEST(DynamicsCosserat, StartReportsItsPotentialEnergy) {
+  const Robot robot = steel_robot(5);
+  std::vector<double> starts;
+  for (const ModelKind kind : {ModelKind::VC, ModelKind::VCref, ModelKind::CCsub, ModelKind::PRB}) {
+    const std::unique_ptr<StaticModel> model = make_model(kind, robot, Effects{});
+    Timeline timeline;
+    timeline.entries.push_back(TimelineEntry{0.0, tensions(robot, {1.0, 0.0, 0.0, 0.0})});
+    SimulationOptions opt;
+    opt.duration = 0.01;
+    opt.dt = 0.005;
+    const SimulationResult r = simulate(*model, damped(), timeline, opt, test::fixed_mesh_settings());
+    ASSERT_TRUE(r.completed) << to_string(kind) << ": " << r.message;
+    const double U0 = r.steps[0].potential_energy;
+    std::printf("%s: potential energy at t = 0 %.9e J, at 5 ms %.9e J\n", to_string(kind).c_str(), U0,
+                r.steps[1].potential_energy);
+    EXPECT_EQ(r.steps[0].kinetic_energy, 0.0);
+    EXPECT_LT(U0, 0.05 - 1e-4) << to_string(kind);  // bent: below the straight robot's 0.05 J
+    EXPECT_GT(U0, 0.04) << to_string(kind);
+    EXPECT_NEAR(r.steps[1].potential_energy, U0, 1e-6 * std::abs(U0)) << to_string(kind);
+    starts.push_back(U0);
+  }
+  for (const double U : starts) EXPECT_NEAR(U, starts[0], 1e-4 * starts[0]);
+}
+
+// Displacement input is refused per model: CCsub's dynamics take tensions only so far.
+TEST(DynamicsCosserat, DisplacementInputIsRefusedWhereNotSupported) {
+  const Robot robot = steel_robot(5);
+  const std::unique_ptr<StaticModel> model = make_model(ModelKind::CCsub, robot, Effects{});
+  Timeline timeline;
+  timeline.entries.push_back(TimelineEntry{0.0, pull_tendon_1(robot, 0.0)});
+  SimulationOptions opt;
+  opt.duration = 0.01;
+  try {
+    simulate(*model, damped(), timeline, opt, SolverOptions{});
+    ADD_FAILURE() << "CCsub took displacement input";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "timeline[0].actuation") << e.what();
+  }
+}
+
+// The disks' rotary inertia: a robot with heavy wide disks (1 g, 10 mm radius: polar inertia
+// 5e-8 kg m^2 each, 16 000 times its backbone interval's 3.1e-12) twisted by a tip moment and
+// released twists back and forth as the chain of torsional springs GJ / h and disk inertias
+// m r^2 / 2: fixed at the base, free at the tip, its first frequency is
+// (1 / pi) sqrt(k / J) sin(pi / (2 (2 n + 1))) Hz for n disks. Measured through the disks' twist
+// projected on that mode (sin(j pi / (2 n + 1)), disk j), zero crossings, VC by implicit
+// midpoint; undamped, its energy (the disks' rotation included) is kept.
+TEST(DynamicsCosserat, DiskRotaryInertiaSetsTheTorsionalFrequency) {
+  Robot robot = steel_robot(5);
+  for (Segment& seg : robot.segments) {
+    seg.disk_mass = 1e-3;
+    seg.disk_radius = 0.01;
+  }
+  const VcModel model(robot, Effects{});
+  const TendonRouting& rt = model.routing();
+  const int n = rt.disk_count() - 1;
+  const double h = robot.total_length() / n;
+  const double GJ = robot.backbone.effective_stiffness().GJ, J = 1e-3 * 0.01 * 0.01 / 2.0;
+  const double theta = M_PI / (2.0 * (2 * n + 1));
+  const double f1 = std::sqrt(GJ / h / J) * std::sin(theta) / M_PI;
+  ModelInput twisted = tensions(robot, {});
+  twisted.loads.tip_moment = Vec3(0.0, 0.0, 1e-3);  // 0.03 rad at the tip: linear
+  const ModelInput released = tensions(robot, {});
+  DynamicsSettings set;
+  set.scheme = TimeScheme::ImplicitMidpoint;
+  const double dt = 1e-4;
+  auto dyn = vc::make_vc_dynamics(model, set, dt);
+  dyn->initialize(static_answer(model, twisted, 2), twisted);
+  std::vector<double> t, eta;
+  double e0 = NAN, drift = 0.0, peak_kinetic = 0.0;
+  const int steps = static_cast<int>(std::ceil(3.2 / f1 / dt));
+  for (int k = 1; k <= steps; ++k) {
+    const SimulationStep s = dyn->advance_with_input(k * dt, released);
+    ASSERT_EQ(s.status, TerminationType::Converged) << "step " << k << ": " << dyn->last_message();
+    const Solution shape = dyn->shape();
+    double q = 0.0;
+    for (int j = 1; j <= n; ++j)
+      q += std::sin(j * 2.0 * theta) * std::atan2(shape.disk_frames[j].R(1, 0), shape.disk_frames[j].R(0, 0));
+    t.push_back(s.t);
+    eta.push_back(q);
+    const double e = s.kinetic_energy + s.potential_energy;
+    if (k == 1) e0 = e;
+    drift = std::max(drift, std::abs(e - e0));
+    peak_kinetic = std::max(peak_kinetic, s.kinetic_energy);
+  }
+  const double g1 = crossing_frequency(t, eta);
+  std::printf("torsion f1 %.4f Hz (disk chain %.4f Hz), energy drift %.3e of the peak kinetic %.3e J\n", g1, f1,
+              drift / peak_kinetic, peak_kinetic);
+  // Without the disks' rotary inertia the twist would ring at the backbone's own polar inertia,
+  // over a hundred times faster.
+  EXPECT_NEAR(g1 / f1, 1.0, 0.005);
+  EXPECT_LT(drift, 1e-4 * peak_kinetic);
+}

@@ -50,12 +50,14 @@ SimulationResult simulate(const StaticModel& model, const DynamicsSettings& sett
   options.validate();
   settings.validate();
   timeline.validate(model.robot());
-  for (std::size_t i = 0; i < timeline.entries.size(); ++i)
-    if (timeline.entries[i].input.actuation.kind != Actuation::Kind::Tensions)
-      throw InputError("timeline[" + std::to_string(i) + "].actuation", "displacements",
-                       "simulation takes tension input only so far (displacement input and tendon slack are not "
-                       "supported yet)");
   std::unique_ptr<DynamicsIntegrator> integrator = make_dynamics_integrator(model, settings, options.dt, solver);
+  if (!integrator->takes_displacement_input())
+    for (std::size_t i = 0; i < timeline.entries.size(); ++i) {
+      const Actuation& a = timeline.entries[i].input.actuation;
+      if (a.kind != Actuation::Kind::Tensions || a.mixed())
+        throw InputError("timeline[" + std::to_string(i) + "].actuation", "displacements",
+                         model.name() + "'s dynamics take tension input only so far (VC and VCref take displacements)");
+    }
   SimulationResult result;
   // t = 0: at rest on the static answer of the first input.
   const ModelInput first = timeline.at(0.0);
@@ -79,14 +81,21 @@ SimulationResult simulate(const StaticModel& model, const DynamicsSettings& sett
   const long steps = std::lround(std::ceil(options.duration / options.dt - 1e-9));
   result.steps.reserve(static_cast<std::size_t>(steps) + 1);
   {
-    // The reported energies of the start come from the integrator's first (empty) advance.
+    // At rest: no kinetic energy; the potential energy of the start from the integrator.
     s0.kinetic_energy = 0.0;
+    s0.potential_energy = integrator->potential_energy();
+    s0.tensions = rest.tensions;
+    s0.tendon_displacements = rest.tendon_displacements;
     result.steps.push_back(s0);
     if (observer) observer(s0, rest);
   }
   for (long k = 1; k <= steps; ++k) {
     const double t = std::min(options.duration, static_cast<double>(k) * options.dt);
     SimulationStep s = integrator->advance(t, timeline);
+    if (s.tensions.empty()) {  // tension input (the integrators without displacement input): as given
+      const ModelInput in = timeline.at(s.t);
+      if (in.actuation.kind == Actuation::Kind::Tensions && !in.actuation.mixed()) s.tensions = in.actuation.values;
+    }
     result.steps.push_back(s);
     if (observer) observer(s, integrator->shape());
     if (s.status != TerminationType::Converged) {

@@ -319,6 +319,12 @@ SimulationStep LumpedDynamics::advance(double t_next, const Timeline& timeline) 
   return step;
 }
 
+double LumpedDynamics::potential_energy() {
+  input_at(t_);
+  twists(q_.data(), T_);
+  return potential_energy(q_.data());
+}
+
 void LumpedDynamics::choose_bending_planes(const Timeline& timeline) {
   chart_chosen_ = true;
   if (m_ != 5) return;

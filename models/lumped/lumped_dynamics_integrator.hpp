@@ -71,6 +71,7 @@ class LumpedDynamics final : public DynamicsIntegrator {
   void initialize(const Solution& at_rest, const ModelInput& input) override;
   SimulationStep advance(double t_next, const Timeline& timeline) override;
   Solution shape() const override;
+  double potential_energy() override;
 
   // (K, M) about x at rest under input: the natural frequencies (Hz).
   Eigen::VectorXd frequencies(const Eigen::VectorXd& x, const ModelInput& input);

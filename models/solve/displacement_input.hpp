@@ -123,6 +123,17 @@ class DisplacementProblem final : public ModelProblem, public bvp::Parameterized
   /// `values` (the input's, global order) with each driven tendon's entry the tension of the
   /// linear guess (see linear_guess()).
   std::vector<double> linear_tensions(std::vector<double> values) const;
+  /// Time stepping (VC's and VCref's dynamics, models/vc/vc_dynamics.cpp): from now on the
+  /// commanded pulls of `input` (the tendons driven as bound), without a rebind; the driven
+  /// tensions are applied again at the next evaluation (the inner problem may have been rebound).
+  /// Allocation-free.
+  void set_commanded(const ModelInput& input) {
+    for (int i = 0; i < k_; ++i) delta_[i] = input.actuation.values[static_cast<std::size_t>(index_[i])];
+    applied_valid_ = false;
+  }
+  /// Complementarity after a converged solve at y (a taut tendon that would push goes slack, a
+  /// slack one whose path is too long goes taut): true if a tendon changed (then solve again).
+  bool update_slack(const Eigen::VectorXd& y) { return flip(y); }
   /// Which driven tendons are taut (by driven index) and their global indices.
   const std::vector<char>& taut() const { return taut_; }
   const std::vector<int>& driven() const { return index_; }

@@ -13,8 +13,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <string>
+#include <utility>
 
+#include "solve/displacement_input.hpp"
 #include "tdcr/bvp/newton_solver.hpp"
 #include "tdcr/core/error.hpp"
 #include "tdcr/models/tendon_physics.hpp"
@@ -98,6 +101,65 @@ class StepSystem final : public bvp::ResidualSystem {
   dyn::Vec6 res_;
 };
 
+/// A time step as the model problem that displacement input borders (detail::DisplacementProblem,
+/// the statics' own): its residual system is the step's shooting (single or multiple), its
+/// tendon pulls those of the step's shape, its driven tensions set on the workspace's loads as
+/// the statics set them. Only what the bordered Newton solve and complementarity read.
+class StepProblem final : public ModelProblem, public bvp::ParameterizedSystem {
+ public:
+  /// `pulls(d)`: every tendon's pull of the last residual's shape into d.
+  StepProblem(VcWorkspace::Impl& W, bvp::ResidualSystem& system, std::function<void(Eigen::VectorXd&)> pulls)
+      : W_(W), sys_(system), pulls_(std::move(pulls)) {}
+  /// The unknowns the guesses return (the step's current ones).
+  Eigen::VectorXd current;
+
+  // --- bvp::ParameterizedSystem: the step's shooting at fixed input ---
+  int size() const override { return sys_.size(); }
+  bool residual(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> f) override {
+    last_x_ = x;
+    last_version_ = version_;
+    last_ok_ = sys_.residual(x, f);
+    return last_ok_;
+  }
+  const bvp::SparsityPattern* sparsity() const override { return sys_.sparsity(); }
+  void residual_scale(Eigen::Ref<Eigen::VectorXd> s) const override { sys_.residual_scale(s); }
+  void unknown_scale(Eigen::Ref<Eigen::VectorXd> s) const override { sys_.unknown_scale(s); }
+  void set_parameter(double) override {}
+
+  // --- ModelProblem ---
+  bvp::ParameterizedSystem* system() override { return this; }
+  bvp::NewtonSolver& newton() override { return newton_; }
+  void cold_guess(Eigen::VectorXd& x) override { x = current; }
+  void rest_state(Eigen::VectorXd& x) override { x = current; }
+  bool warm_guess(const Solution&, Eigen::VectorXd& x) override {
+    x = current;
+    return true;
+  }
+  void extract(const Eigen::VectorXd&, bool, Solution&) override {}
+  bool set_driven_tensions(const std::vector<int>& index, const Eigen::VectorXd& T) override {
+    vc::set_driven_tensions(W_, index, T);
+    ++version_;
+    return true;
+  }
+  bool tendon_pulls(const Eigen::VectorXd& x, Eigen::VectorXd& d) override {
+    if (!(last_ok_ && last_version_ == version_ && last_x_.size() == x.size() && last_x_ == x)) {
+      scratch_.resize(x.size());
+      if (!residual(x, scratch_)) return false;
+    }
+    pulls_(d);
+    return d.allFinite();
+  }
+
+ private:
+  VcWorkspace::Impl& W_;
+  bvp::ResidualSystem& sys_;
+  std::function<void(Eigen::VectorXd&)> pulls_;
+  bvp::NewtonSolver newton_;
+  Eigen::VectorXd last_x_, scratch_;
+  bool last_ok_ = false;
+  unsigned long version_ = 0, last_version_ = ~0ul;
+};
+
 class VcDynamics final : public CosseratDynamics {
  public:
   /// `model` the VC rod of `original` (VC itself, or VCref's robot and effects as a VcModel, then
@@ -129,6 +191,15 @@ class VcDynamics final : public CosseratDynamics {
     if (!at_rest.converged())
       throw InputError("at_rest", to_string(at_rest.summary.termination),
                        "the start must be a converged static answer");
+    // Displacement input: the driven tendons' tensions join each step's unknowns.
+    driven_index_.clear();
+    for (std::size_t k = 0; k < input.actuation.values.size(); ++k)
+      if (input.actuation.kind_of(k) == Actuation::Kind::Displacements) driven_index_.push_back(static_cast<int>(k));
+    driven_ = static_cast<int>(driven_index_.size());
+    displacement_.reset();
+    step_problem_.reset();
+    bound_ = false;
+    if (driven_ > 0) placeholders_ = detail::DisplacementProblem::placeholders(original_, input);
     bind(input);
     mesh_.build(W_, options_.rk4_steps, options_.rk4_max_step);
     const Values zero = Values::Zero();
@@ -142,7 +213,17 @@ class VcDynamics final : public CosseratDynamics {
       x << at_rest.backbone.front().n, at_rest.backbone.front().m;
     x_ = x;
     peak_force_ = peak_moment_ = 0.0;
+    if (driven_ > 0) {
+      // The start's driven tensions, so that the static start of multiple shooting is its shape.
+      Eigen::VectorXd T(driven_);
+      for (int i = 0; i < driven_; ++i) {
+        const auto k = static_cast<std::size_t>(driven_index_[i]);
+        T[i] = k < at_rest.tensions.size() ? at_rest.tensions[k] : 0.0;
+      }
+      vc::set_driven_tensions(W_, driven_index_, T);
+    }
     if (multiple_) start_multiple(at_rest);
+    if (driven_ > 0) start_displacement(at_rest, input);
     bvp::NewtonResult r = solve(false);
     if (!r.converged())
       throw std::runtime_error("Cosserat dynamics: the static start on the dynamics' mesh did not converge: " +
@@ -185,6 +266,8 @@ class VcDynamics final : public CosseratDynamics {
     if (steps_ > 1) x_ = 2.0 * x_ - x_previous_;
     const Eigen::VectorXd xm_start = xm_;
     if (multiple_ && steps_ > 1) xm_ = 2.0 * xm_ - xm_previous_;
+    tau_start_ = tau_;
+    if (driven_ > 0 && steps_ > 1) tau_ = 2.0 * tau_ - tau_previous_;
     const bvp::NewtonResult r = solve(steps_ > 0);
     SimulationStep step;
     step.t = t_next;
@@ -193,7 +276,10 @@ class VcDynamics final : public CosseratDynamics {
     if (!r.converged()) {
       x_ = x_start;  // the state stays at t_, so that a caller may retry with another step
       xm_ = xm_start;
+      tau_ = tau_start_;
       step.tip = frames_.back();  // the last converged shape's
+      step.tensions = tensions_;
+      step.tendon_displacements = pulls_report_;
       return step;
     }
     for (int i = 0; i < mesh_.points; ++i) {
@@ -210,12 +296,15 @@ class VcDynamics final : public CosseratDynamics {
     }
     x_previous_ = x_start;
     xm_previous_ = xm_start;
+    tau_previous_ = tau_start_;
     t_ = t_next;
     ++steps_;
     publish(y1_);
     step.tip = frames_.back();
     step.kinetic_energy = kinetic_;
     step.potential_energy = potential_;
+    step.tensions = tensions_;
+    step.tendon_displacements = pulls_report_;
     return step;
   }
 
@@ -226,10 +315,14 @@ class VcDynamics final : public CosseratDynamics {
     s.summary.termination = TerminationType::Converged;
     s.disk_frames = frames_;
     s.backbone = samples_;
-    s.tensions = W_.loads.full_tensions();
+    s.tensions = tensions_;
+    s.tendon_displacements = pulls_report_;
+    s.tendon_slack = slack_;
     s.unknowns = x_;
     return s;
   }
+  double potential_energy() override { return potential_; }
+  bool takes_displacement_input() const override { return true; }
   double time() const override { return t_; }
   long shots() const override { return system_.shots + (multiple_system_ ? multiple_system_->shots : 0); }
   int mesh_points() const override { return mesh_.points; }
@@ -238,15 +331,177 @@ class VcDynamics final : public CosseratDynamics {
  private:
   void bind(const ModelInput& input) {
     input.validate(model_.robot());
-    if (input.actuation.kind != Actuation::Kind::Tensions || input.actuation.mixed())
-      throw InputError("actuation.kind", "displacements", "VC's dynamics takes tension input");
+    const bool displaced = input.actuation.kind != Actuation::Kind::Tensions || input.actuation.mixed();
+    if (displaced != (driven_ > 0))
+      throw InputError("actuation.kind", displaced ? "displacements" : "tensions",
+                       "the simulation started with the other kind of input: tendons given by displacement stay so");
     if (bound_ && same_input(input, input_)) return;
-    SolverOptions o;
-    o.integrator = IntegratorKind::FixedStepRK4;  // the workspace's own integrators stay unused
-    bind_input(W_, model_, input, o);
+    const ModelInput* bound = &input;
+    if (driven_ > 0) {
+      // The tension form (the statics' rule): the driven tendons bound at their tension scales,
+      // their tensions set per evaluation by the displacement problem.
+      tension_form_.actuation.kind = Actuation::Kind::Tensions;
+      tension_form_.actuation.convention = input.actuation.convention;
+      tension_form_.actuation.kinds.clear();
+      tension_form_.actuation.values.assign(input.actuation.values.begin(), input.actuation.values.end());
+      for (const int k : driven_index_) tension_form_.actuation.values[static_cast<std::size_t>(k)] = placeholders_[k];
+      tension_form_.loads = input.loads;
+      bound = &tension_form_;
+    }
+    if (!(bound_ && same_input(*bound, bound_input_))) {
+      SolverOptions o;
+      o.integrator = IntegratorKind::FixedStepRK4;  // the workspace's own integrators stay unused
+      bind_input(W_, model_, *bound, o);
+      bound_input_ = *bound;
+      set_c0(X_.c0);  // the section's weight follows the input
+    }
     input_ = input;
     bound_ = true;
-    set_c0(X_.c0);  // the section's weight follows the input
+    if (displacement_) displacement_->set_commanded(input);
+  }
+
+  // Displacement input: the statics' DisplacementProblem on the step's shooting, its tendons taut
+  // or slack as the start's.
+  void start_displacement(const Solution& at_rest, const ModelInput& input) {
+    if (chords_) {
+      // VCref's pulls: each tendon's chords from its first disk (the base, or with the
+      // per-segment convention its segment's start) and their length on the straight robot,
+      // read off chord_displacements (pull + chords' length) once.
+      const TendonRouting& rt = model_.routing();
+      const std::vector<double> p = tendon::chord_displacements(at_rest.disk_frames, rt, input.actuation.convention);
+      chord_first_.assign(rt.tendons.size(), 0);
+      chord_rest_.assign(rt.tendons.size(), 0.0);
+      for (std::size_t k = 0; k < rt.tendons.size(); ++k) {
+        const RoutedTendon& t = rt.tendons[k];
+        if (input.actuation.convention == Actuation::DisplacementConvention::PerSegment && t.segment > 0)
+          chord_first_[k] = rt.segment_end_disk[static_cast<std::size_t>(t.segment - 1)];
+        chord_rest_[k] =
+            p[k] + tendon::chord_length(at_rest.disk_frames.data(), rt, static_cast<int>(k), chord_first_[k]);
+      }
+    }
+    bvp::ResidualSystem& sys = multiple_ ? static_cast<bvp::ResidualSystem&>(*multiple_system_) : system_;
+    step_problem_ = std::make_unique<StepProblem>(W_, sys, [this](Eigen::VectorXd& d) { step_pulls(d); });
+    step_problem_->current = multiple_ ? xm_ : Eigen::VectorXd(x_);
+    displacement_ = std::make_unique<detail::DisplacementProblem>();
+    SolverOptions so;
+    so.function_tolerance = options_.function_tolerance;
+    displacement_->bind(original_, *step_problem_, input, so, &at_rest);
+    Eigen::VectorXd y;
+    if (!displacement_->warm_guess(at_rest, y))
+      throw InputError("at_rest", "", "the start has no tensions of the displacement-driven tendons");
+    tau_ = y.tail(driven_);
+    tau_previous_ = tau_;
+  }
+
+  // Every tendon's pull of the last residual's shape (the displacement problem's rows).
+  void step_pulls(Eigen::VectorXd& d) {
+    if (chords_) {  // pull = the straight chords' length minus the chords' (allocation-free)
+      const TendonRouting& rt = model_.routing();
+      d.resize(static_cast<Eigen::Index>(rt.tendons.size()));
+      for (std::size_t k = 0; k < rt.tendons.size(); ++k)
+        d[static_cast<Eigen::Index>(k)] = chord_rest_[k] - tendon::chord_length(multiple_system_->frames().data(), rt,
+                                                                                static_cast<int>(k), chord_first_[k]);
+      return;
+    }
+    dyn::path_pulls(W_, mesh_, values_, lengths_, pulls_);
+    d = Eigen::Map<const Eigen::VectorXd>(pulls_.data(), static_cast<Eigen::Index>(pulls_.size()));
+  }
+
+  // Newton on the step with the driven tensions as unknowns (the displacement problem's bordered
+  // system), then complementarity: a tendon that would push goes slack, a slack one pulled past
+  // its path goes taut, and the step is solved again (at most kMaxSlackChanges times). The
+  // re-solves are exact Newton with full steps: KINSOL's line search stalled on the bordered
+  // multiple-shooting system (paper robot, tendon 1 pulled 2 mm within 10 ms from slack, VCref:
+  // 50 iterations at a scaled residual of 0.13; full steps: 4 iterations).
+  bvp::NewtonResult bordered_solve(bvp::NewtonOptions o, int& iterations) {
+    constexpr int kMaxSlackChanges = 8;
+    detail::DisplacementProblem& D = *displacement_;
+    bvp::NewtonResult r = D.newton().solve(D, y_, o);
+    iterations += r.iterations;
+    o.reuse_jacobian = false;  // other equations: exact Newton from the last answer
+    o.max_setup_calls = 1;
+    o.line_search = false;
+    int changes = 0;
+    while (r.converged() && D.update_slack(y_)) {
+      if (++changes > kMaxSlackChanges) {
+        r.termination = TerminationType::NoConvergence;
+        r.message += "; slack and taut tendons changed more than " + std::to_string(kMaxSlackChanges) + " times";
+        break;
+      }
+      y_flip_ = y_;
+      r = D.newton().solve(D, y_, o);
+      iterations += r.iterations;
+      if (!r.converged()) {  // full steps failed: with the line search from the same start
+        y_ = y_flip_;
+        o.line_search = true;
+        r = D.newton().solve(D, y_, o);
+        iterations += r.iterations;
+        o.line_search = false;
+      }
+    }
+    return r;
+  }
+
+  // The step with displacement input: bordered_solve from the predicted unknowns; where that
+  // fails, from the step's start by exact Newton with full steps; where that fails too and a taut
+  // tendon is commanded below the last state's pull (released faster than the robot follows:
+  // its taut equations ask for a pushing tendon), from the start with those tendons slack.
+  bvp::NewtonResult solve_driven(bool reuse) {
+    detail::DisplacementProblem& D = *displacement_;
+    const int n = multiple_ ? static_cast<int>(xm_.size()) : 6;
+    y_.resize(n + driven_);
+    if (multiple_)
+      y_.head(n) = xm_;
+    else
+      y_.head(n) = x_;
+    y_.tail(driven_) = tau_;
+    y_start_ = y_;
+    int iterations = 0;
+    bvp::NewtonResult r = bordered_solve(newton_options(reuse), iterations);
+    bvp::NewtonOptions exact = newton_options(false);
+    exact.max_setup_calls = 1;
+    exact.line_search = false;
+    if (!r.converged()) {
+      y_ = y_start_;
+      r = bordered_solve(exact, iterations);
+    }
+    if (!r.converged()) {
+      y_ = y_start_;
+      bool released = false;
+      for (int i = 0; i < driven_; ++i) {
+        const auto k = static_cast<std::size_t>(driven_index_[i]);
+        if (D.taut()[static_cast<std::size_t>(i)] && k < pulls_report_.size() &&
+            input_.actuation.values[k] < pulls_report_[k]) {
+          y_[n + i] = -1.0;  // marks it for update_slack
+          released = true;
+        }
+      }
+      if (released) {
+        D.update_slack(y_);
+        for (int i = 0; i < driven_; ++i) y_[n + i] = std::max(0.0, y_[n + i]);
+        r = bordered_solve(exact, iterations);
+      }
+    }
+    r.iterations = iterations;
+    message_ = r.message;
+    if (!r.converged()) return r;
+    // The state of the answer (values_, the workspace's tensions): one evaluation at it.
+    fy_.resize(y_.size());
+    if (!D.residual(y_, fy_)) {
+      r.termination = TerminationType::IntegrationFailed;
+      r.message += "; the shot at the solution failed";
+      return r;
+    }
+    tau_ = y_.tail(driven_);
+    if (multiple_) {
+      Eigen::VectorXd x = y_.head(n);
+      multiple_system_->rebase(x);
+      xm_ = x;
+      x_ = x.head<6>();
+    } else {
+      x_ = y_.head<6>();
+    }
+    return r;
   }
 
   // The step's section: K + c0 B inverted once per step length.
@@ -293,7 +548,8 @@ class VcDynamics final : public CosseratDynamics {
     } else {
       if (static_cast<int>(at_rest.disk_frames.size()) != N + 1 || static_cast<int>(at_rest.backbone.size()) != N + 1)
         throw InputError("at_rest", "", "needs the disk frames and backbone samples of a VCref answer");
-      const std::vector<double>& T = W_.loads.full_tensions();
+      std::vector<double> T(W_.loads.full_tensions().size());
+      for (std::size_t k = 0; k < T.size(); ++k) T[k] = W_.loads.tension(static_cast<int>(k));
       for (int j = 1; j < N; ++j) {
         const tendon::DiskWrench w =
             tendon::disk_wrench(j, at_rest.disk_frames.data(), rt, T.data(),
@@ -315,13 +571,12 @@ class VcDynamics final : public CosseratDynamics {
     peak_moment_ = std::max(peak_moment_, x_.tail<3>().norm());
     const double fs = std::max(W_.loads.force_scale(), peak_force_);
     const double ms = std::max(W_.loads.moment_scale(), peak_moment_);
-    if (!multiple_) {
-      system_.force_scale = fs;
-      system_.moment_scale = ms;
-      return solve_single(reuse);
-    }
+    system_.force_scale = fs;
+    system_.moment_scale = ms;
+    if (multiple_) multiple_system_->set_scales(fs, ms);
+    if (displacement_) return solve_driven(reuse);
+    if (!multiple_) return solve_single(reuse);
     dyn::MultipleShooting& sys = *multiple_system_;
-    sys.set_scales(fs, ms);
     Eigen::VectorXd x = xm_;
     bvp::NewtonResult r = newton_.solve(sys, x, newton_options(reuse));
     message_ = r.message;
@@ -387,6 +642,20 @@ class VcDynamics final : public CosseratDynamics {
       samples_[j] = BackboneSample{rt.disk_s[j], frames_[j], frames_[j].R * nb, frames_[j].R * mb};
     }
     dyn::energies(W_, chords_, X_, mesh_, values, frames_, point_positions_, kinetic_, potential_);
+    // The reported tensions (a slack tendon's exactly 0) and the pulls a motor sets (an elastic
+    // tendon's stretch added, as the statics report them).
+    const std::size_t K = W_.loads.full_tensions().size();
+    tensions_.resize(K);
+    slack_.assign(K, false);
+    for (std::size_t k = 0; k < K; ++k) tensions_[k] = std::max(0.0, W_.loads.tension(static_cast<int>(k)));
+    if (displacement_)
+      for (int i = 0; i < driven_; ++i)
+        slack_[static_cast<std::size_t>(driven_index_[i])] = !displacement_->taut()[static_cast<std::size_t>(i)];
+    if (chords_)
+      pulls_report_ = tendon::chord_displacements(frames_, model_.routing(), input_.actuation.convention);
+    else
+      dyn::path_pulls(W_, mesh_, values, lengths_, pulls_report_);
+    tendon::add_elastic_stretch(model_.robot(), model_.routing(), tensions_, pulls_report_);
   }
 
   const StaticModel& original_;
@@ -397,8 +666,24 @@ class VcDynamics final : public CosseratDynamics {
   bool chords_, multiple_;
   std::unique_ptr<ModelWorkspace> workspace_;
   VcWorkspace::Impl& W_;
-  ModelInput input_;
+  ModelInput input_;        ///< The input of the step (displacements as given).
+  ModelInput bound_input_;  ///< What the workspace is bound to (displacement input: its tension form).
   bool bound_ = false;
+  // Displacement input: the driven tendons (global indices), their tension scales' placeholders,
+  // the statics' bordered problem on the step, and the driven tensions (scaled) now, at the step's
+  // start and a step before.
+  int driven_ = 0;
+  std::vector<int> driven_index_;
+  std::vector<double> placeholders_;
+  ModelInput tension_form_;
+  std::unique_ptr<StepProblem> step_problem_;
+  std::unique_ptr<detail::DisplacementProblem> displacement_;
+  Eigen::VectorXd tau_, tau_start_, tau_previous_, y_, y_start_, y_flip_, fy_;
+  std::vector<double> lengths_, pulls_;                   ///< path_pulls' scratch and result.
+  std::vector<int> chord_first_;                           ///< VCref: each tendon's first disk of its pull.
+  std::vector<double> chord_rest_;                         ///< VCref: its chords' length on the straight robot.
+  std::vector<double> tensions_, pulls_report_;            ///< Reported with the published shape.
+  std::vector<bool> slack_;
   dyn::Mesh mesh_;
   dyn::StepSection X_;
   ValuesList history_, values_;  ///< Per point: the step's history, the last shot's values.

@@ -76,9 +76,12 @@ class CosseratDynamics : public DynamicsIntegrator {
 };
 
 /// @brief The VC dynamics of `model`: `settings` validated here, `dt` the time step (s, > 0).
-/// Throws InputError naming the field: a robot without mass (`robot.backbone.density`),
-/// displacement input is refused at initialize (`actuation.kind`), tendon friction
-/// (`effects.tendon_friction`), or a bad setting (`dynamics.<key>`, `dt`).
+/// Displacement input (all tendons or mixed) makes the driven tendons' tensions unknowns of every
+/// step (the statics' DisplacementProblem on the step's shooting, slack by complementarity;
+/// docs/dynamics-cosserat.md); the kind of input is fixed at initialize. Throws InputError naming
+/// the field: a robot without mass (`robot.backbone.density`), a step whose input changes between
+/// tensions and displacements (`actuation.kind`), tendon friction (`effects.tendon_friction`), or a
+/// bad setting (`dynamics.<key>`, `dt`).
 std::unique_ptr<CosseratDynamics> make_vc_dynamics(const VcModel& model, const DynamicsSettings& settings, double dt,
                                                    const CosseratDynamicsOptions& options = {});
 

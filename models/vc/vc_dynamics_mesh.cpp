@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "physics/cosserat_rhs.hpp"
+#include "physics/tendon_path.hpp"
 #include "tdcr/models/tendon_physics.hpp"
 
 namespace tdcr::vc::dyn {
@@ -18,6 +19,9 @@ void Mesh::build(const VcWorkspace::Impl& W, int rk4_steps, double rk4_max_step)
   pre.assign(nd, -1);
   post.assign(nd, -1);
   disk_mass.assign(nd, 0.0);
+  disk_inertia.assign(nd, Vec3::Zero());
+  double hole_radius = 0.0;
+  for (const RoutedTendon& t : rt.tendons) hole_radius = std::max(hole_radius, physics::max_offset(t));
   weight.clear();
   int p = 0;
   for (int j = 1; j < nd; ++j) {
@@ -36,7 +40,10 @@ void Mesh::build(const VcWorkspace::Impl& W, int rk4_steps, double rk4_max_step)
     post[j] = p++;
     weight.push_back(0.0);
     weight.push_back(0.0);
-    disk_mass[j] = robot.segments[I.segment].disk_mass;
+    const Segment& seg = robot.segments[I.segment];
+    disk_mass[j] = seg.disk_mass;
+    const double r = seg.disk_radius > 0.0 ? seg.disk_radius : hole_radius;
+    disk_inertia[j] = seg.disk_mass * r * r * Vec3(0.25, 0.25, 0.5);
     intervals.push_back(I);
   }
   points = p;
@@ -44,7 +51,7 @@ void Mesh::build(const VcWorkspace::Impl& W, int rk4_steps, double rk4_max_step)
 
 // As vc::disk_point_loads does for the statics: tendon terminations (Eq. 40-41), the disk's
 // weight, and the kinks of the continuing tendons (VcOptions::kink_forces); here also the disk's
-// inertia, and the step's strain law on both sides.
+// inertia (its mass and its rotary inertia), and the step's strain law on both sides.
 bool disk_loads(VcWorkspace::Impl& W, const ShotData& d, int i, int j, double* y) {
   const Mesh& M = *d.mesh;
   const StepSection& X = *d.X;
@@ -63,7 +70,8 @@ bool disk_loads(VcWorkspace::Impl& W, const ShotData& d, int i, int j, double* y
   vp << v, u, q, w, Vec6::Zero();
   const bool terminates = d.distributed && j == last && !seg.terminating.empty();
   const bool weighted = W.loads.has_disk_weight() && W.loads.disk_weight(j).squaredNorm() > 0.0;
-  const bool massive = M.disk_mass[j] > 0.0 && (X.c0 != 0.0 || hp.segment<3>(kQ).squaredNorm() > 0.0);
+  const bool massive = M.disk_mass[j] > 0.0 && (X.c0 != 0.0 || hp.segment<3>(kQ).squaredNorm() > 0.0 ||
+                                               hp.segment<3>(kW).squaredNorm() > 0.0);
   if (terminates) {
     for (const cosserat::TendonLoad& t : seg.terminating_at(s)) {
       const Vec3 qk = v + u.cross(t.r) + t.dr;
@@ -73,8 +81,13 @@ bool disk_loads(VcWorkspace::Impl& W, const ShotData& d, int i, int j, double* y
     }
   }
   if (weighted) n -= W.loads.disk_weight(j);
-  // The disk's mass moves with the backbone point: n jumps by m_d a, a = R (w x q + q_t).
-  if (massive) n += M.disk_mass[j] * (R * (w.cross(q) + X.c0 * q + hp.segment<3>(kQ)));
+  // The disk moves with the backbone point as a rigid body: n jumps by m_d a, a = R (w x q + q_t),
+  // m by the rate of its angular momentum R (J_d w_t + w x J_d w) (body frame: w, J_d diagonal).
+  if (massive) {
+    n += M.disk_mass[j] * (R * (w.cross(q) + X.c0 * q + hp.segment<3>(kQ)));
+    const Vec3& J = M.disk_inertia[j];
+    m += R * (J.cwiseProduct(X.c0 * w + hp.segment<3>(kW)) + w.cross(J.cwiseProduct(w)));
+  }
   const Values& hd = (*d.history)[M.post[j]];
   if (terminates || weighted || massive) {
     const std::vector<cosserat::TendonLoad>* cont = nullptr;
@@ -189,6 +202,42 @@ void reconstruct(const Mesh& M, const ValuesList& values, std::vector<Frame>& fr
   }
 }
 
+namespace {
+/// Arc length of point i of interval I (its RK4 stage).
+double point_s(const Interval& I, int i) {
+  const int step = (i - I.first) / 4, stage = (i - I.first) % 4;
+  return I.s0 + (step + (stage == 0 ? 0.0 : stage == 3 ? 1.0 : 0.5)) * I.h;
+}
+}  // namespace
+
+void path_pulls(const VcWorkspace::Impl& W, const Mesh& M, const ValuesList& values, std::vector<double>& lengths,
+                std::vector<double>& pulls) {
+  const TendonRouting& rt = W.model->routing();
+  const int K = W.tendon_count;
+  const std::size_t nseg = W.segments.size();
+  lengths.assign(nseg * static_cast<std::size_t>(K), 0.0);
+  pulls.assign(static_cast<std::size_t>(K), 0.0);  // running lengths from the base
+  for (const Interval& I : M.intervals) {
+    const SegmentLoads& seg = W.segments[I.segment];
+    for (int i = I.first; i < I.first + 4 * I.steps; ++i) {
+      const Vec3 v = values[i].segment<3>(kV), u = values[i].segment<3>(kU);
+      const double wgt = M.weight[i];
+      if (seg.all_straight) {
+        for (const LengthTerm& t : seg.lengths) pulls[t.index] += wgt * physics::tendon_tangent(v, u, t.r).norm();
+      } else {
+        const double s = point_s(I, i);
+        for (const LengthTerm& t : seg.lengths) {
+          const physics::TendonPoint p = physics::tendon_path(*t.tendon, s);
+          pulls[t.index] += wgt * physics::tendon_tangent(v, u, p.r, p.dr).norm();
+        }
+      }
+    }
+    if (I.disk == rt.segment_end_disk[I.segment])
+      for (int k = 0; k < K; ++k) lengths[static_cast<std::size_t>(I.segment * K + k)] = pulls[k];
+  }
+  tendon_displacements(W, lengths, pulls);
+}
+
 void energies(const VcWorkspace::Impl& W, bool chords, const StepSection& X, const Mesh& M, const ValuesList& values,
               const std::vector<Frame>& frames, const std::vector<Vec3>& points, double& kinetic, double& potential) {
   const cosserat::Section& S = X.S;
@@ -210,14 +259,17 @@ void energies(const VcWorkspace::Impl& W, bool chords, const StepSection& X, con
       potential += 0.5 * wgt * e;
       if (S.gravity) potential -= wgt * S.weight.dot(points[i]);
       // Constant tensions: T times the tendon's path length (the point's share of it).
-      const int step = (i - I.first) / 4, stage = (i - I.first) % 4;
-      const double s = I.s0 + (step + (stage == 0 ? 0.0 : stage == 3 ? 1.0 : 0.5)) * I.h;
+      const double s = point_s(I, i);
       if (!chords)
         for (const cosserat::TendonLoad& t : seg.tendons_at(s))
           potential += wgt * t.T * (v + u.cross(t.r) + t.dr).norm();
     }
     const int j = I.disk;
-    if (M.disk_mass[j] > 0.0) kinetic += 0.5 * M.disk_mass[j] * values[M.pre[j]].segment<3>(kQ).squaredNorm();
+    if (M.disk_mass[j] > 0.0) {
+      const Vec3 w = values[M.pre[j]].segment<3>(kW);
+      kinetic += 0.5 * M.disk_mass[j] * values[M.pre[j]].segment<3>(kQ).squaredNorm() +
+                 0.5 * w.dot(M.disk_inertia[j].cwiseProduct(w));
+    }
     if (W.loads.has_disk_weight()) potential -= W.loads.disk_weight(j).dot(frames[j].p);
   }
   if (chords) {

@@ -40,6 +40,10 @@ struct Mesh {
   int points = 0;
   std::vector<double> weight;     ///< Quadrature weight per point (RK4's h/6 (1, 2, 2, 1); 0 at disks).
   std::vector<double> disk_mass;  ///< kg, per disk (index 0 unused).
+  /// kg m^2, per disk (index 0 unused): its rotary inertia about its centre in the disk frame,
+  /// a thin disk of the segment's disk_radius (0: out to the farthest tendon hole, as the lumped
+  /// models take it), m r^2 (1/4, 1/4, 1/2).
+  std::vector<Vec3> disk_inertia;
 
   /// Build for `W`'s model with the RK4 settings.
   void build(const VcWorkspace::Impl& W, int rk4_steps, double rk4_max_step);
@@ -101,6 +105,8 @@ class MultipleShooting final : public bvp::ResidualSystem {
     force_ = force;
     moment_ = moment;
   }
+  /// The disk poses 0..N of the last residual (the nodes' and the tip's).
+  const std::vector<Frame>& frames() const { return frames_; }
   long shots = 0;          ///< Residual evaluations.
   Eigen::VectorXd last_x;  ///< The last residual's unknowns (its values are in d.values).
   bool last_ok = false;
@@ -115,12 +121,20 @@ class MultipleShooting final : public bvp::ResidualSystem {
   std::vector<Mat3> rbar_;     ///< Per inner disk (index j - 1).
   StateList ends_;             ///< Per interval: the state at its end, before the disk's loads.
   std::vector<Frame> frames_;  ///< Disk poses 0..N for the chords.
+  std::vector<double> tensions_;  ///< The tensions of the last residual (global order).
   bvp::SparsityPattern pattern_;
 };
 
 /// The disk frames of the shape whose strains are `values` (p' = R v, R' = R [u]x by the shot's
 /// RK4 on the same points), and the position at every point (for the weights' potential).
 void reconstruct(const Mesh& mesh, const ValuesList& values, std::vector<Frame>& frames, std::vector<Vec3>& points);
+
+/// The pull of every tendon (Solution::tendon_displacements in the bound convention, without an
+/// elastic tendon's stretch) of the shape whose strains are `values`: VC's fully constrained
+/// paths, |v + u x r_k + r_k'| integrated with RK4's weights on the points (the statics' length
+/// states on the same steps). `lengths`: scratch. Allocation-free once sized.
+void path_pulls(const VcWorkspace::Impl& W, const Mesh& mesh, const ValuesList& values, std::vector<double>& lengths,
+                std::vector<double>& pulls);
 
 /// Kinetic and potential energy (J) of the shape `values` (frames, points from reconstruct):
 /// kinetic of the backbone (translation and rotation) and of the disks' masses; potential:

@@ -76,7 +76,10 @@ bool MultipleShooting::residual(const Eigen::Ref<const Eigen::VectorXd>& x, Eige
   }
   frames_[disks_] = Frame{Eigen::Map<const Mat3>(ends_[disks_ - 1].data() + 3), ends_[disks_ - 1].head<3>()};
   const TendonRouting& rt = W_.model->routing();
-  const std::vector<double>& T = W_.loads.full_tensions();
+  // The tensions acting now (a displacement-driven tendon's is set per evaluation, not bound).
+  tensions_.resize(W_.loads.full_tensions().size());
+  for (std::size_t k = 0; k < tensions_.size(); ++k) tensions_[k] = W_.loads.tension(static_cast<int>(k));
+  const std::vector<double>& T = tensions_;
   for (int j = 1; j <= disks_; ++j) {
     State& e = ends_[j - 1];
     if (chords_) {

@@ -79,9 +79,28 @@ void bind_dynamics(py::module_& m) {
           I(k) = s.iterations;
           status.append(tdcr::to_string(s.status));
         }
+        // Per tendon: the tensions of every step (given, or solved for displacement input; a
+        // slack tendon's exactly 0), and the tendon paths' pulls where the model reports them.
+        const auto m_t = static_cast<py::ssize_t>(m->robot().tendon_count());
+        py::array_t<double> tensions({n, m_t}), pulls({n, m_t});
+        bool have_pulls = n > 0;
+        {
+          auto TT = tensions.mutable_unchecked<2>();
+          auto D = pulls.mutable_unchecked<2>();
+          for (py::ssize_t k = 0; k < n; ++k) {
+            const tdcr::SimulationStep& s = r.steps[static_cast<std::size_t>(k)];
+            have_pulls = have_pulls && static_cast<py::ssize_t>(s.tendon_displacements.size()) == m_t;
+            for (py::ssize_t j = 0; j < m_t; ++j) {
+              const auto u = static_cast<std::size_t>(j);
+              TT(k, j) = u < s.tensions.size() ? s.tensions[u] : std::nan("");
+              D(k, j) = u < s.tendon_displacements.size() ? s.tendon_displacements[u] : std::nan("");
+            }
+          }
+        }
         py::dict out("t"_a = t, "tip"_a = tip, "rot"_a = rot, "status"_a = status, "iterations"_a = iterations,
                         "kinetic_energy"_a = ke, "potential_energy"_a = pe, "completed"_a = r.completed,
-                     "message"_a = r.message);
+                     "message"_a = r.message, "tensions"_a = tensions);
+        if (have_pulls) out["tendon_displacements"] = pulls;
         if (shapes) {
           const auto nd = static_cast<py::ssize_t>(disks.empty() ? 0 : disks.front().size());
           py::array_t<double> D({n, nd, py::ssize_t{3}});
@@ -100,7 +119,8 @@ void bind_dynamics(py::module_& m) {
       "scene"_a, "duration"_a, "dt"_a = 1.0 / 60.0, "model"_a = py::none(), "shapes"_a = false,
       "The scene's robot in motion under its timeline (docs/dynamics.md): a dict of numpy arrays, one "
       "row per output step (t, tip, rot as rotation vectors, iterations, kinetic_energy, "
-      "potential_energy), the steps' status, completed and message; with shapes=True also disks, the "
+      "potential_energy, tensions (steps, tendons) in N; tendon_displacements (steps, tendons) in m for "
+      "VC and VCref), the steps' status, completed and message; with shapes=True also disks, the "
       "disk positions of each step (steps, disks, 3) in m, disk 0 the base (for pictures: tdcr.plot).");
 }
 

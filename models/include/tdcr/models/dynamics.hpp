@@ -43,6 +43,12 @@ struct SimulationStep {
   double residual = 0.0;
   double kinetic_energy = 0.0;       ///< J.
   double potential_energy = 0.0;     ///< J: elastic energy plus the potential of conservative loads.
+  /// N, per tendon (global order): the tensions of the step, given (tension input) or solved
+  /// (displacement input; exactly 0 for a slack tendon).
+  std::vector<double> tensions;
+  /// m, per tendon: the pulls of the tendon paths (Solution::tendon_displacements; the Cosserat
+  /// models; empty where the integrator does not compute them).
+  std::vector<double> tendon_displacements;
 };
 
 /// @brief A model's time integrator: made for one model, one time step, one settings.
@@ -56,6 +62,13 @@ class DynamicsIntegrator {
   virtual SimulationStep advance(double t_next, const Timeline& timeline) = 0;
   /// @brief The current shape as a Solution (disk frames; for the Cosserat models, backbone samples).
   virtual Solution shape() const = 0;
+  /// @brief The potential energy (J) of the current state under the current input, as
+  /// SimulationStep::potential_energy: after initialize(), that of the start at rest.
+  virtual double potential_energy() = 0;
+  /// @brief Whether timeline entries may give tendons by displacement (their tensions then are
+  /// unknowns of every step). simulate() refuses such a timeline otherwise, naming
+  /// `timeline[i].actuation`.
+  virtual bool takes_displacement_input() const { return false; }
 };
 
 /// @brief Options of `simulate`.
