@@ -14,7 +14,7 @@
 #include "tdcr/core/lie.hpp"
 #include "tdcr/models/tendon_physics.hpp"
 #include "physics/tendon_path.hpp"
-#include "solve/newton_summary.hpp"
+#include "solve/contact_completion.hpp"
 #include "vcref/vcref_shooting.hpp"
 #include "vcref/vcref_stability.hpp"
 
@@ -235,7 +235,7 @@ bool same_integrator(const SolverOptions& a, const SolverOptions& b) {
 }
 
 // The mutable memory of VCref's solves and the problem of the bound input.
-class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem {
+class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem, public detail::ContactHost {
  public:
   VcrefWorkspace(const VcrefModel& owner, const VcrefModel::Data& d)
       : ModelWorkspace(owner),
@@ -398,7 +398,29 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
     }
   }
 
- Completion complete(Eigen::VectorXd& y, const bvp::NewtonOptions& options, SolverSummary& summary) override;
+  // Contact (solve/contact_completion.hpp, docs/contact.md).
+  Completion complete(Eigen::VectorXd& y, const bvp::NewtonOptions& options, SolverSummary& summary) override {
+    return detail::complete_contacts(*this, y, options, summary);
+  }
+  const std::vector<Obstacle>& contact_obstacles() const override { return problem_.obstacles(); }
+  const contact::Surfaces& contact_surfaces() const override { return problem_.surfaces(); }
+  contact::Law& contact_law() override { return problem_.law(); }
+  std::vector<contact::Candidate>& contact_candidates() override { return problem_.candidates(); }
+  void contact_candidates_changed() override { system_.contacts_changed(); }
+  bvp::ParameterizedSystem& contact_system() override { return system_; }
+  bvp::NewtonSolver& contact_newton() override { return newton(); }
+  // The disk frames 1..N of the shooting unknowns (one shot per interval).
+  bool contact_frames(const Eigen::VectorXd& y, std::vector<Frame>& frames) override {
+    if (!shooting_.evaluate(y.head(d_.size))) return false;
+    const bvp::ShootingNodes nodes = shooting_.nodes();
+    frames.resize(static_cast<std::size_t>(d_.N + 1));
+    frames[0] = Frame{};
+    for (int j = 1; j <= d_.N; ++j) frames[static_cast<std::size_t>(j)] = problem_.disk_frame(j, nodes);
+    return true;
+  }
+  void contact_rest(Eigen::VectorXd& y) override { rest_state(y); }
+  int contact_disks() const override { return d_.N; }
+  double contact_length() const override { return d_.length; }
 
  private:
   // --- Contact (docs/contact.md) ---
@@ -412,19 +434,10 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
   }
   // The contacts of a previous answer as the candidates, their forces as the guess.
   void warm_contacts(const Solution& prev) {
-    std::vector<contact::Candidate>& cands = problem_.candidates();
-    cands.clear();
+    problem_.candidates().clear();
     if (problem_.contact_on())
-      for (const Contact& p : prev.contacts) {
-        if (p.obstacle < 0 || p.obstacle >= static_cast<int>(problem_.obstacles().size()) || p.disk_index < 1 ||
-            p.disk_index > d_.N)
-          continue;
-        contact::Candidate c;
-        c.disk = p.disk_index, c.obstacle = p.obstacle;
-        c.body = p.disk ? ContactBody::Disk : ContactBody::Backbone;
-        c.lambda = p.force / problem_.law().force_scale;
-        cands.push_back(c);
-      }
+      detail::warm_contacts(prev, d_.N, static_cast<int>(problem_.obstacles().size()), problem_.law().force_scale,
+                            problem_.candidates());
     system_.contacts_changed();
   }
   void report_contacts(const bvp::ShootingNodes& nodes, Solution& sol) {
@@ -432,18 +445,7 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
     for (std::size_t i = 0; i < cands.size(); ++i) cands[i].at = problem_.contact_at(i, problem_.disk_frame(cands[i].disk, nodes));
     contact::report(cands, d_.routing->disk_s, problem_.law().force_scale, kReportedForce, sol.contacts);
   }
-  // The disk frames 1..N of the shooting unknowns x (one shot of the last interval); false if it failed.
-  bool contact_frames(const Eigen::VectorXd& x) {
-    if (!shooting_.evaluate(x.head(d_.size))) return false;
-    const bvp::ShootingNodes nodes = shooting_.nodes();
-    contact_frames_.resize(static_cast<std::size_t>(d_.N + 1));
-    contact_frames_[0] = Frame{};
-    for (int j = 1; j <= d_.N; ++j) contact_frames_[static_cast<std::size_t>(j)] = problem_.disk_frame(j, nodes);
-    return true;
-  }
-  bool load_with_contacts(Eigen::VectorXd& y, const bvp::NewtonOptions& nopt, SolverSummary& work);
   static constexpr double kReportedForce = 1e-9;  // scaled forces below: no contact
-  std::vector<Frame> contact_frames_;
 
   std::vector<Frame> pull_frames_;  // tendon_pulls()
   // The Jacobian structure of the bound input's pass-through mask: the model's (every routed
@@ -566,163 +568,6 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
   int last_iterations_ = 0;  // Newton iterations of the last solve (Jacobian reuse)
   bool reuse_ = false;       // VcrefOptions::reuse_jacobian
 };
-
-// Natural-parameter steps of the load factor from rest, each a Newton solve from the last
-// answer; a step whose answer penetrates a pair left out adds it and is solved again; a failed
-// step is halved (as the lumped models' loading with contacts, lumped_contact.cpp).
-bool VcrefWorkspace::load_with_contacts(Eigen::VectorXd& y, const bvp::NewtonOptions& nopt, SolverSummary& work) {
-  constexpr double kFirstStep = 0.125, kMinStep = 1.0 / 1024.0;
-  system_.set_parameter(0.0);
-  rest_state(y);
-  double t = 0.0, h = kFirstStep;
-  Eigen::VectorXd last = y;
-  const double margin = 0.1 * d_.length / d_.N;
-  while (t < 1.0) {
-    const double next = std::min(1.0, t + h);
-    system_.set_parameter(next);
-    SolverSummary step;
-    detail::copy_newton_result(newton().solve(system_, y, nopt), step);
-    detail::add_work(step, work);
-    ++work.continuation_steps;
-    work.message = step.message;
-    if (!step.converged()) {
-      y = last;
-      h *= 0.5;
-      if (h < kMinStep) {
-        system_.set_parameter(1.0);
-        work.termination = step.termination;
-        return false;
-      }
-      continue;
-    }
-    const std::size_t before = problem_.candidates().size();
-    if (!contact_frames(y)) return false;
-    problem_.set_contact_forces(y.data() + d_.size);
-    contact::scan(problem_.obstacles(), problem_.surfaces(), contact_frames_.data(), d_.N, margin, true,
-                  problem_.candidates());
-    if (problem_.candidates().size() != before) {  // a new contact closed within this step: again with it
-      system_.contacts_changed();
-      const Eigen::Index n = last.size(), added = static_cast<Eigen::Index>(problem_.candidates().size() - before);
-      y.resize(n + added);
-      y.head(n) = last;
-      y.tail(added).setZero();
-      last = y;
-      continue;
-    }
-    t = next;
-    last = y;
-    h = std::min(2.0 * h, 0.25);
-  }
-  system_.set_parameter(1.0);
-  work.termination = TerminationType::Converged;
-  return true;
-}
-
-// After the free-space solve (or a solve with candidates): the pairs the answer penetrates join
-// the candidates, with every pair within 0.1 L / N of touching, and the contact system is solved
-// from the answer (min(gap, force) steps first where the penetration is shallow; compliant
-// contact of rising stiffness where rigid contact diverges; loading from rest with the contacts
-// where the free answer has passed a finite obstacle's middle), until no pair is penetrated.
-ModelProblem::Completion VcrefWorkspace::complete(Eigen::VectorXd& y, const bvp::NewtonOptions& options,
-                                                  SolverSummary& summary) {
-  if (!problem_.contact_on()) return Completion::Done;
-  constexpr int kMaxContactRounds = 8;
-  bvp::NewtonOptions nopt = options;
-  nopt.reuse_jacobian = false;  // the contact set changes between solves
-  nopt.freeze_jacobian_below = 0.0;
-  const double margin = 0.1 * d_.length / d_.N;
-  contact::Law& law = problem_.law();
-  for (int round = 0;; ++round) {
-    if (!contact_frames(y)) {
-      summary.termination = TerminationType::IntegrationFailed;
-      summary.message += "; the shots of the answer failed in the contact test";
-      return Completion::Done;
-    }
-    problem_.set_contact_forces(y.data() + d_.size);
-    const std::size_t before = problem_.candidates().size();
-    const contact::Scan found = contact::scan(problem_.obstacles(), problem_.surfaces(), contact_frames_.data(), d_.N,
-                                              margin, true, problem_.candidates());
-    if (!found.penetrates) return Completion::Done;
-    if (round == kMaxContactRounds || problem_.candidates().size() == before) {
-      summary.termination = TerminationType::NoConvergence;
-      summary.message += "; the answer still penetrates an obstacle after " + std::to_string(round) +
-                         " rounds of contact candidates";
-      return Completion::Done;
-    }
-    system_.contacts_changed();
-    const Eigen::Index n = y.size(), added = static_cast<Eigen::Index>(problem_.candidates().size() - before);
-    y.conservativeResize(n + added);
-    y.tail(added).setZero();
-    summary.unknowns = system_.size();
-    SolverSummary step;
-    if (round == 0 && found.passed_through) {
-      if (load_with_contacts(y, nopt, step)) {
-        detail::add_work(step, summary);
-        summary.message += "; contact with " + std::to_string(problem_.candidates().size()) +
-                           " candidates, loaded from rest (the free answer had passed an obstacle's middle): " +
-                           step.message;
-        continue;
-      }
-      detail::add_work(step, summary);
-      summary.termination = step.termination;
-      summary.message += "; loading from rest with contact failed: " + step.message;
-      return Completion::FollowAgain;
-    }
-    const Eigen::VectorXd start = y;
-    if (law.stiffness == 0.0 && found.deepest < margin) {
-      // A few semismooth Newton steps on min(a, b) first (the active set's linearisation closes
-      // a penetrated gap in one step), then Fischer-Burmeister from there (docs/contact.md).
-      bvp::NewtonOptions mopt = nopt;
-      mopt.max_iterations = 3;
-      law.use_min = true;
-      SolverSummary pre;
-      detail::copy_newton_result(newton().solve(system_, y, mopt), pre);
-      detail::add_work(pre, summary);
-      summary.message += "; min(gap, force) steps: " + pre.message;
-      law.use_min = false;
-      if (!pre.converged()) y = start;
-    }
-    detail::copy_newton_result(newton().solve(system_, y, nopt), step);
-    if (!step.converged() && law.stiffness == 0.0) {
-      // Rigid contact from a deeply penetrating answer can diverge: compliant contact first, its
-      // stiffness raised a decade per solve from F_s / L to 1e6 times that, then rigid.
-      detail::add_work(step, summary);
-      y = start;
-      const double soft = law.force_scale / d_.length;
-      int decade = 0;
-      for (; decade <= 7; ++decade) {
-        law.stiffness = decade < 7 ? soft * std::pow(10.0, decade) : 0.0;
-        step = SolverSummary{};
-        detail::copy_newton_result(newton().solve(system_, y, nopt), step);
-        if (!step.converged() || decade == 7) break;
-        detail::add_work(step, summary);
-      }
-      law.stiffness = 0.0;
-      step.message += step.converged() ? " (rigid contact reached through compliant contact of rising stiffness)"
-                                       : " (compliant contact of rising stiffness failed at stage " +
-                                             std::to_string(decade) + " of 7)";
-    }
-    if (!step.converged()) {
-      // Loading from rest with the candidates.
-      detail::add_work(step, summary);
-      SolverSummary path;
-      if (load_with_contacts(y, nopt, path)) {
-        detail::add_work(path, summary);
-        summary.message += "; contact solve failed (" + step.message + "), loaded from rest with " +
-                           std::to_string(problem_.candidates().size()) + " candidates: " + path.message;
-        continue;
-      }
-      step = path;
-    }
-    detail::add_work(step, summary);
-    summary.termination = step.termination;
-    summary.residual_norm = step.residual_norm;
-    summary.physical_residual = step.physical_residual;
-    summary.linear_solver = step.linear_solver;
-    summary.message += "; contact with " + std::to_string(problem_.candidates().size()) + " candidates: " + step.message;
-    if (!step.converged()) return Completion::FollowAgain;
-  }
-}
 
 }  // namespace
 
