@@ -12,6 +12,7 @@ namespace tdcr::detail {
 namespace {
 
 constexpr int kMaxContactRounds = 8;
+constexpr double kContactStepFactor = 100.0;
 
 // The candidates' margin: pairs this close join the penetrated ones.
 double margin(const ContactHost& host) { return 0.1 * host.contact_length() / host.contact_disks(); }
@@ -89,6 +90,10 @@ ModelProblem::Completion complete_contacts(ContactHost& host, Eigen::VectorXd& y
   bvp::NewtonOptions nopt = options;
   nopt.reuse_jacobian = false;  // the contact set changes between solves
   nopt.freeze_jacobian_below = 0.0;
+  // A model's bound on the Newton step (VC's single shooting: 1 in the scales of the loads) is
+  // too short for the step to the contact forces, which the loads' scales do not know (an
+  // unactuated robot bent by a lumen: n(0) of 50 force scales).
+  if (nopt.max_newton_step > 0.0) nopt.max_newton_step *= kContactStepFactor;
   bvp::ParameterizedSystem& sys = host.contact_system();
   std::vector<contact::Candidate>& cands = host.contact_candidates();
   contact::Law& law = host.contact_law();
