@@ -6,6 +6,7 @@
 #include <string>
 
 #include "solve/newton_summary.hpp"
+#include "tdcr/core/lie.hpp"
 
 namespace tdcr::detail {
 
@@ -17,11 +18,47 @@ constexpr double kContactStepFactor = 100.0;
 // The candidates' margin: pairs this close join the penetrated ones.
 double margin(const ContactHost& host) { return 0.1 * host.contact_length() / host.contact_disks(); }
 
+// The disk poses between two shapes (`from`, `to`: frames 0..N), each disk along the screw from
+// its pose in one to its pose in the other (position linear, rotation by the geodesic), at 15
+// samples: an obstacle thinner than the step between the shapes can lie between them, penetrated
+// by neither. The first sample that penetrates a pair that is not a candidate adds its pairs (as
+// contact::scan with `add`); returns that scan, passed_through set.
+contact::Scan swept_scan(ContactHost& host, const std::vector<Frame>& from, const std::vector<Frame>& to,
+                         std::vector<Frame>& between) {
+  constexpr int kSamples = 16;
+  const int N = host.contact_disks();
+  between.resize(from.size());
+  for (int k = 1; k < kSamples; ++k) {
+    const double t = double(k) / kSamples;
+    for (int j = 0; j <= N; ++j) {
+      const std::size_t u = static_cast<std::size_t>(j);
+      between[u].p = (1.0 - t) * from[u].p + t * to[u].p;
+      between[u].R = from[u].R * lie::exp_so3(t * lie::log_so3(from[u].R.transpose() * to[u].R));
+    }
+    contact::Scan found = contact::scan(host.contact_obstacles(), host.contact_surfaces(), between.data(), N,
+                                        margin(host), true, host.contact_candidates());
+    if (found.penetrates) {
+      found.passed_through = true;
+      return found;
+    }
+  }
+  return contact::Scan{};
+}
+
+// The straight robot at rest: disk j at s_j e_z.
+void rest_frames(const ContactHost& host, std::vector<Frame>& frames) {
+  const std::vector<double>& s = host.contact_disk_s();
+  frames.assign(s.size(), Frame{});
+  for (std::size_t j = 0; j < s.size(); ++j) frames[j].p = s[j] * Vec3::UnitZ();
+}
+
 // Natural-parameter steps of the load factor from rest, each a Newton solve from the last answer;
 // a step whose answer penetrates a pair left out adds it and is solved again; a failed step is
 // halved (the lumped models' loading with contacts, lumped_contact.cpp).
 bool load_with_contacts(ContactHost& host, Eigen::VectorXd& y, const bvp::NewtonOptions& nopt,
                         std::vector<Frame>& frames, SolverSummary& work) {
+  std::vector<Frame> last_frames, between;
+  rest_frames(host, last_frames);
   constexpr double kFirstStep = 0.125, kMinStep = 1.0 / 1024.0;
   bvp::ParameterizedSystem& sys = host.contact_system();
   std::vector<contact::Candidate>& cands = host.contact_candidates();
@@ -49,8 +86,10 @@ bool load_with_contacts(ContactHost& host, Eigen::VectorXd& y, const bvp::Newton
     }
     const std::size_t before = cands.size();
     if (!host.contact_frames(y, frames)) return false;
-    contact::scan(host.contact_obstacles(), host.contact_surfaces(), frames.data(), host.contact_disks(), margin(host),
-                  true, cands);
+    if (!contact::scan(host.contact_obstacles(), host.contact_surfaces(), frames.data(), host.contact_disks(),
+                       margin(host), true, cands)
+             .penetrates)
+      swept_scan(host, last_frames, frames, between);
     if (cands.size() != before) {  // a new contact closed within this step: again with it
       host.contact_candidates_changed();
       const Eigen::Index n = last.size(), added = static_cast<Eigen::Index>(cands.size() - before);
@@ -62,6 +101,7 @@ bool load_with_contacts(ContactHost& host, Eigen::VectorXd& y, const bvp::Newton
     }
     t = next;
     last = y;
+    last_frames = frames;
     h = std::min(2.0 * h, 0.25);
   }
   sys.set_parameter(1.0);
@@ -105,8 +145,15 @@ ModelProblem::Completion complete_contacts(ContactHost& host, Eigen::VectorXd& y
       return ModelProblem::Completion::Done;
     }
     const std::size_t before = cands.size();
-    const contact::Scan found = contact::scan(host.contact_obstacles(), host.contact_surfaces(), frames.data(),
-                                              host.contact_disks(), margin(host), true, cands);
+    contact::Scan found = contact::scan(host.contact_obstacles(), host.contact_surfaces(), frames.data(),
+                                        host.contact_disks(), margin(host), true, cands);
+    if (!found.penetrates && round == 0 && before == 0) {
+      // The free answer may have passed a thin obstacle on its way from rest: then loaded from
+      // rest with the contacts.
+      std::vector<Frame> rest, between;
+      rest_frames(host, rest);
+      found = swept_scan(host, rest, frames, between);
+    }
     if (!found.penetrates) return ModelProblem::Completion::Done;
     if (round == kMaxContactRounds || cands.size() == before) {
       summary.termination = TerminationType::NoConvergence;

@@ -35,6 +35,8 @@ class ContactHost {
   virtual bool contact_frames(const Eigen::VectorXd& y, std::vector<Frame>& frames) = 0;
   // The unloaded robot with every candidate's force 0 (the system's parameter is 0).
   virtual void contact_rest(Eigen::VectorXd& y) = 0;
+  // The disks' arc lengths 0..N (the straight robot at rest: disk j at s_j e_z).
+  virtual const std::vector<double>& contact_disk_s() const = 0;
   // Total disks N and robot length L (the candidates' margin 0.1 L / N).
   virtual int contact_disks() const = 0;
   virtual double contact_length() const = 0;

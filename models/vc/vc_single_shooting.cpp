@@ -127,6 +127,7 @@ class SingleShooting final : public detail::ModelProblem, public detail::Contact
     return static_cast<int>(frames.size()) == W_.model->routing().disk_count();
   }
   void contact_rest(Eigen::VectorXd& y) override { rest_state(y); }
+  const std::vector<double>& contact_disk_s() const override { return W_.model->routing().disk_s; }
   int contact_disks() const override { return W_.model->routing().disk_count() - 1; }
   double contact_length() const override { return W_.model->robot().total_length(); }
   bvp::ParameterizedSystem* system() override { return &system_; }

@@ -419,6 +419,7 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem,
     return true;
   }
   void contact_rest(Eigen::VectorXd& y) override { rest_state(y); }
+  const std::vector<double>& contact_disk_s() const override { return d_.routing->disk_s; }
   int contact_disks() const override { return d_.N; }
   double contact_length() const override { return d_.length; }
 
