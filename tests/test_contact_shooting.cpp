@@ -156,6 +156,21 @@ TEST_P(ContactShooting, ProppedCantileverLargeDeflectionMatchesTheElastica) {
   }
 }
 
+// Contact is modelled with tension input only: displacement input with obstacles is refused,
+// naming the field.
+TEST_P(ContactShooting, DisplacementInputWithObstaclesIsRefused) {
+  Scene s = robot_scene(GetParam(), 5);
+  s.environment.obstacles = {plane(Vec3(0, 0.012, 0), Vec3(0, -1, 0))};
+  s.actuation.kind = Actuation::Kind::Displacements;
+  s.actuation.values = {0.001, 0, 0, 0};
+  try {
+    run(s);
+    ADD_FAILURE() << "displacement input took obstacles";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "environment.obstacles") << e.what();
+  }
+}
+
 // Two supports mirrored about the x-z plane: equal forces, mirrored normals, tip in the plane.
 TEST_P(ContactShooting, SymmetricSupportsCarryEqualForces) {
   Scene s = robot_scene(GetParam(), 10);
