@@ -121,8 +121,8 @@ class SingleShooting final : public detail::ModelProblem, public detail::Contact
   bvp::ParameterizedSystem& contact_system() override { return system_; }
   bvp::NewtonSolver& contact_newton() override { return newton_; }
   bool contact_frames(const Eigen::VectorXd& y, std::vector<Frame>& frames) override {
-    Eigen::VectorXd f(system_.size());
-    if (!system_.residual(y, f)) return false;
+    scratch_f_.resize(system_.size());
+    if (!system_.residual(y, scratch_f_)) return false;
     frames = system_.frames();
     return static_cast<int>(frames.size()) == W_.model->routing().disk_count();
   }
@@ -186,8 +186,8 @@ class SingleShooting final : public detail::ModelProblem, public detail::Contact
   // Every shot records the tendon lengths at the segment ends (memoised: after Newton's residual
   // at x this shoots nothing).
   bool tendon_pulls(const Eigen::VectorXd& x, Eigen::VectorXd& d) override {
-    Vec6 f;
-    if (!system_.residual(x, f)) return false;
+    scratch_f_.resize(system_.size());  // allocates only when the candidates change
+    if (!system_.residual(x, scratch_f_)) return false;
     tendon_displacements(W_, W_.segment_lengths, pulls_);
     d = Eigen::Map<const Eigen::VectorXd>(pulls_.data(), static_cast<Eigen::Index>(pulls_.size()));
     return d.allFinite();
@@ -211,8 +211,8 @@ class SingleShooting final : public detail::ModelProblem, public detail::Contact
     sol.backbone = system_.samples();
     sol.contacts.clear();
     if (!W_.contacts.empty()) {
-      Eigen::VectorXd f(system_.size());
-      if (system_.residual(x, f))  // memoised: sets the candidates' contact points
+      scratch_f_.resize(system_.size());
+      if (system_.residual(x, scratch_f_))  // memoised: sets the candidates' contact points
         contact::report(W_.contacts, W_.model->routing().disk_s, W_.law.force_scale, 1e-9, sol.contacts);
     }
     tendon_displacements(W_, W_.segment_lengths, sol.tendon_displacements);
@@ -329,6 +329,7 @@ class SingleShooting final : public detail::ModelProblem, public detail::Contact
   bvp::NewtonSolver newton_;
   int last_iterations_ = 0;  ///< Newton iterations of the last solve (Jacobian reuse).
   std::vector<double> pulls_;  ///< tendon_pulls()
+  Eigen::VectorXd scratch_f_;  ///< residuals of tendon_pulls(), extract(), contact_frames()
 };
 
 }  // namespace
