@@ -361,7 +361,8 @@ TEST_P(ContactLumped, ProppedCantileverLargeDeflectionMatchesTheElastica) {
     std::printf("%s n = %d: reaction %.6g N, relative error to the elastica %.2e\n", GetParam().c_str(), n,
                 sol.contacts[0].force, error);
     // CCsub: about 0.44 / n. PRB: 4.1e-4 at n = 5, then within 1e-4 (7.5e-5, 2.0e-5, 4.8e-5 at
-    // n = 10, 20, 40: the elastica's own shooting is accurate to about that).
+    // n = 10, 20, 40: PRB's own; VC and VCref match the elastica to 4.4e-11 and 6.6e-11 at n = 20,
+    // tests/test_contact_shooting.cpp).
     if (GetParam() == "ccsub") EXPECT_LT(error, last);
     else EXPECT_LT(error, n >= 10 ? 1e-4 : 1e-3);
     last = error;
