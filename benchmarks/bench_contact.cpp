@@ -1,6 +1,6 @@
 // Contact benchmark (docs/contact.md): the cost of a contact solve against the free-space solve
-// of the same scene, and a warm-started trajectory sliding along a wall, for CCsub and PRB on the
-// paper robot (Table 3, 10 mm disks) at n disks per segment.
+// of the same scene, and a warm-started trajectory sliding along a wall, for CCsub, PRB, VC and
+// VCref on the paper robot (Table 3, 10 mm disks) at n disks per segment.
 //
 // Scenes: "wall" (examples/robot_against_wall.json: tendons 2 and 1 N bend the robot into a
 // wall at y = 25 mm, one disk rim touches), "point" (a straight robot with a 2 mN tip force on a
@@ -13,10 +13,11 @@
 // --profile: also the work of each contact solve (Newton iterations, residual evaluations,
 // Jacobian evaluations, continuation steps) and the solver's message (fallbacks).
 //
-// Usage: bench_contact [--quick] [--profile] [--reps N] [--steps N] [--n N]
+// Usage: bench_contact [--quick] [--profile] [--reps N] [--steps N] [--n N] [--models a,b,...]
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -58,6 +59,7 @@ Scene point_scene(const std::string& model, int n) {
 int main(int argc, char** argv) {
   int reps = 50, steps = 1000, n = 10;
   bool profile = false;
+  std::vector<std::string> models = {"ccsub", "prb", "vc", "vcref"};
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--quick") reps = 3, steps = 20;
@@ -65,8 +67,16 @@ int main(int argc, char** argv) {
     else if (a == "--reps" && i + 1 < argc) reps = std::atoi(argv[++i]);
     else if (a == "--steps" && i + 1 < argc) steps = std::atoi(argv[++i]);
     else if (a == "--n" && i + 1 < argc) n = std::atoi(argv[++i]);
-    else {
-      std::fprintf(stderr, "usage: bench_contact [--quick] [--profile] [--reps N] [--steps N] [--n N]\n");
+    else if (a == "--models" && i + 1 < argc) {
+      models.clear();
+      std::string list = argv[++i];
+      for (std::size_t at = 0; at <= list.size();) {
+        const std::size_t comma = std::min(list.find(',', at), list.size());
+        models.push_back(list.substr(at, comma - at));
+        at = comma + 1;
+      }
+    } else {
+      std::fprintf(stderr, "usage: bench_contact [--quick] [--profile] [--reps N] [--steps N] [--n N] [--models a,b,...]\n");
       return 2;
     }
   }
@@ -74,7 +84,7 @@ int main(int argc, char** argv) {
   std::printf("%s\n# n = %d disks per segment, median of %d cold solves\n", bench::machine_stamp().c_str(), n, reps);
   std::printf("%-6s %-6s %9s %12s %12s %8s %9s %10s\n", "model", "scene", "contacts", "free_us", "contact_us", "ratio",
               "free_it", "contact_it");
-  for (const std::string model : {"ccsub", "prb"}) {
+  for (const std::string& model : models) {
     for (const std::string name : {"wall", "point"}) {
       Scene s = name == "wall" ? wall_scene(model, n) : point_scene(model, n);
       const auto m = make_model(parse_model_kind(model), s);
@@ -97,7 +107,7 @@ int main(int argc, char** argv) {
   }
   std::printf("\n# trajectory along the wall: %d warm-started steps, tip force x 0 -> 50 mN -> 0\n", steps);
   std::printf("%-6s %10s %10s %12s %10s\n", "model", "total_ms", "rate_hz", "iterations", "contacts");
-  for (const std::string model : {"ccsub", "prb"}) {
+  for (const std::string& model : models) {
     Scene s = wall_scene(model, n);
     const auto m = make_model(parse_model_kind(model), s);
     auto ws = m->make_workspace();

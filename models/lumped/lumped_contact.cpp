@@ -17,10 +17,6 @@
 namespace tdcr::detail {
 
 namespace {
-// A shape penetrating an obstacle deeper than this (m) is not an answer: the pair joins the
-// contact candidates. Far below the 1e-9 m the contact tests allow, far above round-off of the
-// positions (1e-16 of a robot's length).
-constexpr double kPenetration = 1e-12;
 // Rounds of candidates added after a penetrating answer before the solve gives up.
 constexpr int kMaxContactRounds = 8;
 // Scaled forces below this are reported as no contact (a candidate the answer does not touch
@@ -37,6 +33,8 @@ void LumpedProblem::bind_contact(const ModelInput& input) {
   contact_stiffness_ = input.environment.contact.stiffness;
   contact_force_scale_ = body_.EI / (body_.length * body_.length);
   contact_length_scale_ = body_.backbone_radius > 0.0 ? body_.backbone_radius : 1e-3 * body_.length;
+  contact_surfaces_.backbone_radius = body_.backbone_radius;
+  contact_surfaces_.disk_radius = body_.disk_radius;
   // The contact solve is the recursive form; the free-space solve before it is that too, so
   // that an untouched obstacle leaves the free-space answer of the default formulation.
   banded_ = false;
@@ -90,76 +88,25 @@ void LumpedProblem::evaluate_contacts() {
 }
 
 void LumpedProblem::contact_residuals(double* f) const {
-  for (std::size_t i = 0; i < contacts_.size(); ++i) {
-    const ContactCandidate& c = contacts_[i];
-    const double a = c.at.gap / contact_length_scale_, b = c.lambda;
-    if (contact_stiffness_ > 0.0)
-      f[i] = b - contact_stiffness_ * std::max(0.0, -c.at.gap) / contact_force_scale_;
-    else if (contact_min_)
-      f[i] = std::min(a, b);
-    else
-      f[i] = a + b - std::sqrt(a * a + b * b);
-  }
+  const contact::Law law = contact_law();
+  for (std::size_t i = 0; i < contacts_.size(); ++i) f[i] = law.residual(contacts_[i].at.gap, contacts_[i].lambda);
 }
 
 void LumpedProblem::report_contacts(Solution& solution) const {
-  solution.contacts.clear();
-  const std::vector<double>& s = body_.statics.routing().disk_s;
-  for (const ContactCandidate& c : contacts_) {
-    if (!(c.lambda > kReportedForce)) continue;
-    Contact out;
-    out.s = s[c.disk];
-    out.point = c.at.point;
-    out.normal = c.at.normal;
-    out.force = c.lambda * contact_force_scale_;
-    out.gap = c.at.gap;
-    out.disk = c.body == ContactBody::Disk;
-    out.disk_index = c.disk;
-    out.obstacle = c.obstacle;
-    solution.contacts.push_back(out);
-  }
+  contact::report(contacts_, body_.statics.routing().disk_s, contact_force_scale_, kReportedForce, solution.contacts);
 }
 
 bool LumpedProblem::penetrating_pairs(const Eigen::VectorXd& x, bool add) {
-  passed_through_ = false;
-  deepest_ = 0.0;
   contact_frames_.resize(body_.N + 1);
   body_.compute_frames(x.data(), body_.N, loads_.stretch_data(), contact_frames_.data());
-  const auto candidate = [&](int j, int o, ContactBody b) {
-    for (const ContactCandidate& c : contacts_)
-      if (c.disk == j && c.obstacle == o && c.body == b) return true;
-    return false;
-  };
   // Pairs this close join the candidates with the penetrating ones: the contact solve then moves
   // the robot without stepping into the neighbours of the first contacts unseen.
   const double margin = 0.1 * body_.length / body_.N;
-  bool penetrates = false;
-  for (int pass = 0; pass < (add ? 2 : 1); ++pass) {
-    for (int j = 1; j <= body_.N; ++j)
-      for (int o = 0; o < static_cast<int>(obstacles_.size()); ++o)
-        for (ContactBody b : {ContactBody::Backbone, ContactBody::Disk}) {
-          const double radius = b == ContactBody::Disk ? body_.disk_radius[j] : body_.backbone_radius;
-          if (b == ContactBody::Disk && radius <= 0.0) continue;
-          if (candidate(j, o, b)) continue;
-          const double gap = contact_point(obstacles_[o], contact_frames_[j], b, radius).gap;
-          if (pass == 0 && gap < -kPenetration) {
-            penetrates = true;
-            deepest_ = std::max(deepest_, -gap);
-            // Deeper than a quarter of a finite obstacle's radius: the free answer may have passed
-            // its middle, and the nearest way out is then on its far side.
-            const Obstacle& ob = obstacles_[o];
-            if (ob.type != Obstacle::Type::Plane && ob.type != Obstacle::Type::Lumen && -gap > 0.25 * ob.radius)
-              passed_through_ = true;
-          }
-          if (pass == 1 && gap < margin) {
-            ContactCandidate c;
-            c.disk = j, c.obstacle = o, c.body = b;
-            contacts_.push_back(c);
-          }
-        }
-    if (!penetrates) break;
-  }
-  return penetrates;
+  const contact::Scan found =
+      contact::scan(obstacles_, contact_surfaces_, contact_frames_.data(), body_.N, margin, add, contacts_);
+  passed_through_ = found.passed_through;
+  deepest_ = found.deepest;
+  return found.penetrates;
 }
 
 bool LumpedProblem::swept_pairs(const Eigen::VectorXd& from, const Eigen::VectorXd& to) {

@@ -114,23 +114,7 @@ void LumpedProblem::contact_column(int k, int c, const Mat3& Q, const Vec3& t, c
 }
 
 void LumpedProblem::contact_derivatives(std::size_t i, double& da, double& db) const {
-  const ContactCandidate& cand = contacts_[i];
-  if (contact_stiffness_ > 0.0) {
-    da = cand.at.gap < 0.0 ? contact_stiffness_ / contact_force_scale_ : 0.0;
-    db = 1.0;
-    return;
-  }
-  const double rs = contact_length_scale_;
-  const double a = cand.at.gap / rs, b = cand.lambda, r = std::sqrt(a * a + b * b);
-  if (contact_min_) {  // min(a, b): the active set's linearisation
-    da = a <= b ? 1.0 / rs : 0.0;
-    db = a <= b ? 0.0 : 1.0;
-    return;
-  }
-  // At the corner a = b = 0 an element of the generalised gradient.
-  const double ca = r > 0.0 ? a / r : M_SQRT1_2, cb = r > 0.0 ? b / r : M_SQRT1_2;
-  da = (1.0 - ca) / rs;
-  db = 1.0 - cb;
+  contact_law().derivatives(contacts_[i].at.gap, contacts_[i].lambda, da, db);
 }
 
 bool LumpedProblem::contact_jacobian(Eigen::Ref<Eigen::MatrixXd> Jm) {

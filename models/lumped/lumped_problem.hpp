@@ -22,6 +22,7 @@
 
 #include <Eigen/Core>
 
+#include "physics/contact_law.hpp"
 #include "tdcr/core/contact_geometry.hpp"
 #include "tdcr/models/model_problem.hpp"
 #include "lumped/subsegment_statics.hpp"
@@ -251,21 +252,20 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
 
  private:
   // --- Contact (lumped_contact.cpp, docs/contact.md) ---
-  // A candidate contact: a disk's rim or the backbone at a disk's centre against an obstacle;
-  // its force magnitude (scaled by contact_force_scale_) is an unknown after the x_j.
-  struct ContactCandidate {
-    int disk = 0;
-    int obstacle = 0;
-    ContactBody body = ContactBody::Backbone;
-    double lambda = 0.0;  // scaled force magnitude of the last evaluation
-    ContactPoint at;      // its contact point at the last evaluation
-  };
+  // A candidate contact (physics/contact_law.hpp): a disk's rim or the backbone at a disk's
+  // centre against an obstacle; its force magnitude (scaled by contact_force_scale_) is an
+  // unknown after the x_j.
+  using ContactCandidate = contact::Candidate;
+  contact::Law contact_law() const {
+    return contact::Law{contact_stiffness_, contact_force_scale_, contact_length_scale_, contact_min_};
+  }
   bool contact_ = false;  // the bound input has obstacles
   std::vector<Obstacle> obstacles_;
   double contact_stiffness_ = 0.0;  // N/m; 0: rigid
   bool contact_min_ = false;        // complete()'s first steps: rigid contact as min(a, b) = 0
   double contact_force_scale_ = 1.0, contact_length_scale_ = 1.0;
   std::vector<ContactCandidate> contacts_;
+  contact::Surfaces contact_surfaces_;  // the body's backbone and disk radii
   Eigen::VectorXd contact_x_;      // complete(): the x_j of all N subsegments
   std::vector<Frame> contact_frames_;
   void bind_contact(const ModelInput& input);

@@ -101,7 +101,7 @@ ModelChoice choose_model(const Scene& scene, double tolerance) {
         }
       c.kind = best->kind;
       c.expected_error = expected_model_error(c.kind, n, loaded);
-      c.reason = features + ", obstacles: " + to_string(c.kind) + " (the models with contact: CCsub, PRB), expected within " +
+      c.reason = features + ", obstacles: " + to_string(c.kind) + " (the models with contact: CCsub, PRB, VC, VCref), expected within " +
                  percent(c.expected_error) + " of VCref in free space";
       return c;
     }

@@ -57,7 +57,7 @@ void StaticModel::check_input(const ModelInput& input) const {
   }
   if (!caps.contact && !input.environment.obstacles.empty())
     throw InputError("environment.obstacles", std::to_string(input.environment.obstacles.size()) + " obstacles",
-                     "the " + name() + " model does not model contact yet (CCsub and PRB do)");
+                     "the " + name() + " model does not model contact yet (CCsub, PRB, VC and VCref do)");
   if (!input.environment.obstacles.empty() && !tensions)
     throw InputError("environment.obstacles", std::to_string(input.environment.obstacles.size()) + " obstacles",
                      "contact is modelled with tension input only so far (give actuation.tensions)");

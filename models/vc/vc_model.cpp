@@ -58,7 +58,8 @@ detail::ModelProblem& VcModel::bind(ModelWorkspace& workspace, const ModelInput&
                                     const SolverOptions& options) const {
   VcWorkspace::Impl& W = static_cast<VcWorkspace&>(workspace).impl();
   vc::bind_input(W, *this, input, options);
-  if (multiple_shooting(W.loads.load_parameter())) {
+  // Contact is modelled in single shooting (vc_single_shooting.cpp, docs/contact.md).
+  if (multiple_shooting(W.loads.load_parameter()) && input.environment.obstacles.empty()) {
     if (!W.multiple) W.multiple = vc::make_multiple_shooting(W);
     return *W.multiple;
   }

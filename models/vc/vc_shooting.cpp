@@ -2,6 +2,8 @@
 // and the tendon displacements (vc_shooting.hpp).
 #include "vc/vc_shooting.hpp"
 
+#include <type_traits>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -97,6 +99,19 @@ void bind_input(VcWorkspace::Impl& W, const VcModel& model, const ModelInput& in
   W.lambda = 1.0;
   W.per_segment = input.actuation.convention == Actuation::DisplacementConvention::PerSegment;
   W.section = cosserat::Section::from(robot, model.effects(), W.loads.backbone_weight());
+  W.contacts.clear();
+  W.obstacles = input.environment.obstacles;  // allocates only when the obstacles grow
+  if (!W.obstacles.empty()) {
+    const int N = robot.total_disks();
+    W.surfaces.backbone_radius = robot.backbone.outer_radius;
+    W.surfaces.disk_radius.assign(static_cast<std::size_t>(N + 1), 0.0);
+    for (int j = 0; j <= N; ++j) W.surfaces.disk_radius[static_cast<std::size_t>(j)] = robot.segments[rt.disk_segment[j]].disk_radius;
+    const double L = robot.total_length();
+    W.law = contact::Law{};
+    W.law.stiffness = input.environment.contact.stiffness;
+    W.law.force_scale = 1.0 / (W.section.inv_kbt.x() * L * L);  // EI / L^2
+    W.law.length_scale = W.surfaces.backbone_radius > 0.0 ? W.surfaces.backbone_radius : 1e-3 * L;
+  }
   for (SegmentLoads& s : W.segments) {
     s.tendons.clear();
     s.tendon_index.clear();
@@ -239,7 +254,11 @@ bool disk_point_loads(const VcWorkspace::Impl& W, int i, int j, T* y) {
   const int last = rt.segment_end_disk[i];
   const bool terminates = j == last && !seg.terminating.empty();
   const bool weighted = W.loads.has_disk_weight() && W.loads.disk_weight(j).squaredNorm() > 0.0;
-  if (!terminates && !weighted) return true;
+  // Contact forces (double only: with candidates the Jacobian is taken by differences).
+  bool touched = false;
+  if constexpr (std::is_same_v<T, double>)
+    for (const contact::Candidate& c : W.contacts) touched = touched || c.disk == j;
+  if (!terminates && !weighted && !touched) return true;
   const double s = rt.disk_s[j];
   // Point loads at disk j, with u, v just proximal of it.
   const Mat3T<T> R = Eigen::Map<const Mat3T<T>>(y + 3);
@@ -259,6 +278,19 @@ bool disk_point_loads(const VcWorkspace::Impl& W, int i, int j, T* y) {
     m -= dm;
   }
   if (weighted) n -= W.loads.disk_weight(j);
+  if constexpr (std::is_same_v<T, double>) {
+    if (touched) {
+      const Frame frame = cosserat::frame_of(y);
+      for (const contact::Candidate& c : W.contacts) {
+        if (c.disk != j) continue;
+        const ContactPoint at =
+            contact_point(W.obstacles[c.obstacle], frame, c.body, W.surfaces.radius(c.disk, c.body));
+        const Vec3 f = (c.lambda * W.law.force_scale) * at.normal;
+        n -= f;
+        m -= (at.point - frame.p).cross(f);
+      }
+    }
+  }
   // Kinks: the point loads make u, v jump, so every tensioned tendon continuing past disk j
   // changes direction there and pulls on the backbone with T_k R (t_k+ - t_k-) at p + R r_k.
   // t_k+ depends on the wrench after the kink: a fixed point z = G(z) (kink_fixed_point).

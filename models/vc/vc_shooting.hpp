@@ -9,6 +9,7 @@
 #include <Eigen/Core>
 
 #include "tdcr/models/model_problem.hpp"
+#include "physics/contact_law.hpp"
 #include "physics/load_case.hpp"
 #include "tdcr/bvp/integrator.hpp"
 #include "tdcr/models/cosserat_rod.hpp"
@@ -60,6 +61,14 @@ struct VcWorkspace::Impl {
   std::unique_ptr<vc::FrictionRod> friction_final_rod;
   Eigen::VectorXd y;                                  ///< 18 + tendon_count (+ tendon_count: tensions).
   std::vector<double> segment_lengths;                ///< [segment * tendon_count + k] at segment ends.
+
+  // Contact (docs/contact.md; single shooting, vc_single_shooting.cpp): the bound input's
+  // obstacles, the robot's surfaces, the law and the candidates, whose forces act at their disks
+  // among the disk point loads (disk_point_loads; reactions, not scaled by the load factor).
+  std::vector<Obstacle> obstacles;
+  contact::Surfaces surfaces;
+  contact::Law law;
+  std::vector<contact::Candidate> contacts;
 
   // The formulations, built on first use.
   std::unique_ptr<detail::ModelProblem> single;

@@ -3,6 +3,7 @@
 
 #include "tdcr/bvp/newton_solver.hpp"
 #include "physics/tendon_path.hpp"
+#include "solve/contact_completion.hpp"
 #include "vc/vc_shooting.hpp"
 #include "vc/vc_stability.hpp"
 
@@ -31,21 +32,37 @@ constexpr int kStaleAfterIterations = 3;
 class ShootingSystem final : public bvp::ParameterizedSystem {
  public:
   explicit ShootingSystem(VcWorkspace::Impl& W) : W_(W) {}
-  int size() const override { return 6; }
+  // With contact candidates (W.contacts, docs/contact.md) their scaled force magnitudes follow
+  // n(0), m(0) and their complementarity residuals the tip wrench; the forces act at their disks
+  // among the disk point loads.
+  int contacts() const { return static_cast<int>(W_.contacts.size()); }
+  int size() const override { return 6 + contacts(); }
   bool residual(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> f) override {
-    const Vec6 xx = x;
-    if (!(valid_ && version_ == W_.loads_version && xx == x_)) {
+    const Vec6 xx = x.head<6>();
+    const int nc = contacts();
+    bool same = valid_ && version_ == W_.loads_version && xx == x_ && xc_.size() == nc;
+    for (int i = 0; same && i < nc; ++i) same = xc_[i] == x[6 + i];
+    if (!same) {
       frames_.clear();
       samples_.clear();
       W_.degeneracy.reset();
+      for (int i = 0; i < nc; ++i) W_.contacts[static_cast<std::size_t>(i)].lambda = x[6 + i];
       const Record rec{&frames_, &samples_, &W_.segment_lengths, &end_tensions_};
       x_ = xx;
+      if (xc_.size() != nc) xc_.resize(nc);  // allocates only when the candidates change
+      xc_ = x.tail(nc);
       version_ = W_.loads_version;
       valid_ = shoot(W_, true, xx, f_, &rec);
     }
     if (!valid_) return false;
-    f = f_;
-    return true;
+    f.head<6>() = f_;
+    for (int i = 0; i < nc; ++i) {
+      contact::Candidate& c = W_.contacts[static_cast<std::size_t>(i)];
+      c.at = contact_point(W_.obstacles[c.obstacle], frames_[static_cast<std::size_t>(c.disk)], c.body,
+                           W_.surfaces.radius(c.disk, c.body));
+      f[6 + i] = W_.law.residual(c.at.gap, x[6 + i]);
+    }
+    return f.allFinite();
   }
   /// What the last shot recorded.
   const std::vector<Frame>& frames() const { return frames_; }
@@ -53,8 +70,11 @@ class ShootingSystem final : public bvp::ParameterizedSystem {
   const std::vector<double>& end_tensions() const { return end_tensions_; }
   // With RK4 the exact Jacobian of the discrete shot (vc_jacobian.cpp, about one shot's cost);
   // with CVODE forward differences by the solver (6 extra shots), with increments
-  // sqrt(max(eps, relative_noise)) = sqrt(rtol).
-  bool has_jacobian() const override { return W_.model->options().exact_jacobian && has_exact_jacobian(W_); }
+  // sqrt(max(eps, relative_noise)) = sqrt(rtol). With contact candidates: forward differences
+  // by the solver (6 + candidates shots).
+  bool has_jacobian() const override {
+    return contacts() == 0 && W_.model->options().exact_jacobian && has_exact_jacobian(W_);
+  }
   bool jacobian(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>&,
                 Eigen::Ref<Eigen::MatrixXd> J) override {
     Vec6 r;
@@ -66,7 +86,8 @@ class ShootingSystem final : public bvp::ParameterizedSystem {
   double relative_noise() const override { return W_.shot_integrator->relative_noise(); }
   void residual_scale(Eigen::Ref<Eigen::VectorXd> s) const override {
     s.head<3>().setConstant(1.0 / W_.loads.force_scale());
-    s.tail<3>().setConstant(1.0 / W_.loads.moment_scale());
+    s.segment<3>(3).setConstant(1.0 / W_.loads.moment_scale());
+    s.tail(s.size() - 6).setOnes();  // phi: the gap in units of r_o, the force in units of F_s
   }
   void unknown_scale(Eigen::Ref<Eigen::VectorXd> s) const override { residual_scale(s); }
   void set_parameter(double lambda) override { set_load_factor(W_, lambda); }
@@ -75,6 +96,7 @@ class ShootingSystem final : public bvp::ParameterizedSystem {
   VcWorkspace::Impl& W_;
   // The last shot: unknowns, loads version, residual, success, records.
   Vec6 x_ = Vec6::Zero();
+  Eigen::VectorXd xc_;  // and its contact forces
   unsigned long version_ = 0;
   Vec6 f_ = Vec6::Zero();
   bool valid_ = false;
@@ -83,9 +105,31 @@ class ShootingSystem final : public bvp::ParameterizedSystem {
   std::vector<double> end_tensions_;  ///< Friction: each tendon's tension at its end.
 };
 
-class SingleShooting final : public detail::ModelProblem {
+class SingleShooting final : public detail::ModelProblem, public detail::ContactHost {
  public:
   explicit SingleShooting(VcWorkspace::Impl& W) : W_(W), system_(W) {}
+
+  // Contact (solve/contact_completion.hpp, docs/contact.md).
+  Completion complete(Eigen::VectorXd& y, const bvp::NewtonOptions& options, SolverSummary& summary) override {
+    return detail::complete_contacts(*this, y, options, summary);
+  }
+  const std::vector<Obstacle>& contact_obstacles() const override { return W_.obstacles; }
+  const contact::Surfaces& contact_surfaces() const override { return W_.surfaces; }
+  contact::Law& contact_law() override { return W_.law; }
+  std::vector<contact::Candidate>& contact_candidates() override { return W_.contacts; }
+  void contact_candidates_changed() override {}
+  bvp::ParameterizedSystem& contact_system() override { return system_; }
+  bvp::NewtonSolver& contact_newton() override { return newton_; }
+  bool contact_frames(const Eigen::VectorXd& y, std::vector<Frame>& frames) override {
+    scratch_f_.resize(system_.size());
+    if (!system_.residual(y, scratch_f_)) return false;
+    frames = system_.frames();
+    return static_cast<int>(frames.size()) == W_.model->routing().disk_count();
+  }
+  void contact_rest(Eigen::VectorXd& y) override { rest_state(y); }
+  const std::vector<double>& contact_disk_s() const override { return W_.model->routing().disk_s; }
+  int contact_disks() const override { return W_.model->routing().disk_count() - 1; }
+  double contact_length() const override { return W_.model->robot().total_length(); }
   bvp::ParameterizedSystem* system() override { return &system_; }
   bvp::NewtonSolver& newton() override { return newton_; }
   void adjust(bvp::NewtonOptions& options) const override {
@@ -97,26 +141,42 @@ class SingleShooting final : public detail::ModelProblem {
     options.reuse_jacobian = same_input || last_iterations_ <= kStaleAfterIterations;
     options.max_setup_calls = kReuseSetupCalls;
   }
-  void cold_guess(Eigen::VectorXd& x) override { x = guess(W_.model->options().initial_guess); }
+  void cold_guess(Eigen::VectorXd& x) override {
+    x = guess(W_.model->options().initial_guess);
+    append_forces(x, true);
+  }
   bool alternative_guess(Eigen::VectorXd& x) override {
     // The equilibrium guess overestimates the lever of tip forces on strongly bent robots,
     // zeros ignore the tendons.
     x = guess(W_.model->options().initial_guess == VcInitialGuess::Equilibrium ? VcInitialGuess::Zero
                                                                                : VcInitialGuess::Equilibrium);
+    append_forces(x, true);
     return true;
   }
-  // The unloaded robot is straight: n = m = 0 exactly.
-  void rest_state(Eigen::VectorXd& x) override { x = Eigen::VectorXd::Zero(6); }
+  // The unloaded robot is straight: n = m = 0 exactly (and every candidate's force 0).
+  void rest_state(Eigen::VectorXd& x) override {
+    x = Eigen::VectorXd::Zero(6);
+    append_forces(x, true);
+  }
+  // A previous answer's contacts become the candidates, their forces the guess; its base wrench
+  // (with contacts: its own unknowns, which balance its contact forces too) or the reaction of its
+  // shape under the bound loads.
   bool warm_guess(const Solution& previous, Eigen::VectorXd& x) override {
+    W_.contacts.clear();
+    if (!W_.obstacles.empty())
+      detail::warm_contacts(previous, contact_disks(), static_cast<int>(W_.obstacles.size()), W_.law.force_scale,
+                            W_.contacts);
     Vec6 r;
-    if (warm_reaction(previous, r)) {
+    if (W_.contacts.empty() && warm_reaction(previous, r)) {
       x = r;
       return true;
     }
-    if (previous.unknowns.size() == 6 && previous.unknowns.allFinite()) {
-      x = previous.unknowns;
+    if (previous.unknowns.size() >= 6 && previous.unknowns.allFinite()) {
+      x = previous.unknowns.head(6);
+      append_forces(x, false);
       return true;
     }
+    W_.contacts.clear();
     return false;
   }
   bool set_driven_tensions(const std::vector<int>& index, const Eigen::VectorXd& T) override {
@@ -126,8 +186,8 @@ class SingleShooting final : public detail::ModelProblem {
   // Every shot records the tendon lengths at the segment ends (memoised: after Newton's residual
   // at x this shoots nothing).
   bool tendon_pulls(const Eigen::VectorXd& x, Eigen::VectorXd& d) override {
-    Vec6 f;
-    if (!system_.residual(x, f)) return false;
+    scratch_f_.resize(system_.size());  // allocates only when the candidates change
+    if (!system_.residual(x, scratch_f_)) return false;
     tendon_displacements(W_, W_.segment_lengths, pulls_);
     d = Eigen::Map<const Eigen::VectorXd>(pulls_.data(), static_cast<Eigen::Index>(pulls_.size()));
     return d.allFinite();
@@ -137,7 +197,7 @@ class SingleShooting final : public detail::ModelProblem {
   bool final_residual(const Eigen::VectorXd& x, Eigen::Ref<Eigen::VectorXd> f) override {
     return system_.residual(x, f);
   }
-  void extract(const Eigen::VectorXd&, bool evaluated, Solution& sol) override {
+  void extract(const Eigen::VectorXd& x, bool evaluated, Solution& sol) override {
     last_iterations_ = sol.summary.iterations;
     sol.tensions = W_.loads.full_tensions();
     if (!evaluated) {
@@ -149,6 +209,12 @@ class SingleShooting final : public detail::ModelProblem {
     }
     sol.disk_frames = system_.frames();
     sol.backbone = system_.samples();
+    sol.contacts.clear();
+    if (!W_.contacts.empty()) {
+      scratch_f_.resize(system_.size());
+      if (system_.residual(x, scratch_f_))  // memoised: sets the candidates' contact points
+        contact::report(W_.contacts, W_.model->routing().disk_s, W_.law.force_scale, 1e-9, sol.contacts);
+    }
     tendon_displacements(W_, W_.segment_lengths, sol.tendon_displacements);
     if (W_.friction) sol.tendon_end_tensions = system_.end_tensions();
   }
@@ -157,6 +223,7 @@ class SingleShooting final : public detail::ModelProblem {
   // automatic rule's budget, so direct answers under loads are not tested without asking.
   bool automatic_stability_under_loads() const override { return false; }
   Stability stability(const Eigen::VectorXd& x, double load_factor) override {
+    if (!W_.contacts.empty()) return Stability{StabilityStatus::Undetermined, NAN, "not determined with contact"};
     if (W_.friction)
       return Stability{StabilityStatus::Undetermined, NAN,
                        "tendon friction: the conjugate-point test assumes tensions independent of the shape"};
@@ -168,7 +235,7 @@ class SingleShooting final : public detail::ModelProblem {
   // Single shooting cannot damp a snap; multiple shooting damps the inner disks' poses. Its node
   // 0 holds the base wrench, this formulation's unknowns. Not with friction (single shooting only).
   detail::ModelProblem* damping_formulation() override {
-    if (W_.friction) return nullptr;
+    if (W_.friction || !W_.obstacles.empty()) return nullptr;  // multiple shooting has no contact
     if (!W_.multiple) W_.multiple = make_multiple_shooting(W_);
     return W_.multiple.get();
   }
@@ -176,6 +243,13 @@ class SingleShooting final : public detail::ModelProblem {
   std::string integrator_name() const override { return W_.shot_integrator->name(); }
 
  private:
+  // x (n(0), m(0)) extended by the candidates' scaled forces (`zero`: 0).
+  void append_forces(Eigen::VectorXd& x, bool zero) const {
+    const int nc = static_cast<int>(W_.contacts.size());
+    if (nc == 0) return;
+    x.conservativeResize(6 + nc);
+    for (int i = 0; i < nc; ++i) x[6 + i] = zero ? 0.0 : W_.contacts[static_cast<std::size_t>(i)].lambda;
+  }
   // The cold-start guess at load factor 1 (VcInitialGuess).
   Vec6 guess(VcInitialGuess which) const {
     Vec6 x = Vec6::Zero();
@@ -255,6 +329,7 @@ class SingleShooting final : public detail::ModelProblem {
   bvp::NewtonSolver newton_;
   int last_iterations_ = 0;  ///< Newton iterations of the last solve (Jacobian reuse).
   std::vector<double> pulls_;  ///< tendon_pulls()
+  Eigen::VectorXd scratch_f_;  ///< residuals of tendon_pulls(), extract(), contact_frames()
 };
 
 }  // namespace

@@ -14,6 +14,7 @@
 #include "tdcr/core/lie.hpp"
 #include "tdcr/models/tendon_physics.hpp"
 #include "physics/tendon_path.hpp"
+#include "solve/contact_completion.hpp"
 #include "vcref/vcref_shooting.hpp"
 #include "vcref/vcref_stability.hpp"
 
@@ -22,36 +23,70 @@ namespace tdcr {
 namespace {
 
 // The shooting system with the load factor as its parameter; accepted steps rebase the charts.
+// With contact candidates (VcrefShooting::candidates(), docs/contact.md) their scaled force
+// magnitudes b_i follow the shooting unknowns and their complementarity residuals the shooting
+// residuals: the forces act in the disk equilibria (VcrefShooting::subtract_contact).
 class VcrefSystem final : public bvp::ParameterizedSystem {
  public:
-  VcrefSystem(VcrefShooting& problem, bvp::ShootingSystem& shooting) : problem_(problem), shooting_(shooting) {}
-  int size() const override { return shooting_.size(); }
+  VcrefSystem(VcrefShooting& problem, bvp::ShootingSystem& shooting, std::unique_ptr<bvp::Integrator>& integrator)
+      : problem_(problem), shooting_(shooting), integrator_(integrator) {}
+  int free_size() const { return shooting_.size(); }
+  int contacts() const { return static_cast<int>(problem_.candidates().size()); }
+  int size() const override { return free_size() + contacts(); }
   bool residual(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> f) override {
-    return shooting_.residual(x, f) && f.allFinite();
+    const int n = free_size(), nc = contacts();
+    if (nc == 0) return shooting_.residual(x, f) && f.allFinite();
+    problem_.set_contact_forces(x.data() + n);
+    if (!shooting_.residual(x.head(n), f.head(n))) return false;
+    const bvp::ShootingNodes nodes = shooting_.nodes();
+    std::vector<contact::Candidate>& cands = problem_.candidates();
+    for (int i = 0; i < nc; ++i) {
+      contact::Candidate& c = cands[static_cast<std::size_t>(i)];
+      c.at = problem_.contact_at(static_cast<std::size_t>(i), problem_.disk_frame(c.disk, nodes));
+      f[n + i] = problem_.law().residual(c.at.gap, x[n + i]);
+    }
+    return f.allFinite();
   }
-  const bvp::SparsityPattern* sparsity() const override { return shooting_.sparsity(); }
+  const bvp::SparsityPattern* sparsity() const override {
+    return contacts() == 0 ? shooting_.sparsity() : &pattern_;
+  }
   bool has_jacobian() const override { return true; }
   bool sparse_jacobian(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& f,
                        double* values) override {
-    return shooting_.sparse_jacobian(x, f, values);
+    if (contacts() == 0) return shooting_.sparse_jacobian(x, f, values);
+    return contact_jacobian(x, f, values);
   }
-  void residual_scale(Eigen::Ref<Eigen::VectorXd> s) const override { shooting_.residual_scale(s); }
-  void unknown_scale(Eigen::Ref<Eigen::VectorXd> s) const override { shooting_.unknown_scale(s); }
+  void residual_scale(Eigen::Ref<Eigen::VectorXd> s) const override {
+    const int n = free_size();
+    shooting_.residual_scale(s.head(n));
+    s.tail(s.size() - n).setOnes();  // phi: the gap in units of r_o, the force in units of F_s
+  }
+  void unknown_scale(Eigen::Ref<Eigen::VectorXd> s) const override {
+    const int n = free_size();
+    shooting_.unknown_scale(s.head(n));
+    s.tail(s.size() - n).setOnes();
+  }
   void set_parameter(double lambda) override {
     problem_.set_load_factor(lambda);
     shooting_.invalidate();
   }
-  void accept_step(Eigen::VectorXd& x) override { shooting_.rebase(x); }
+  void accept_step(Eigen::VectorXd& x) override {
+    Eigen::Ref<Eigen::VectorXd> head = x.head(free_size());
+    shooting_.rebase(head);
+  }
   // Along a loading path a disk can turn by more than pi from its reference (the rest state's):
   // its rotation vector w then nears |w| = 2 pi, where the chart degenerates and the path's
   // steps are spent on w (VCref s1011 of the loaded-scene suite, docs/hard-cases.md). Re-centred
   // once some |w| exceeds kRecenterAngle.
   bool recenter(Eigen::Ref<Eigen::VectorXd> x) override {
     constexpr double kRecenterAngle = 1.0;  // rad
-    const int nodes = (static_cast<int>(x.size()) - 6) / 12;
+    const int nodes = (free_size() - 6) / 12;
     bool far = false;
     for (int k = 1; k <= nodes && !far; ++k) far = x.segment<3>(6 + 12 * (k - 1) + 3).norm() > kRecenterAngle;
-    if (far) shooting_.rebase(x);
+    if (far) {
+      Eigen::Ref<Eigen::VectorXd> head = x.head(free_size());
+      shooting_.rebase(head);
+    }
     return far;
   }
   bool set_damping(const Eigen::Ref<const Eigen::VectorXd>& x, double rate) override {
@@ -59,11 +94,133 @@ class VcrefSystem final : public bvp::ParameterizedSystem {
     shooting_.invalidate();
     return true;
   }
+  // The candidates or the shooting structure changed: the pattern of the contact system.
+  void contacts_changed();
 
  private:
+  // Rows of the equilibrium of disk j (6: force, moment) and the first column and count of the
+  // unknowns its pose depends on.
+  int equilibrium_row(int j) const { return j == problem_.data().N ? shooting_.offset(0) : shooting_.offset(j) + 6; }
+  void pose_columns(int j, int& first, int& count) const {
+    const int N = problem_.data().N;
+    const int k = j == N ? N - 1 : j;
+    first = shooting_.offset(k);
+    count = j == N ? problem_.unknown_dimension(k) : 6;
+  }
+  bool contact_jacobian(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& f,
+                        double* values);
+  // The gap of candidate i with its disk's pose from node unknowns `node` (of node k; the tip:
+  // one shot of the last interval); false if the shot failed.
+  bool gap_of(std::size_t i, int k, const double* node, double& gap) const;
+
   VcrefShooting& problem_;
   bvp::ShootingSystem& shooting_;
+  std::unique_ptr<bvp::Integrator>& integrator_;
+  bvp::SparsityPattern pattern_;
+  std::vector<int> shoot_pos_;              // position of each shooting entry in pattern_
+  std::vector<int> gap_pos_, force_pos_, diag_pos_;  // per candidate: 12, 6, 1 positions
+  std::vector<double> shoot_values_;
 };
+
+void VcrefSystem::contacts_changed() {
+  const int n = free_size(), nc = contacts();
+  if (nc == 0) return;
+  const bvp::SparsityPattern& sp = *shooting_.sparsity();
+  std::vector<std::pair<int, int>> e;
+  e.reserve(static_cast<std::size_t>(sp.nnz() + 20 * nc));
+  for (int c = 0; c < n; ++c)
+    for (int k = sp.col_ptr[c]; k < sp.col_ptr[c + 1]; ++k) e.emplace_back(sp.row_idx[k], c);
+  const std::vector<contact::Candidate>& cands = problem_.candidates();
+  for (int i = 0; i < nc; ++i) {
+    const int j = cands[static_cast<std::size_t>(i)].disk;
+    int first = 0, count = 0;
+    pose_columns(j, first, count);
+    for (int q = 0; q < count; ++q) e.emplace_back(n + i, first + q);
+    for (int r = 0; r < 6; ++r) e.emplace_back(equilibrium_row(j) + r, n + i);
+    e.emplace_back(n + i, n + i);
+  }
+  pattern_ = bvp::SparsityPattern::from_triplets(n + nc, n + nc, e);
+  shoot_pos_.resize(static_cast<std::size_t>(sp.nnz()));
+  for (int c = 0; c < n; ++c)
+    for (int k = sp.col_ptr[c]; k < sp.col_ptr[c + 1]; ++k) shoot_pos_[static_cast<std::size_t>(k)] = pattern_.index_of(sp.row_idx[k], c);
+  gap_pos_.assign(static_cast<std::size_t>(12 * nc), -1);
+  force_pos_.assign(static_cast<std::size_t>(6 * nc), -1);
+  diag_pos_.assign(static_cast<std::size_t>(nc), -1);
+  for (int i = 0; i < nc; ++i) {
+    const int j = cands[static_cast<std::size_t>(i)].disk;
+    int first = 0, count = 0;
+    pose_columns(j, first, count);
+    for (int q = 0; q < count; ++q) gap_pos_[static_cast<std::size_t>(12 * i + q)] = pattern_.index_of(n + i, first + q);
+    for (int r = 0; r < 6; ++r) force_pos_[static_cast<std::size_t>(6 * i + r)] = pattern_.index_of(equilibrium_row(j) + r, n + i);
+    diag_pos_[static_cast<std::size_t>(i)] = pattern_.index_of(n + i, n + i);
+  }
+}
+
+bool VcrefSystem::gap_of(std::size_t i, int k, const double* node, double& gap) const {
+  const int N = problem_.data().N;
+  const int j = problem_.candidates()[i].disk;
+  double y[cosserat::kStateSize];
+  problem_.start_state(k, node, y);
+  if (j == N && !integrator_->integrate(problem_.ode(k), problem_.node(k), problem_.node(k + 1), y)) return false;
+  gap = problem_.contact_at(i, cosserat::frame_of(y)).gap;
+  return std::isfinite(gap);
+}
+
+// The shooting's Jacobian (its differences see the contact forces at the perturbed poses), the
+// force columns exactly (a unit b_i adds -F_s n_i and -(c_i - p_j) x F_s n_i to the equilibrium
+// of its disk j) and the complementarity rows as phi's derivatives in closed form times the
+// gap's gradient in the unknowns of the disk's pose (central differences: of the pose chart at
+// a node, of one shot of the last interval at the tip).
+bool VcrefSystem::contact_jacobian(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& f,
+                                   double* values) {
+  const int n = free_size(), nc = contacts();
+  std::fill(values, values + pattern_.nnz(), 0.0);
+  problem_.set_contact_forces(x.data() + n);
+  shoot_values_.resize(shoot_pos_.size());
+  if (!shooting_.sparse_jacobian(x.head(n), f.head(n), shoot_values_.data())) return false;
+  for (std::size_t k = 0; k < shoot_pos_.size(); ++k) values[shoot_pos_[k]] = shoot_values_[k];
+  if (!shooting_.evaluate(x.head(n))) return false;
+  const bvp::ShootingNodes nodes = shooting_.nodes();
+  const double Fs = problem_.law().force_scale;
+  const double rel = std::max(1e-6, std::cbrt(integrator_->relative_noise()));
+  std::vector<contact::Candidate>& cands = problem_.candidates();
+  for (int i = 0; i < nc; ++i) {
+    const std::size_t ui = static_cast<std::size_t>(i);
+    contact::Candidate& c = cands[ui];
+    const Frame frame = problem_.disk_frame(c.disk, nodes);
+    c.at = problem_.contact_at(ui, frame);
+    const Vec3 fn = Fs * c.at.normal;
+    const Vec3 mn = (c.at.point - frame.p).cross(fn);
+    for (int r = 0; r < 3; ++r) {
+      values[force_pos_[6 * ui + static_cast<std::size_t>(r)]] = -fn[r];
+      values[force_pos_[6 * ui + 3 + static_cast<std::size_t>(r)]] = -mn[r];
+    }
+    double dgap = 0.0, db = 0.0;
+    problem_.law().derivatives(c.at.gap, x[n + i], dgap, db);
+    values[diag_pos_[ui]] = db;
+    if (dgap == 0.0) continue;
+    int first = 0, count = 0;
+    pose_columns(c.disk, first, count);
+    const int N = problem_.data().N;
+    const int k = c.disk == N ? N - 1 : c.disk;
+    double node[12], scale[12];
+    problem_.unknown_scale(k, scale);
+    std::copy(x.data() + first, x.data() + first + problem_.unknown_dimension(k), node);
+    for (int q = 0; q < count; ++q) {
+      const double h = rel * std::max(std::abs(node[q]) * (q >= 6 || k == 0 ? 1.0 : 0.0), 1.0 / scale[q]);
+      const double keep = node[q];
+      double gp = 0.0, gm = 0.0;
+      node[q] = keep + h;
+      const bool okp = gap_of(ui, k, node, gp);
+      node[q] = keep - h;
+      const bool okm = gap_of(ui, k, node, gm);
+      node[q] = keep;
+      if (!okp || !okm) return false;
+      values[gap_pos_[12 * ui + static_cast<std::size_t>(q)]] = dgap * (gp - gm) / (2.0 * h);
+    }
+  }
+  return true;
+}
 
 // Largest system factored densely: two disk intervals (18 unknowns).
 constexpr int kDenseSizeLimit = 18;
@@ -78,7 +235,7 @@ bool same_integrator(const SolverOptions& a, const SolverOptions& b) {
 }
 
 // The mutable memory of VCref's solves and the problem of the bound input.
-class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem {
+class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem, public detail::ContactHost {
  public:
   VcrefWorkspace(const VcrefModel& owner, const VcrefModel::Data& d)
       : ModelWorkspace(owner),
@@ -86,7 +243,7 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
         problem_(d),
         integrator_(bvp::make_integrator(detail::integrator_options(integrator_options_))),
         shooting_(problem_, *integrator_, d.structure),
-        system_(problem_, shooting_) {}
+        system_(problem_, shooting_, integrator_) {}
 
   void bind(const ModelInput& input, const SolverOptions& options, const VcrefOptions& vo) {
     if (!same_integrator(options, integrator_options_)) {
@@ -95,7 +252,7 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
       shooting_.set_integrator(*integrator_);
     }
     detail::update_stability_integrator(options, stability_integrator_);
-    problem_.bind(input, options);
+    problem_.bind(input, options);  // no contact candidates
     select_structure();
     shooting_.invalidate();
     convention_ = input.actuation.convention;
@@ -135,14 +292,21 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
     options.max_setup_calls = kReuseSetupCalls;
   }
   detail::ColdStart cold_start() const override { return cold_; }
-  void cold_guess(Eigen::VectorXd& x) override { shape_guess(x, d_.arc_guess); }
+  void cold_guess(Eigen::VectorXd& x) override {
+    shape_guess(x, d_.arc_guess);
+    append_forces(x, true);
+  }
   // The other shape: under antagonistic tensions with a tip force the arcs can start Newton in a
   // basin it does not leave (tests/data/antagonistic_tip_force.json), the straight robot not.
   bool alternative_guess(Eigen::VectorXd& x) override {
     shape_guess(x, !d_.arc_guess);
+    append_forces(x, true);
     return true;
   }
-  void rest_state(Eigen::VectorXd& x) override { shape_guess(x, false); }
+  void rest_state(Eigen::VectorXd& x) override {
+    shape_guess(x, false);
+    append_forces(x, true);
+  }
   std::string integrator_name() const override { return integrator_->name(); }
   // The test on a coarse mesh costs a fraction of a cold loaded solve (solve/stability_mesh.hpp):
   // +17 % on the median loaded case of bench_loaded, so the automatic rule tests direct answers
@@ -150,6 +314,8 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
   bool automatic_stability_under_loads() const override { return true; }
   // The reduced stiffness in the disk poses (vcref_stability.cpp).
   Stability stability(const Eigen::VectorXd& x, double load_factor) override {
+    if (!problem_.candidates().empty())
+      return Stability{StabilityStatus::Undetermined, NAN, "not determined with contact"};
     if (d_.friction)
       return Stability{StabilityStatus::Undetermined, NAN,
                        "tendon friction: the disk-pose stiffness test assumes tensions independent of the shape"};
@@ -163,10 +329,12 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
   // The previous unknowns, its disk rotations as the chart references (w = 0).
   bool warm_guess(const Solution& prev, Eigen::VectorXd& x) override {
     const int N = d_.N;
-    if (prev.unknowns.size() != d_.size || static_cast<int>(prev.disk_frames.size()) != N + 1 ||
+    if (prev.unknowns.size() < d_.size || static_cast<int>(prev.disk_frames.size()) != N + 1 ||
         !prev.unknowns.allFinite())
       return false;
-    x = prev.unknowns;
+    x = prev.unknowns.head(d_.size);
+    warm_contacts(prev);
+    append_forces(x, false);
     for (int j = 1; j < N; ++j) {
       problem_.reference(j) = lie::nearest_rotation(prev.disk_frames[j].R);
       x.segment<3>(6 + 12 * (j - 1) + 3).setZero();
@@ -201,6 +369,7 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
 
   void extract(const Eigen::VectorXd& x, bool evaluated, Solution& sol) override {
     const int N = d_.N;
+    sol.contacts.clear();
     const TendonRouting& routing = *d_.routing;
     last_iterations_ = sol.summary.iterations;
     sol.tensions = problem_.loads().full_tensions();
@@ -220,6 +389,7 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
       sol.tendon_end_tensions = tendon::end_tensions(routing, chord.data(), static_cast<int>(routing.tendons.size()));
     }
     sol.disk_frames[N].R = lie::nearest_rotation(sol.disk_frames[N].R);
+    if (problem_.contact_on()) report_contacts(nodes, sol);
     sol.backbone.resize(N + 1);
     sol.backbone[0] = BackboneSample{0.0, Frame{}, x.segment<3>(0), x.segment<3>(3)};
     for (int j = 1; j <= N; ++j) {
@@ -228,7 +398,56 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem 
     }
   }
 
+  // Contact (solve/contact_completion.hpp, docs/contact.md).
+  Completion complete(Eigen::VectorXd& y, const bvp::NewtonOptions& options, SolverSummary& summary) override {
+    return detail::complete_contacts(*this, y, options, summary);
+  }
+  const std::vector<Obstacle>& contact_obstacles() const override { return problem_.obstacles(); }
+  const contact::Surfaces& contact_surfaces() const override { return problem_.surfaces(); }
+  contact::Law& contact_law() override { return problem_.law(); }
+  std::vector<contact::Candidate>& contact_candidates() override { return problem_.candidates(); }
+  void contact_candidates_changed() override { system_.contacts_changed(); }
+  bvp::ParameterizedSystem& contact_system() override { return system_; }
+  bvp::NewtonSolver& contact_newton() override { return newton(); }
+  // The disk frames 1..N of the shooting unknowns (one shot per interval).
+  bool contact_frames(const Eigen::VectorXd& y, std::vector<Frame>& frames) override {
+    if (!shooting_.evaluate(y.head(d_.size))) return false;
+    const bvp::ShootingNodes nodes = shooting_.nodes();
+    frames.resize(static_cast<std::size_t>(d_.N + 1));
+    frames[0] = Frame{};
+    for (int j = 1; j <= d_.N; ++j) frames[static_cast<std::size_t>(j)] = problem_.disk_frame(j, nodes);
+    return true;
+  }
+  void contact_rest(Eigen::VectorXd& y) override { rest_state(y); }
+  const std::vector<double>& contact_disk_s() const override { return d_.routing->disk_s; }
+  int contact_disks() const override { return d_.N; }
+  double contact_length() const override { return d_.length; }
+
  private:
+  // --- Contact (docs/contact.md) ---
+  // x (the shooting unknowns) extended by the candidates' scaled forces (`zero`: 0).
+  void append_forces(Eigen::VectorXd& x, bool zero) const {
+    const std::vector<contact::Candidate>& c = problem_.candidates();
+    if (c.empty()) return;
+    const Eigen::Index n = x.size();
+    x.conservativeResize(n + static_cast<Eigen::Index>(c.size()));
+    for (std::size_t i = 0; i < c.size(); ++i) x[n + static_cast<Eigen::Index>(i)] = zero ? 0.0 : c[i].lambda;
+  }
+  // The contacts of a previous answer as the candidates, their forces as the guess.
+  void warm_contacts(const Solution& prev) {
+    problem_.candidates().clear();
+    if (problem_.contact_on())
+      detail::warm_contacts(prev, d_.N, static_cast<int>(problem_.obstacles().size()), problem_.law().force_scale,
+                            problem_.candidates());
+    system_.contacts_changed();
+  }
+  void report_contacts(const bvp::ShootingNodes& nodes, Solution& sol) {
+    std::vector<contact::Candidate>& cands = problem_.candidates();
+    for (std::size_t i = 0; i < cands.size(); ++i) cands[i].at = problem_.contact_at(i, problem_.disk_frame(cands[i].disk, nodes));
+    contact::report(cands, d_.routing->disk_s, problem_.law().force_scale, kReportedForce, sol.contacts);
+  }
+  static constexpr double kReportedForce = 1e-9;  // scaled forces below: no contact
+
   std::vector<Frame> pull_frames_;  // tendon_pulls()
   // The Jacobian structure of the bound input's pass-through mask: the model's (every routed
   // tendon) when they agree, else the last or second-last one built here (a trajectory rebuilds
@@ -441,8 +660,9 @@ bvp::JacobianCheck VcrefModel::check_jacobian(ModelWorkspace& workspace, const M
   ws.bind(input, options, options_);
   bvp::ParameterizedSystem& sys = *ws.system();
   sys.set_parameter(1.0);
-  Eigen::VectorXd x, scale(sys.size());
+  Eigen::VectorXd x;
   if (!(at && ws.warm_guess(*at, x))) ws.cold_guess(x);
+  Eigen::VectorXd scale(sys.size());  // the contact forces of `at` join the unknowns
   sys.unknown_scale(scale);
   for (int i = 0; i < x.size(); ++i) x[i] += perturbation * std::sin(1.0 + i) / scale[i];
   return bvp::check_jacobian(sys, x);

@@ -34,6 +34,7 @@ VcrefShooting::VcrefShooting(const VcrefModel::Data& d)
 void VcrefShooting::bind(const ModelInput& input, const SolverOptions& options) {
   const TendonRouting& routing = *d_.routing;
   load_.bind(*d_.robot, routing, input);
+  bind_contact(input);
   damping_ = 0.0;  // a snap switches it off again; a new input never starts damped
   active_ = routing;
   active_.tendons.clear();
@@ -158,6 +159,31 @@ void VcrefShooting::subtract_disk_load(int j, Vec3& F, Vec3& M) const {
   if (load_.has_disk_weight()) F -= load_.disk_weight(j);
 }
 
+void VcrefShooting::subtract_contact(int j, const Frame& frame, Vec3& F, Vec3& M) const {
+  for (std::size_t i = 0; i < candidates_.size(); ++i) {
+    if (candidates_[i].disk != j) continue;
+    const ContactPoint at = contact_at(i, frame);
+    const Vec3 f = (candidates_[i].lambda * law_.force_scale) * at.normal;
+    F -= f;
+    M -= (at.point - frame.p).cross(f);
+  }
+}
+
+void VcrefShooting::bind_contact(const ModelInput& input) {
+  candidates_.clear();
+  obstacles_ = input.environment.obstacles;  // allocates only when the obstacles grow
+  if (obstacles_.empty()) return;
+  const Robot& robot = *d_.robot;
+  const TendonRouting& routing = *d_.routing;
+  surfaces_.backbone_radius = robot.backbone.outer_radius;
+  surfaces_.disk_radius.assign(d_.N + 1, 0.0);
+  for (int j = 0; j <= d_.N; ++j) surfaces_.disk_radius[j] = robot.segments[routing.disk_segment[j]].disk_radius;
+  law_ = contact::Law{};
+  law_.stiffness = input.environment.contact.stiffness;
+  law_.force_scale = 1.0 / (d_.section.inv_kbt.x() * d_.length * d_.length);  // EI / L^2
+  law_.length_scale = surfaces_.backbone_radius > 0.0 ? surfaces_.backbone_radius : 1e-3 * d_.length;
+}
+
 void VcrefShooting::begin_linearization(const bvp::ShootingNodes& nominal) const {
   if (d_.friction) return;
   linearized_ = true;
@@ -222,6 +248,7 @@ void VcrefShooting::boundary(const bvp::ShootingNodes& nodes, double* r) const {
     frames_[N] = cosserat::frame_of(e);
   }
   subtract_disk_load(N, F, M);
+  if (!candidates_.empty()) subtract_contact(N, cosserat::frame_of(e), F, M);
   if (load_.has_tip_wrench()) {
     F -= load_.tip_force();
     M -= load_.tip_moment();
@@ -243,6 +270,7 @@ void VcrefShooting::junction(int j, const bvp::ShootingNodes& nodes, double* r) 
     if (passes_[j]) frames_[j + 1] = cosserat::frame_of(j + 1 < N ? nodes.start(j + 1) : nodes.end(N - 1));
   }
   subtract_disk_load(j, F, M);
+  if (!candidates_.empty()) subtract_contact(j, cosserat::frame_of(y), F, M);
   out(r) = cosserat::position(y) - cosserat::position(e);
   out(r + 3) = lie::vee(cosserat::rotation(e).transpose() * cosserat::rotation(y));
   out(r + 6) = F - cosserat::force(y);

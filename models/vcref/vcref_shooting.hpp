@@ -5,6 +5,7 @@
 #include <memory>
 #include <vector>
 
+#include "physics/contact_law.hpp"
 #include "physics/load_case.hpp"
 #include "tdcr/bvp/shooting.hpp"
 #include "tdcr/models/cosserat_rod.hpp"
@@ -97,6 +98,32 @@ class VcrefShooting final : public bvp::ShootingProblem {
   void begin_linearization(const bvp::ShootingNodes& nominal) const override;
   void end_linearization() const override { linearized_ = false; }
 
+  // --- Contact (vcref_shooting.cpp, vcref_model.cpp; docs/contact.md) ---
+  // The bound input's obstacles; no candidates. The candidates' forces (b F_s along the normal
+  // at the contact point of the disk's current pose) act on their disks in the tip and disk
+  // equilibria like the tendon wrenches; they are reactions, not scaled by the load factor.
+  void bind_contact(const ModelInput& input);
+  bool contact_on() const { return !obstacles_.empty(); }
+  std::vector<contact::Candidate>& candidates() { return candidates_; }
+  const std::vector<contact::Candidate>& candidates() const { return candidates_; }
+  const std::vector<Obstacle>& obstacles() const { return obstacles_; }
+  const contact::Surfaces& surfaces() const { return surfaces_; }
+  contact::Law& law() { return law_; }
+  const contact::Law& law() const { return law_; }
+  // The candidates' scaled force magnitudes b (one per candidate).
+  void set_contact_forces(const double* b) {
+    for (std::size_t i = 0; i < candidates_.size(); ++i) candidates_[i].lambda = b[i];
+  }
+  // The frame of disk k = 1..N of the trajectory `nodes` (node k's start, the tip the last end).
+  Frame disk_frame(int k, const bvp::ShootingNodes& nodes) const {
+    return cosserat::frame_of(k < d_.N ? nodes.start(k) : nodes.end(d_.N - 1));
+  }
+  // Candidate i's contact point with its disk at `frame`.
+  ContactPoint contact_at(std::size_t i, const Frame& frame) const {
+    const contact::Candidate& c = candidates_[i];
+    return contact_point(obstacles_[c.obstacle], frame, c.body, surfaces_.radius(c.disk, c.body));
+  }
+
   // The tendon wrench on disk j and its derivative in the poses (dp, body rotation dtheta) of the
   // disks j-1, j, j+1 (columns 0-5, 6-11, 12-17; the last six zero unless a tendon passes disk j)
   // at `frames` (disk frames, 0..N), for the tensions of the last set_load_factor(). Without
@@ -106,6 +133,8 @@ class VcrefShooting final : public bvp::ShootingProblem {
 
  private:
   void subtract_disk_load(int j, Vec3& F, Vec3& M) const;
+  // Subtracts the contact forces of the candidates at disk j (pose `frame`) from F, M (about its centre).
+  void subtract_contact(int j, const Frame& frame, Vec3& F, Vec3& M) const;
   // The tendon wrench on disk j at frames_ j-1..j+1 through its linearisation about the nominal
   // frames (begin_linearization).
   tendon::DiskWrench linearized_wrench(int j) const;
@@ -115,6 +144,10 @@ class VcrefShooting final : public bvp::ShootingProblem {
 
   const VcrefModel::Data& d_;
   physics::LoadCase load_;
+  std::vector<Obstacle> obstacles_;  // contact: the bound input's obstacles
+  contact::Surfaces surfaces_;
+  contact::Law law_;
+  std::vector<contact::Candidate> candidates_;
   TendonRouting active_;            // tendons with nonzero tension
   std::vector<char> tendon_at_;     // disk j receives a tendon wrench
   std::vector<char> passes_;        // an active tendon passes disk j (all routed before bind)

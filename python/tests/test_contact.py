@@ -47,7 +47,7 @@ def test_obstacle_through_the_base_is_named():
 
 def test_models_without_contact_refuse_obstacles():
     d = copy.deepcopy(WALL)
-    d["model"] = "vc"
+    d["model"] = "cc"
     with pytest.raises(tdcr.InputError) as e:
         tdcr.solve(tdcr.Scene.from_dict(d))
     assert "environment.obstacles" in str(e.value)

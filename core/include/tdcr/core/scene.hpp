@@ -187,7 +187,7 @@ struct SceneEffects {
   bool shear_extension = true;            ///< Effects::shear_extension (every model).
   bool disk_normal_force_removed = false;  ///< Effects::disk_normal_force is Removed (Eq. 58).
   bool tendon_friction = false;           ///< Effects::tendon_friction is on (some mu > 0).
-  bool contact = false;                   ///< The environment has obstacles (CCsub, PRB).
+  bool contact = false;                   ///< The environment has obstacles (CCsub, PRB, VC, VCref).
 };
 
 /// @brief The effects a solve of `robot` with `effects` under `input` turns on.

@@ -172,7 +172,7 @@ struct Solution {
   Stability stability;                    ///< Stability of the answer (if tested: SolverOptions::stability).
   std::vector<PathEvent> path_events;     ///< Folds, bifurcations, snaps met on the way.
   std::vector<GeometryWarning> geometry_warnings;  ///< Shapes a real robot cannot take.
-  std::vector<Contact> contacts;          ///< Contacts with obstacles that carry force (CCsub, PRB).
+  std::vector<Contact> contacts;          ///< Contacts with obstacles that carry force (CCsub, PRB, VC, VCref).
   /// d(tip pose) / d(Actuation::values), 6 x m (SolverOptions::differential_kinematics; empty
   /// otherwise or if it could not be computed). Rows 0-2: tip position (m per unit of the value,
   /// base frame); rows 3-5: rotation vector w of the tip rotation increment in the base frame,

@@ -132,6 +132,7 @@ class VcModel final : public StaticModel {
     c.displacement_statics = true;
     c.tendon_friction = true;
     c.rk4_mesh = true;
+    c.contact = true;
     c.stability_under_loads = false;
     return c;
   }();

@@ -108,6 +108,7 @@ class VcrefModel final : public StaticModel {
     c.displacement_statics = true;
     c.tendon_friction = true;
     c.rk4_mesh = true;
+    c.contact = true;
     return c;
   }();
   ModelCapabilities capabilities() const override { return kCapabilities; }
