@@ -1,6 +1,8 @@
 // The equations of motion of CCsub and PRB (lumped_dynamics.hpp, docs/dynamics.md), integrated
 // by CVODE (BDF, dense Newton matrices from the model's structured Jacobian).
 #include <algorithm>
+#include <cstdio>
+#include <cstdlib>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -75,6 +77,12 @@ LumpedDynamics::LumpedDynamics(const LumpedModel& model, const LumpedBody& body,
   atol_v_ = atol_q_ / std::max(dt_, 1e-6);
 
   problem_ = body.make_problem();
+  {
+    const std::vector<double> zero(m_, 0.0);
+    SubsegmentPose g;
+    SubsegmentRates d;
+    rates_ = body.local_rates(1, zero.data(), g, d) && !std::getenv("TDCR_NO_RATES");
+  }
   frames_.resize(N_ + 1);
   frames_b_.resize(N_ + 1);
   poses_.resize(N_ + 1);
@@ -264,6 +272,8 @@ void LumpedDynamics::initialize(const Solution& at_rest, const ModelInput& input
   // Per output step: a step that needs more has met a singularity (e.g. a CCsub subsegment bent
   // to 90 deg, where its twist law degenerates), not a hard stretch of motion.
   check(CVodeSetMaxNumSteps(cvode_, kMaxStepsPerOutput), "CVodeSetMaxNumSteps");
+  if (const char* e = std::getenv("TDCR_MAXORD")) CVodeSetMaxOrd(cvode_, std::atoi(e));
+  if (std::getenv("TDCR_STLD")) CVodeSetStabLimDet(cvode_, 1);
   A_mat_ = SUNDenseMatrix(2 * n_, 2 * n_, ctx_);
   ls_ = make_schur_solver();
   if (!A_mat_ || !ls_) throw std::runtime_error("lumped dynamics: dense matrix or solver creation failed");
@@ -280,11 +290,15 @@ SimulationStep LumpedDynamics::advance(double t_next, const Timeline& timeline) 
   long steps = 0;  // summed per CVode call: CVodeReInit (at timeline entries) resets the count
   int flag = CV_SUCCESS;
   while (t_ < t_next) {
-    // Stop at the timeline's entries: the input's slope jumps there, and CVODE restarts.
-    double stop = t_next;
+    // Stop at the timeline's entries: the input's slope jumps there, and CVODE restarts. Output
+    // times are no stops: CVODE steps past them and interpolates (its steps follow the motion,
+    // not the output step).
+    double entry = INFINITY;
     for (const TimelineEntry& e : timeline.entries)
-      if (e.t > t_ * (1.0 + 1e-14) + 1e-300 && e.t < stop) stop = e.t;
-    check(CVodeSetStopTime(cvode_, stop), "CVodeSetStopTime");
+      if (e.t > t_ * (1.0 + 1e-14) + 1e-300 && e.t < entry) entry = e.t;
+    const bool to_entry = entry <= t_next;
+    const double stop = to_entry ? entry : t_next;
+    check(CVodeSetStopTime(cvode_, std::isfinite(entry) ? entry : 1e300), "CVodeSetStopTime");
     sunrealtype reached = t_;
     cvode_message_.clear();
     long n0 = 0, n1 = 0;
@@ -297,8 +311,17 @@ SimulationStep LumpedDynamics::advance(double t_next, const Timeline& timeline) 
       break;
     }
     t_ = reached;
-    if (stop < t_next && t_ >= stop) check(CVodeReInit(cvode_, t_, y_), "CVodeReInit");
-    if (t_ >= stop) t_ = stop;
+    if (t_ >= stop) {
+      t_ = stop;
+      if (to_entry) check(CVodeReInit(cvode_, t_, y_), "CVodeReInit");
+    }
+  }
+  if (std::getenv("TDCR_DYN_DEBUG")) {
+    long ns, nf, nls, netf, nni, nncf, nje; int qlast, qcur; double h0, hl, hc, tc;
+    CVodeGetIntegratorStats(cvode_, &ns, &nf, &nls, &netf, &qlast, &qcur, &h0, &hl, &hc, &tc);
+    CVodeGetNonlinSolvStats(cvode_, &nni, &nncf);
+    CVodeGetNumJacEvals(cvode_, &nje);
+    std::fprintf(stderr, "t %.4f steps %ld f %ld setups %ld etf %ld nni %ld ncf %ld jac %ld q %d h %.3g\n", t_next, ns, nf, nls, netf, nni, nncf, nje, qcur, hc);
   }
   const double* yv = N_VGetArrayPointer(y_);
   q_ = Eigen::Map<const Eigen::VectorXd>(yv, n_);

@@ -130,6 +130,9 @@ class LumpedDynamics final : public DynamicsIntegrator {
   // the local Jacobian (base frame) of link i of subsegment j at index 4 j + i.
   static constexpr int kLinks = 4;
   bool links_ = false;
+  // The body has closed-form rates of its subsegments' poses (LumpedBody::local_rates); else
+  // the twists are fourth-order differences of local().
+  bool rates_ = false;
   std::vector<double> link_mass_;
   std::vector<Vec3> link_c_, link_stencil_[4];
   std::vector<Eigen::Matrix<double, 3, 5>> link_J_;

@@ -23,6 +23,23 @@ void LumpedDynamics::twists(const double* q, Twists& T, std::vector<Vec3>* point
       for (int i = 0; i < kLinks; ++i)
         c[kLinks * j + i] = frames_b_[j - 1].p + frames_b_[j - 1].R * poses_[j].aux[3 + i];
   }
+  if (rates_) {
+    // Closed-form rates of the subsegments' poses (LumpedBody::local_rates).
+    SubsegmentPose g;
+    SubsegmentRates d;
+    for (int j = 1; j <= N_; ++j) {
+      body_.local_rates(j, q + m_ * (j - 1), g, d);
+      const Mat3& R0 = frames_b_[j - 1].R;
+      const Vec3& pj = frames_b_[j].p;
+      for (int i = 0; i < m_; ++i) {
+        const Vec3 w = R0 * d.w[i];
+        T.col(m_ * (j - 1) + i) << w, R0 * d.dp[i] - w.cross(pj);
+        if (links_ && !points)
+          for (int l = 0; l < kLinks; ++l) link_J_[kLinks * j + l].col(i) = R0 * d.dmid[l][i];
+      }
+    }
+    return;
+  }
   double xs[8];
   SubsegmentPose g[4];
   static constexpr double kOffset[4] = {2.0, 1.0, -1.0, -2.0};
