@@ -103,6 +103,7 @@ LumpedDynamics::LumpedDynamics(const LumpedModel& model, const LumpedBody& body,
   K_.setZero(n_, n_);
   schur_.setZero(n_, n_);
   schur_A21_.setZero(n_, n_);
+  schur_M_.setZero(n_, n_);
   schur_b_.setZero(n_);
   schur_lu_ = Eigen::PartialPivLU<Eigen::MatrixXd>(n_);
   // Sized by a first factorisation (of the identity): assigning LLT(n_) would copy its
@@ -149,14 +150,14 @@ int LumpedDynamics::rhs_fn(sunrealtype t, N_Vector y, N_Vector yd, void* user) {
   const double* v = yv + n;
   s.input_at(t);
   s.twists(q, s.T_);
-  if (!s.generalized_force(q)) return 1;  // recoverable: CVODE retries a smaller step
+  if (!s.generalized_force(q)) { if (std::getenv("TDCR_DYN_DEBUG")) std::fprintf(stderr, "Q failed\n"); return 1; }  // recoverable: CVODE retries a smaller step
   s.mass_matrix();
   s.bias(q, v);
   Eigen::Map<const Eigen::VectorXd> vv(v, n);
   for (int i = 0; i < n; ++i) s.damp_[i] = s.settings_.bending_damping_time * s.spring(i, q);
   s.rhs_ = s.Q_ - s.damp_.cwiseProduct(vv) - s.b_;
   s.llt_.compute(s.M_);
-  if (s.llt_.info() != Eigen::Success) return 1;
+  if (s.llt_.info() != Eigen::Success) { if (std::getenv("TDCR_DYN_DEBUG")) std::fprintf(stderr, "LLT failed\n"); return 1; }
   Eigen::Map<Eigen::VectorXd> dq(d, n), dv(d + n, n);
   dq = vv;
   dv = s.llt_.solve(s.rhs_);
@@ -183,24 +184,73 @@ int LumpedDynamics::jac_fn(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix J, 
     } else {
       s.K_.middleRows(r0, 5) = c * s.Jr_.middleRows(r0, 5);
       s.K_.row(r0 + 3) *= s.S_[j](0, 0);
+      // The phi row is Q_phi = -c a r_phi (a = theta_1 + theta_2 + theta_3): its factor's own
+      // derivative meets r_phi, which is not zero in motion; and its damping tau K_Theta c a^2 v_phi.
+      const double* v = q + n;
+      const double a = s.S_[j](0, 0);
+      const double kd = s.settings_.bending_damping_time * s.model_.effects().prb.k_theta[1] * c * 2.0 * a * v[r0 + 3];
+      for (int i = 0; i < 3; ++i) s.K_(r0 + 3, r0 + i) += c * s.r_[r0 + 3] + kd;
     }
   }
-  Eigen::Map<Eigen::MatrixXd> Jm(SUNDenseMatrix_Data(J), 2 * n, 2 * n);
-  Jm.setZero();
-  Jm.topRightCorner(n, n).setIdentity();
-  auto J21 = Jm.bottomLeftCorner(n, n);
-  J21 = -s.K_;
-  s.llt_.solveInPlace(J21);
-  auto J22 = Jm.bottomRightCorner(n, n);
-  J22.diagonal() = -s.damp_;
-  s.llt_.solveInPlace(J22);
-  return Jm.allFinite() ? 0 : 1;
+  NewtonMatrix& nm = *static_cast<NewtonMatrix*>(J->content);
+  nm.M = s.M_;
+  nm.K = s.K_;
+  nm.D = s.damp_;
+  nm.gamma = 0.0;
+  nm.scaled = false;
+  return nm.M.allFinite() && nm.K.allFinite() ? 0 : 1;
 }
 
-// CVODE's Newton matrix A = I - gamma J with J = [0 I; J21 J22] (q' = v exactly) is
-// [I, -gamma I; A21, A22]. Eliminating x1 = b1 + gamma x2 leaves (A22 + gamma A21) x2 =
-// b2 - A21 b1: one n x n LU (Eigen's, blocked) instead of SUNDIALS' unblocked 2n x 2n one, which
-// took 57 % of a CCsub run (perf, bench_dynamics).
+// The Jacobian of (q, v)' = (v, M^-1 (Q - D v - b)) without M's and b's own derivatives is
+// J = [0 I; -M^-1 K, -M^-1 D]: a NewtonMatrix keeps M, K and D (n x n, n x n, n) instead of the
+// dense 2n x 2n J, and CVODE's A = I - gamma J as gamma alone (CVODE copies and scales it between
+// steps: on the dense 2n x 2n matrix those copies took 14 % of a run, perf, bench_dynamics).
+SUNMatrix LumpedDynamics::make_newton_matrix(SUNContext ctx, int n) {
+  SUNMatrix A = SUNMatNewEmpty(ctx);
+  if (!A) return nullptr;
+  auto* c = new NewtonMatrix;
+  c->M.setZero(n, n);
+  c->K.setZero(n, n);
+  c->D.setZero(n);
+  A->content = c;
+  A->ops->getid = [](SUNMatrix) { return SUNMATRIX_CUSTOM; };
+  A->ops->clone = [](SUNMatrix A) -> SUNMatrix {
+    return make_newton_matrix(A->sunctx, static_cast<int>(static_cast<NewtonMatrix*>(A->content)->D.size()));
+  };
+  A->ops->destroy = [](SUNMatrix A) {
+    delete static_cast<NewtonMatrix*>(A->content);
+    A->content = nullptr;
+    SUNMatFreeEmpty(A);
+  };
+  A->ops->zero = [](SUNMatrix A) -> int {
+    auto& c = *static_cast<NewtonMatrix*>(A->content);
+    c.M.setZero();
+    c.K.setZero();
+    c.D.setZero();
+    c.gamma = 0.0;
+    c.scaled = false;
+    return 0;
+  };
+  A->ops->copy = [](SUNMatrix A, SUNMatrix B) -> int {
+    *static_cast<NewtonMatrix*>(B->content) = *static_cast<const NewtonMatrix*>(A->content);
+    return 0;
+  };
+  // A = c A + I: CVODE's c = -gamma on a fresh copy of J.
+  A->ops->scaleaddi = [](sunrealtype c, SUNMatrix A) -> int {
+    auto& m = *static_cast<NewtonMatrix*>(A->content);
+    if (m.scaled) return -1;
+    m.gamma = -c;
+    m.scaled = true;
+    return 0;
+  };
+  return A;
+}
+
+// CVODE's Newton systems (I - gamma J) x = b with J = [0 I; -M^-1 K, -M^-1 D]: the first block
+// row gives x1 = b1 + gamma x2, and the second, times M, (M + gamma D + gamma^2 K) x2 =
+// M b2 - gamma K b1: one n x n LU (Eigen's, blocked) of M, D, K as the model has them, no
+// inverse of M and no 2n x 2n matrix (SUNDIALS' unblocked 2n x 2n LU took 57 % of a CCsub run,
+// perf, bench_dynamics).
 SUNLinearSolver LumpedDynamics::make_schur_solver() {
   SUNLinearSolver S = SUNLinSolNewEmpty(ctx_);
   if (!S) throw std::runtime_error("lumped dynamics: SUNLinSolNewEmpty failed");
@@ -209,11 +259,13 @@ SUNLinearSolver LumpedDynamics::make_schur_solver() {
   S->ops->getid = [](SUNLinearSolver) { return SUNLINEARSOLVER_CUSTOM; };
   S->ops->setup = [](SUNLinearSolver ls, SUNMatrix A) -> int {
     auto& d = *static_cast<LumpedDynamics*>(ls->content);
-    const int n = d.n_;
-    Eigen::Map<const Eigen::MatrixXd> Am(SUNDenseMatrix_Data(A), 2 * n, 2 * n);
-    d.schur_gamma_ = -Am(0, n);
-    d.schur_A21_ = Am.bottomLeftCorner(n, n);
-    d.schur_ = Am.bottomRightCorner(n, n) + d.schur_gamma_ * d.schur_A21_;
+    const NewtonMatrix& m = *static_cast<const NewtonMatrix*>(A->content);
+    const double g = m.scaled ? m.gamma : 0.0;
+    d.schur_gamma_ = g;
+    d.schur_A21_ = m.K;  // K and M of this Newton matrix, for solve()
+    d.schur_M_ = m.M;
+    d.schur_ = m.M + (g * g) * m.K;
+    d.schur_.diagonal() += g * m.D;
     d.schur_lu_.compute(d.schur_);
     // A singular or non-finite block: recoverable, CVODE retries with a smaller step.
     return d.schur_lu_.rcond() > 1e-300 && d.schur_.allFinite() ? 0 : 1;
@@ -223,7 +275,8 @@ SUNLinearSolver LumpedDynamics::make_schur_solver() {
     const int n = d.n_;
     Eigen::Map<const Eigen::VectorXd> bb(N_VGetArrayPointer(b), 2 * n);
     Eigen::Map<Eigen::VectorXd> xx(N_VGetArrayPointer(x), 2 * n);
-    d.schur_b_.noalias() = bb.tail(n) - d.schur_A21_ * bb.head(n);
+    d.schur_b_.noalias() = d.schur_M_ * bb.tail(n);
+    d.schur_b_.noalias() -= d.schur_gamma_ * (d.schur_A21_ * bb.head(n));
     xx.tail(n) = d.schur_lu_.solve(d.schur_b_);
     xx.head(n) = bb.head(n) + d.schur_gamma_ * xx.tail(n);
     return xx.allFinite() ? 0 : 1;
@@ -274,7 +327,7 @@ void LumpedDynamics::initialize(const Solution& at_rest, const ModelInput& input
   check(CVodeSetMaxNumSteps(cvode_, kMaxStepsPerOutput), "CVodeSetMaxNumSteps");
   if (const char* e = std::getenv("TDCR_MAXORD")) CVodeSetMaxOrd(cvode_, std::atoi(e));
   if (std::getenv("TDCR_STLD")) CVodeSetStabLimDet(cvode_, 1);
-  A_mat_ = SUNDenseMatrix(2 * n_, 2 * n_, ctx_);
+  A_mat_ = make_newton_matrix(ctx_, n_);
   ls_ = make_schur_solver();
   if (!A_mat_ || !ls_) throw std::runtime_error("lumped dynamics: dense matrix or solver creation failed");
   check(CVodeSetLinearSolver(cvode_, ls_, A_mat_), "CVodeSetLinearSolver");
@@ -307,6 +360,7 @@ SimulationStep LumpedDynamics::advance(double t_next, const Timeline& timeline) 
     CVodeGetNumSteps(cvode_, &n1);
     steps += n1 - n0;
     if (flag < 0) {
+      if (std::getenv("TDCR_DYN_DEBUG")) std::fprintf(stderr, "flag %d: %s\n", flag, cvode_message_.c_str());
       t_ = reached;
       break;
     }
@@ -321,6 +375,11 @@ SimulationStep LumpedDynamics::advance(double t_next, const Timeline& timeline) 
     CVodeGetIntegratorStats(cvode_, &ns, &nf, &nls, &netf, &qlast, &qcur, &h0, &hl, &hc, &tc);
     CVodeGetNonlinSolvStats(cvode_, &nni, &nncf);
     CVodeGetNumJacEvals(cvode_, &nje);
+    if (m_ == 5) {
+      const double* yy = N_VGetArrayPointer(y_);
+      for (int j = 1; j <= N_; j += 3) std::fprintf(stderr, "[%d a %.2e phi %.3f] ", j, yy[5*(j-1)]+yy[5*(j-1)+1]+yy[5*(j-1)+2], yy[5*(j-1)+3]);
+      std::fprintf(stderr, "\n");
+    }
     std::fprintf(stderr, "t %.4f steps %ld f %ld setups %ld etf %ld nni %ld ncf %ld jac %ld q %d h %.3g\n", t_next, ns, nf, nls, netf, nni, nncf, nje, qcur, hc);
   }
   const double* yv = N_VGetArrayPointer(y_);
@@ -363,6 +422,26 @@ void LumpedDynamics::choose_bending_planes(const Timeline& timeline) {
       if (open[j] && std::abs(x[0]) + std::abs(x[1]) + std::abs(x[2]) > 1e-9) {
         y[m_ * (j - 1) + 3] = x[3];
         open[j] = false;
+      }
+    }
+  }
+  // Subsegments no static answer bends (e.g. a segment without pulled tendons, swung by the
+  // others): the plane of the nearest bent subsegment, proximal first, so that a planar motion
+  // stays in one plane (its straight subsegments would otherwise swing through straight by
+  // turning phi, the singular way).
+  std::vector<double> phi(N_ + 1, 0.0);
+  std::vector<bool> set(N_ + 1, false);
+  for (int j = 1; j <= N_; ++j) set[j] = !open[j], phi[j] = y[m_ * (j - 1) + 3];
+  for (int j = 1; j <= N_; ++j) {
+    if (set[j]) continue;
+    for (int d = 1; d < N_; ++d) {
+      if (j - d >= 1 && set[j - d]) {
+        y[m_ * (j - 1) + 3] = phi[j - d];
+        break;
+      }
+      if (j + d <= N_ && set[j + d]) {
+        y[m_ * (j - 1) + 3] = phi[j + d];
+        break;
       }
     }
   }

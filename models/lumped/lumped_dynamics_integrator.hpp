@@ -33,7 +33,7 @@ constexpr double kTwistStep = 1e-3;
 // Step (rad) of the velocity-product terms' differences along q' (bias accelerations).
 constexpr double kBiasStep = 1e-3;
 // PRB: inertia added to the bending-plane angle phi of a subsegment, as a fraction of m l^2 (its
-// disk's mass, its length): that of turning the plane of a bend of sqrt(kPhiInertia) rad. phi
+// disk's and its links' mass, its length): that of turning the plane of a bend of sqrt(kPhiInertia) rad. phi
 // has no inertia of its own where the subsegment is straight (a polar angle at zero bend):
 // without it M is singular there. It only slows a plane's turning near straight.
 constexpr double kPhiInertia = 1e-2;
@@ -149,11 +149,20 @@ class LumpedDynamics final : public DynamicsIntegrator {
   Eigen::LLT<Eigen::MatrixXd> llt_;
   // The Newton systems (I - gamma J) x = b by their Schur complement (lumped_dynamics.cpp,
   // make_schur_solver): n x n instead of 2n x 2n, since J's first block row is [0 I].
-  Eigen::MatrixXd schur_, schur_A21_;
+  Eigen::MatrixXd schur_, schur_A21_, schur_M_;
   Eigen::PartialPivLU<Eigen::MatrixXd> schur_lu_;
   Eigen::VectorXd schur_b_;
   double schur_gamma_ = 0.0;
   SUNLinearSolver make_schur_solver();
+  // CVODE's Newton matrix (lumped_dynamics.cpp, make_newton_matrix): J's blocks M, K, D and
+  // CVODE's gamma, not the dense 2n x 2n matrix.
+  struct NewtonMatrix {
+    Eigen::MatrixXd M, K;
+    Eigen::VectorXd D;
+    double gamma = 0.0;
+    bool scaled = false;
+  };
+  static SUNMatrix make_newton_matrix(SUNContext ctx, int n);
   std::vector<Mat6> IC_, Io_;
   std::vector<Vec6> V_, A_;
   Eigen::VectorXd qs_;

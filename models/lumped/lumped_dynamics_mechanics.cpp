@@ -156,7 +156,9 @@ void LumpedDynamics::mass_matrix() {
             rigid(r, c) = link_mass_[l] * (Tj.col(r).tail<3>() + Tj.col(r).head<3>().cross(link_c_[l])).dot(J.col(c));
         M_.block(m_ * (j - 1), m_ * (j - 1), m_, m_) += link_mass_[l] * J.transpose() * J - rigid;
       }
-      M_(m_ * (j - 1) + 3, m_ * (j - 1) + 3) += kPhiInertia * mass_[j] * length_[j] * length_[j];
+      double mj = mass_[j];  // disk j and the subsegment's links (massless disks: the links alone)
+      for (int i = 0; i < kLinks; ++i) mj += link_mass_[kLinks * j + i];
+      M_(m_ * (j - 1) + 3, m_ * (j - 1) + 3) += kPhiInertia * mj * length_[j] * length_[j];
     }
 }
 
