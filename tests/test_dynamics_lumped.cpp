@@ -8,6 +8,21 @@
 #include <iostream>
 #include <string>
 
+#include "allocation_counter.hpp"
+
+#include <cstddef>
+// Heap use by malloc as well (Eigen's and CVODE's heap goes there, not through operator new):
+// this binary's malloc counts and forwards to glibc's (not under AddressSanitizer, which
+// replaces malloc itself).
+#if defined(__GLIBC__) && !defined(__SANITIZE_ADDRESS__)
+#define TDCR_COUNT_MALLOC 1
+extern "C" void* __libc_malloc(std::size_t);
+inline std::atomic<long> g_mallocs{0};
+extern "C" void* malloc(std::size_t n) {
+  ++g_mallocs;
+  return __libc_malloc(n);
+}
+#endif
 #include "tdcr/core/error.hpp"
 #include "tdcr/core/paper_robot.hpp"
 #include "tdcr/core/scene_io.hpp"
@@ -85,6 +100,34 @@ TEST_P(LumpedDynamicsTest, SettlesOnItsOwnStaticAnswer) {
     // It did move: the start is the straight robot.
     EXPECT_GT((tip - r.steps.front().tip.p).norm(), 1e-3);
   }
+}
+
+// The input along a ramp changes at every right-hand side: the integration allocates nothing
+// there (operator new, and malloc where it can be counted): neither binding the input nor the
+// right-hand sides, Jacobians and Newton systems.
+TEST_P(LumpedDynamicsTest, RampAllocatesNothing) {
+  const Robot robot = paper_robot_with_mass(3);
+  auto model = make_model(GetParam(), robot, Effects());
+  const double T = 0.4 * paper::max_tension(robot);
+  Timeline tl = step_timeline({0, 0, 0, 0}, {T, 0, 0, 0.5 * T}, 1.0);
+  tl.entries[1].input.loads.tip_force = Vec3(0.01, 0.0, 0.0);
+  DynamicsSettings d;
+  d.bending_damping_time = 0.004;
+  auto integrator = make_dynamics_integrator(*model, d, 0.01);
+  auto ws = model->make_workspace();
+  const Solution rest = solve(*model, *ws, tl.entries.front().input);
+  ASSERT_TRUE(rest.converged());
+  integrator->initialize(rest, tl.entries.front().input);
+  ASSERT_EQ(integrator->advance(0.01, tl).status, TerminationType::Converged);  // first: sizes buffers
+  const long before = g_allocations.load();
+#ifdef TDCR_COUNT_MALLOC
+  const long mbefore = g_mallocs.load();
+#endif
+  for (int k = 2; k <= 20; ++k) ASSERT_EQ(integrator->advance(0.01 * k, tl).status, TerminationType::Converged);
+  EXPECT_EQ(g_allocations.load() - before, 0);
+#ifdef TDCR_COUNT_MALLOC
+  EXPECT_EQ(g_mallocs.load() - mbefore, 0);
+#endif
 }
 
 // A released cantilever (a small tip force in the x-z plane, released within 0.1 ms).
