@@ -37,6 +37,9 @@ constexpr double kBiasStep = 1e-3;
 // has no inertia of its own where the subsegment is straight (a polar angle at zero bend):
 // without it M is singular there. It only slows a plane's turning near straight.
 constexpr double kPhiInertia = 1e-2;
+// The dynamics' tip tolerance over the robot's length where the scene gives no
+// solver.tip_tolerance (lumped_dynamics.cpp, docs/dynamics.md "Accuracy").
+constexpr double kDynamicsTipToleranceOverLength = 1e-4;
 // CVODE steps allowed per output step.
 constexpr long kMaxStepsPerOutput = 20000;
 
