@@ -97,6 +97,8 @@ class LumpedDynamics final : public DynamicsIntegrator {
   bool generalized_force(const double* q);
   // M at q from T_ (frames_ of q); the composite inertias kept in IC_.
   void mass_matrix();
+  template <int m>
+  void mass_blocks();  // mass_matrix()'s blocks, m unknowns per subsegment
   // b: velocity-product forces minus drag, at (q, v).
   void bias(const double* q, const double* v);
   double potential_energy(const double* q);

@@ -109,6 +109,27 @@ bool LumpedDynamics::generalized_force(const double* q) {
   return Q_.allFinite();
 }
 
+template <int m>
+void LumpedDynamics::mass_blocks() {
+  for (int bj = 1; bj <= N_; ++bj) {
+    Eigen::Matrix<double, 6, m> U = IC_[bj] * T_.middleCols<m>(m * (bj - 1));
+    if (links_)
+      for (int i = 0; i < kLinks; ++i) {
+        const int l = kLinks * bj + i;
+        const Eigen::Matrix<double, 3, 5>& J = link_J_[l];
+        for (int c = 0; c < m; ++c) {
+          U.col(c).template head<3>() += link_mass_[l] * link_c_[l].cross(Vec3(J.col(c)));
+          U.col(c).template tail<3>() += link_mass_[l] * J.col(c);
+        }
+      }
+    for (int aj = 1; aj <= bj; ++aj) {
+      const Eigen::Matrix<double, m, m> B = T_.middleCols<m>(m * (aj - 1)).transpose() * U;
+      M_.block<m, m>(m * (aj - 1), m * (bj - 1)) = B;
+      if (aj != bj) M_.block<m, m>(m * (bj - 1), m * (aj - 1)) = B.transpose();
+    }
+  }
+}
+
 void LumpedDynamics::mass_matrix() {
   // Composite inertias from the tip: IC_j = sum of the disks k >= j.
   IC_[N_ + 1].setZero();
@@ -124,24 +145,11 @@ void LumpedDynamics::mass_matrix() {
   }
   // Block (a, b), a <= b: the bodies moving rigidly with both columns are the disks k >= b and
   // the links of subsegments > b; PRB: the links of b move with its columns through link_J_.
-  for (int bj = 1; bj <= N_; ++bj) {
-    // At most 5 columns: on the stack (no allocation in CVODE's right-hand side).
-    Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::ColMajor, 6, 5> U(6, m_);
-    U.noalias() = IC_[bj] * T_.middleCols(m_ * (bj - 1), m_);
-    if (links_)
-      for (int i = 0; i < kLinks; ++i) {
-        const int l = kLinks * bj + i;
-        const Eigen::Matrix<double, 3, 5>& J = link_J_[l];
-        for (int c = 0; c < m_; ++c) {
-          U.col(c).head<3>() += link_mass_[l] * link_c_[l].cross(Vec3(J.col(c)));
-          U.col(c).tail<3>() += link_mass_[l] * J.col(c);
-        }
-      }
-    for (int aj = 1; aj <= bj; ++aj) {
-      M_.block(m_ * (aj - 1), m_ * (bj - 1), m_, m_).noalias() = T_.middleCols(m_ * (aj - 1), m_).transpose() * U;
-      if (aj != bj) M_.block(m_ * (bj - 1), m_ * (aj - 1), m_, m_) = M_.block(m_ * (aj - 1), m_ * (bj - 1), m_, m_).transpose();
-    }
-  }
+  // Fixed-size blocks (CCsub 3, PRB 5 columns per subsegment).
+  if (m_ == 3)
+    mass_blocks<3>();
+  else
+    mass_blocks<5>();
   if (links_)
     for (int j = 1; j <= N_; ++j) {
       // The diagonal block's own links: U above holds their rigid part (twist T of b), which
