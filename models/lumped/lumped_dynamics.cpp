@@ -402,8 +402,7 @@ SimulationStep LumpedDynamics::advance(double t_next, const Timeline& timeline) 
   // Energies and the tip at the reached state.
   input_at(step.t);
   twists(q_.data(), T_);
-  mass_matrix();
-  step.kinetic_energy = 0.5 * v_.dot(M_ * v_);
+  step.kinetic_energy = kinetic_energy(v_.data());
   step.potential_energy = potential_energy(q_.data());
   step.tip = frames_b_[N_];
   return step;

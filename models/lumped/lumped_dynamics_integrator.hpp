@@ -102,6 +102,10 @@ class LumpedDynamics final : public DynamicsIntegrator {
   // b: velocity-product forces minus drag, at (q, v).
   void bias(const double* q, const double* v);
   double potential_energy(const double* q);
+  // v^T M v / 2 at the q of the last twists() (frames_b_, T_, link_c_, link_J_), without M.
+  double kinetic_energy(const double* v) const;
+  // PRB: the mass of kPhiInertia's m l^2 for subsegment j.
+  double phi_mass(int j) const;
   // PRB: m a of link l at q'' = 0 from bias()'s stencil of positions (step h along q').
   Vec3 link_force(int l, double h) const {
     const Vec3 acc = (link_stencil_[2][l] - 2.0 * link_c_[l] + link_stencil_[3][l]) / (h * h);

@@ -164,9 +164,7 @@ void LumpedDynamics::mass_matrix() {
             rigid(r, c) = link_mass_[l] * (Tj.col(r).tail<3>() + Tj.col(r).head<3>().cross(link_c_[l])).dot(J.col(c));
         M_.block(m_ * (j - 1), m_ * (j - 1), m_, m_) += link_mass_[l] * J.transpose() * J - rigid;
       }
-      double mj = mass_[j];  // disk j and the subsegment's links (massless disks: the links alone)
-      for (int i = 0; i < kLinks; ++i) mj += link_mass_[kLinks * j + i];
-      M_(m_ * (j - 1) + 3, m_ * (j - 1) + 3) += kPhiInertia * mj * length_[j] * length_[j];
+      M_(m_ * (j - 1) + 3, m_ * (j - 1) + 3) += kPhiInertia * phi_mass(j) * length_[j] * length_[j];
     }
 }
 
@@ -242,6 +240,37 @@ double LumpedDynamics::spring(int i, const double* q) const {
   // phi: turning the plane of a bend a changes the curvature vector's direction at the rate a.
   const double a = q[m_ * (j - 1)] + q[m_ * (j - 1) + 1] + q[m_ * (j - 1) + 2];
   return prb.k_theta[1] * EI / l * a * a;
+}
+
+double LumpedDynamics::kinetic_energy(const double* v) const {
+  // v^T M v / 2 body by body (O(N), M is not formed): disk k moves with the spatial velocity
+  // V_k = sum_{j <= k} T_j v_j; the links of subsegment k with V_{k-1} and their own rates.
+  Eigen::Map<const Eigen::VectorXd> vv(v, n_);
+  double ke = 0.0;
+  Vec6 V = Vec6::Zero();
+  for (int k = 1; k <= N_; ++k) {
+    const auto vk = vv.segment(m_ * (k - 1), m_);
+    if (links_) {
+      for (int i = 0; i < kLinks; ++i) {
+        const int l = kLinks * k + i;
+        const Vec3 vel = V.tail<3>() + V.head<3>().cross(link_c_[l]) + link_J_[l].leftCols(m_) * vk;
+        ke += 0.5 * link_mass_[l] * vel.squaredNorm();
+      }
+      ke += 0.5 * kPhiInertia * phi_mass(k) * length_[k] * length_[k] * vk[3] * vk[3];
+    }
+    V.noalias() += T_.middleCols(m_ * (k - 1), m_) * vk;
+    const Frame& f = frames_b_[k];
+    const Vec3 w_body = f.R.transpose() * V.head<3>();
+    const Vec3 vel = V.tail<3>() + V.head<3>().cross(f.p);
+    ke += 0.5 * (mass_[k] * vel.squaredNorm() + w_body.dot(inertia_[k].asDiagonal() * w_body));
+  }
+  return ke;
+}
+
+double LumpedDynamics::phi_mass(int j) const {
+  double mj = mass_[j];  // disk j and the subsegment's links (massless disks: the links alone)
+  for (int i = 0; i < kLinks; ++i) mj += link_mass_[kLinks * j + i];
+  return mj;
 }
 
 double LumpedDynamics::potential_energy(const double* q) {
