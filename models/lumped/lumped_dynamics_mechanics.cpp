@@ -16,30 +16,36 @@
 namespace tdcr::detail {
 
 void LumpedDynamics::twists(const double* q, Twists& T, std::vector<Vec3>* points) {
-  body_.compute_frames(q, N_, frames_b_.data(), poses_.data());
-  if (links_) {
-    std::vector<Vec3>& c = points ? *points : link_c_;
-    for (int j = 1; j <= N_; ++j)
-      for (int i = 0; i < kLinks; ++i)
-        c[kLinks * j + i] = frames_b_[j - 1].p + frames_b_[j - 1].R * poses_[j].aux[3 + i];
-  }
+  std::vector<Vec3>& c = points ? *points : link_c_;
   if (rates_) {
-    // Closed-form rates of the subsegments' poses (LumpedBody::local_rates).
-    SubsegmentPose g;
+    // Closed-form rates of the subsegments' poses (LumpedBody::local_rates), the frames from the
+    // same poses in one pass (as LumpedBody::compute_frames).
     SubsegmentRates d;
+    frames_b_[0] = Frame{};
     for (int j = 1; j <= N_; ++j) {
+      SubsegmentPose& g = poses_[j];
       body_.local_rates(j, q + m_ * (j - 1), g, d);
-      const Mat3& R0 = frames_b_[j - 1].R;
-      const Vec3& pj = frames_b_[j].p;
+      const Frame& prev = frames_b_[j - 1];
+      Frame& f = frames_b_[j];
+      f.R = prev.R * g.R;
+      f.p = prev.p + prev.R * g.p;
+      const Mat3& R0 = prev.R;
+      if (links_)
+        for (int i = 0; i < kLinks; ++i) c[kLinks * j + i] = prev.p + R0 * g.aux[3 + i];
       for (int i = 0; i < m_; ++i) {
         const Vec3 w = R0 * d.w[i];
-        T.col(m_ * (j - 1) + i) << w, R0 * d.dp[i] - w.cross(pj);
+        T.col(m_ * (j - 1) + i) << w, R0 * d.dp[i] - w.cross(f.p);
         if (links_ && !points)
           for (int l = 0; l < kLinks; ++l) link_J_[kLinks * j + l].col(i) = R0 * d.dmid[l][i];
       }
     }
     return;
   }
+  body_.compute_frames(q, N_, frames_b_.data(), poses_.data());
+  if (links_)
+    for (int j = 1; j <= N_; ++j)
+      for (int i = 0; i < kLinks; ++i)
+        c[kLinks * j + i] = frames_b_[j - 1].p + frames_b_[j - 1].R * poses_[j].aux[3 + i];
   double xs[8];
   SubsegmentPose g[4];
   static constexpr double kOffset[4] = {2.0, 1.0, -1.0, -2.0};
