@@ -1,8 +1,6 @@
 // The equations of motion of CCsub and PRB (lumped_dynamics.hpp, docs/dynamics.md), integrated
 // by CVODE (BDF, dense Newton matrices from the model's structured Jacobian).
 #include <algorithm>
-#include <cstdio>
-#include <cstdlib>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -87,7 +85,7 @@ LumpedDynamics::LumpedDynamics(const LumpedModel& model, const LumpedBody& body,
     const std::vector<double> zero(m_, 0.0);
     SubsegmentPose g;
     SubsegmentRates d;
-    rates_ = body.local_rates(1, zero.data(), g, d) && !std::getenv("TDCR_NO_RATES");
+    rates_ = body.local_rates(1, zero.data(), g, d);
   }
   frames_.resize(N_ + 1);
   frames_b_.resize(N_ + 1);
@@ -156,14 +154,14 @@ int LumpedDynamics::rhs_fn(sunrealtype t, N_Vector y, N_Vector yd, void* user) {
   const double* v = yv + n;
   s.input_at(t);
   s.twists(q, s.T_);
-  if (!s.generalized_force(q)) { if (std::getenv("TDCR_DYN_DEBUG")) std::fprintf(stderr, "Q failed\n"); return 1; }  // recoverable: CVODE retries a smaller step
+  if (!s.generalized_force(q)) return 1;  // recoverable: CVODE retries a smaller step
   s.mass_matrix();
   s.bias(q, v);
   Eigen::Map<const Eigen::VectorXd> vv(v, n);
   for (int i = 0; i < n; ++i) s.damp_[i] = s.settings_.bending_damping_time * s.spring(i, q);
   s.rhs_ = s.Q_ - s.damp_.cwiseProduct(vv) - s.b_;
   s.llt_.compute(s.M_);
-  if (s.llt_.info() != Eigen::Success) { if (std::getenv("TDCR_DYN_DEBUG")) std::fprintf(stderr, "LLT failed\n"); return 1; }
+  if (s.llt_.info() != Eigen::Success) return 1;
   Eigen::Map<Eigen::VectorXd> dq(d, n), dv(d + n, n);
   dq = vv;
   dv = s.llt_.solve(s.rhs_);
@@ -333,8 +331,6 @@ void LumpedDynamics::initialize(const Solution& at_rest, const ModelInput& input
   // Per output step: a step that needs more has met a singularity (e.g. a CCsub subsegment bent
   // to 90 deg, where its twist law degenerates), not a hard stretch of motion.
   check(CVodeSetMaxNumSteps(cvode_, kMaxStepsPerOutput), "CVodeSetMaxNumSteps");
-  if (const char* e = std::getenv("TDCR_MAXORD")) CVodeSetMaxOrd(cvode_, std::atoi(e));
-  if (std::getenv("TDCR_STLD")) CVodeSetStabLimDet(cvode_, 1);
   A_mat_ = make_newton_matrix(ctx_, n_);
   ls_ = make_schur_solver();
   if (!A_mat_ || !ls_) throw std::runtime_error("lumped dynamics: dense matrix or solver creation failed");
@@ -368,7 +364,6 @@ SimulationStep LumpedDynamics::advance(double t_next, const Timeline& timeline) 
     CVodeGetNumSteps(cvode_, &n1);
     steps += n1 - n0;
     if (flag < 0) {
-      if (std::getenv("TDCR_DYN_DEBUG")) std::fprintf(stderr, "flag %d: %s\n", flag, cvode_message_.c_str());
       t_ = reached;
       break;
     }
@@ -377,18 +372,6 @@ SimulationStep LumpedDynamics::advance(double t_next, const Timeline& timeline) 
       t_ = stop;
       if (to_entry) check(CVodeReInit(cvode_, t_, y_), "CVodeReInit");
     }
-  }
-  if (std::getenv("TDCR_DYN_DEBUG")) {
-    long ns, nf, nls, netf, nni, nncf, nje; int qlast, qcur; double h0, hl, hc, tc;
-    CVodeGetIntegratorStats(cvode_, &ns, &nf, &nls, &netf, &qlast, &qcur, &h0, &hl, &hc, &tc);
-    CVodeGetNonlinSolvStats(cvode_, &nni, &nncf);
-    CVodeGetNumJacEvals(cvode_, &nje);
-    if (m_ == 5) {
-      const double* yy = N_VGetArrayPointer(y_);
-      for (int j = 1; j <= N_; j += 3) std::fprintf(stderr, "[%d a %.2e phi %.3f] ", j, yy[5*(j-1)]+yy[5*(j-1)+1]+yy[5*(j-1)+2], yy[5*(j-1)+3]);
-      std::fprintf(stderr, "\n");
-    }
-    std::fprintf(stderr, "t %.4f steps %ld f %ld setups %ld etf %ld nni %ld ncf %ld jac %ld q %d h %.3g\n", t_next, ns, nf, nls, netf, nni, nncf, nje, qcur, hc);
   }
   const double* yv = N_VGetArrayPointer(y_);
   q_ = Eigen::Map<const Eigen::VectorXd>(yv, n_);
