@@ -160,16 +160,17 @@ void LumpedDynamics::mass_matrix() {
     for (int j = 1; j <= N_; ++j) {
       // The diagonal block's own links: U above holds their rigid part (twist T of b), which
       // for b's own columns is not their motion: replace it by J^T m J.
+      const auto Tj = T_.middleCols<5>(5 * (j - 1));
+      Eigen::Matrix<double, 5, 5> own = Eigen::Matrix<double, 5, 5>::Zero();
       for (int i = 0; i < kLinks; ++i) {
         const int l = kLinks * j + i;
         const Eigen::Matrix<double, 3, 5>& J = link_J_[l];
-        const auto Tj = T_.middleCols(m_ * (j - 1), m_);
-        Eigen::Matrix<double, 5, 5> rigid;
-        for (int c = 0; c < m_; ++c)
-          for (int r = 0; r < m_; ++r)
-            rigid(r, c) = link_mass_[l] * (Tj.col(r).tail<3>() + Tj.col(r).head<3>().cross(link_c_[l])).dot(J.col(c));
-        M_.block(m_ * (j - 1), m_ * (j - 1), m_, m_) += link_mass_[l] * J.transpose() * J - rigid;
+        // The rigid motion of the link's point by the columns of b: v_o + w x c.
+        Eigen::Matrix<double, 3, 5> P;
+        for (int r = 0; r < 5; ++r) P.col(r) = Tj.col(r).tail<3>() + Tj.col(r).head<3>().cross(link_c_[l]);
+        own.noalias() += link_mass_[l] * ((J - P).transpose() * J);
       }
+      M_.block<5, 5>(5 * (j - 1), 5 * (j - 1)) += own;
       M_(m_ * (j - 1) + 3, m_ * (j - 1) + 3) += kPhiInertia * phi_mass(j) * length_[j] * length_[j];
     }
 }
