@@ -108,6 +108,7 @@ LumpedDynamics::LumpedDynamics(const LumpedModel& model, const LumpedBody& body,
   schur_.setZero(n_, n_);
   schur_A21_.setZero(n_, n_);
   schur_M_.setZero(n_, n_);
+  last_y_.setZero(2 * n_);
   schur_b_.setZero(n_);
   schur_lu_ = Eigen::PartialPivLU<Eigen::MatrixXd>(n_);
   // Sized by a first factorisation (of the identity): assigning LLT(n_) would copy its
@@ -152,6 +153,7 @@ int LumpedDynamics::rhs_fn(sunrealtype t, N_Vector y, N_Vector yd, void* user) {
   const int n = s.n_;
   const double* q = yv;
   const double* v = yv + n;
+  s.last_valid_ = false;
   s.input_at(t);
   s.twists(q, s.T_);
   if (!s.generalized_force(q)) return 1;  // recoverable: CVODE retries a smaller step
@@ -165,7 +167,11 @@ int LumpedDynamics::rhs_fn(sunrealtype t, N_Vector y, N_Vector yd, void* user) {
   Eigen::Map<Eigen::VectorXd> dq(d, n), dv(d + n, n);
   dq = vv;
   dv = s.llt_.solve(s.rhs_);
-  return dv.allFinite() ? 0 : 1;
+  if (!dv.allFinite()) return 1;
+  s.last_valid_ = true;
+  s.last_t_ = t;
+  s.last_y_ = Eigen::Map<const Eigen::VectorXd>(yv, 2 * n);
+  return 0;
 }
 
 int LumpedDynamics::jac_fn(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix J, void* user, N_Vector tmp1,
@@ -174,8 +180,10 @@ int LumpedDynamics::jac_fn(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix J, 
   auto& s = *static_cast<LumpedDynamics*>(user);
   const int n = s.n_;
   const double* q = N_VGetArrayPointer(y);
-  // Refresh every buffer at this y (rhs_fn's last call may have been elsewhere).
-  if (rhs_fn(t, y, tmp1, user) != 0) return 1;
+  // Every buffer at this y: CVODE's setups usually come right after the right-hand side at the
+  // same (t, y) (its prediction), otherwise it is evaluated again here.
+  Eigen::Map<const Eigen::VectorXd> yy(q, 2 * n);
+  if (!(s.last_valid_ && t == s.last_t_ && yy == s.last_y_) && rhs_fn(t, y, tmp1, user) != 0) return 1;
   Eigen::Map<const Eigen::VectorXd> x(q, n);
   if (!s.problem_->jacobian(x, s.r_, s.Jr_)) return 1;
   // dQ/dq ~ -S dr/dq (S's own derivative meets r, zero at every equilibrium); d(b)/d(q, q') and
@@ -302,6 +310,7 @@ void LumpedDynamics::initialize(const Solution& at_rest, const ModelInput& input
   timeline_ = nullptr;
   input_ = input;
   bound_valid_ = false;
+  last_valid_ = false;
   input_at(0.0);
   Eigen::VectorXd y0(2 * n_);
   y0.head(n_) = at_rest.unknowns;
@@ -382,7 +391,9 @@ SimulationStep LumpedDynamics::advance(double t_next, const Timeline& timeline) 
   if (CVodeGetEstLocalErrors(cvode_, ele_) == CV_SUCCESS && CVodeGetErrWeights(cvode_, ewt_) == CV_SUCCESS)
     step.residual = N_VWrmsNorm(ele_, ewt_);
   step.status = flag < 0 ? TerminationType::IntegrationFailed : TerminationType::Converged;
-  // Energies and the tip at the reached state.
+  // Energies and the tip at the reached state (the buffers are no longer those of CVODE's last
+  // right-hand side).
+  last_valid_ = false;
   input_at(step.t);
   twists(q_.data(), T_);
   step.kinetic_energy = kinetic_energy(v_.data());
@@ -393,6 +404,7 @@ SimulationStep LumpedDynamics::advance(double t_next, const Timeline& timeline) 
 
 void LumpedDynamics::choose_bending_planes(const Timeline& timeline) {
   chart_chosen_ = true;
+  last_valid_ = false;
   if (m_ != 5) return;
   double* y = N_VGetArrayPointer(y_);
   std::vector<bool> open(N_ + 1, false);

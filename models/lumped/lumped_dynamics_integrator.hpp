@@ -161,6 +161,11 @@ class LumpedDynamics final : public DynamicsIntegrator {
   Eigen::VectorXd schur_b_;
   double schur_gamma_ = 0.0;
   SUNLinearSolver make_schur_solver();
+  // The (t, y) of the last successful right-hand side: the buffers (M_, S_, r_, damp_, the
+  // problem's residual state) are those of that point.
+  bool last_valid_ = false;
+  double last_t_ = 0.0;
+  Eigen::VectorXd last_y_;
   // CVODE's Newton matrix (lumped_dynamics.cpp, make_newton_matrix): J's blocks M, K, D and
   // CVODE's gamma, not the dense 2n x 2n matrix.
   struct NewtonMatrix {

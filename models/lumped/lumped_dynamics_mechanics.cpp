@@ -310,6 +310,7 @@ double LumpedDynamics::potential_energy(const double* q) {
 }
 
 Eigen::VectorXd LumpedDynamics::frequencies(const Eigen::VectorXd& x, const ModelInput& input) {
+  last_valid_ = false;
   timeline_ = nullptr;
   input_ = input;
   bound_valid_ = false;
