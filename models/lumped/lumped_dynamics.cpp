@@ -109,6 +109,8 @@ LumpedDynamics::LumpedDynamics(const LumpedModel& model, const LumpedBody& body,
   schur_A21_.setZero(n_, n_);
   schur_M_.setZero(n_, n_);
   last_y_.setZero(2 * n_);
+  damp_const_.setZero(n_);
+  for (int i = 0; i < n_; ++i) damp_const_[i] = settings_.bending_damping_time * spring(i, q_.data());
   schur_b_.setZero(n_);
   schur_lu_ = Eigen::PartialPivLU<Eigen::MatrixXd>(n_);
   // Sized by a first factorisation (of the identity): assigning LLT(n_) would copy its
@@ -160,7 +162,10 @@ int LumpedDynamics::rhs_fn(sunrealtype t, N_Vector y, N_Vector yd, void* user) {
   s.mass_matrix();
   s.bias(q, v);
   Eigen::Map<const Eigen::VectorXd> vv(v, n);
-  for (int i = 0; i < n; ++i) s.damp_[i] = s.settings_.bending_damping_time * s.spring(i, q);
+  // D = tau_bt K: constant but for PRB's phi rows (their stiffness grows with the bend a^2).
+  s.damp_ = s.damp_const_;
+  if (s.m_ == 5)
+    for (int j = 0; j < s.N_; ++j) s.damp_[5 * j + 3] = s.settings_.bending_damping_time * s.spring(5 * j + 3, q);
   s.rhs_ = s.Q_ - s.damp_.cwiseProduct(vv) - s.b_;
   s.llt_.compute(s.M_);
   if (s.llt_.info() != Eigen::Success) return 1;

@@ -151,6 +151,7 @@ class LumpedDynamics final : public DynamicsIntegrator {
   std::vector<SubsegmentPose> poses_;
   Twists T_, Tp_, Tm_;
   Eigen::VectorXd r_, Q_, b_, rhs_, damp_;
+  Eigen::VectorXd damp_const_;  // tau_bt K of the constant springs (PRB's phi rows: recomputed)
   std::vector<Mat3> S_;  // per subsegment m x m (top-left) of S
   Eigen::MatrixXd M_, Jr_, K_;
   Eigen::LLT<Eigen::MatrixXd> llt_;
