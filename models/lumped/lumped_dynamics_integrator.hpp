@@ -95,6 +95,16 @@ class LumpedDynamics final : public DynamicsIntegrator {
   bool generalized_force(const double* q);
   // M at q from T_ (frames_ of q); the composite inertias kept in IC_.
   void mass_matrix();
+  // The disks' spatial inertias Io_ at frames_b_ (mass_matrix() computes them too).
+  void body_inertias();
+  // CCsub: q'' = M^-1 rhs_ by the articulated-body algorithm, O(N) (no M, no Cholesky), from
+  // T_, Io_, and bias()'s A_ and pbody_.
+  void articulated(Eigen::Map<Eigen::VectorXd>& qdd);
+  bool aba_ = false;  // CCsub (3 unknowns, no links): articulated() in the right-hand side
+  std::vector<Vec6> pbody_;
+  std::vector<Eigen::Matrix<double, 6, 3>> aba_U_;
+  std::vector<Mat3> aba_Dinv_;
+  std::vector<Vec3> aba_u_;
   template <int m>
   void mass_blocks();  // mass_matrix()'s blocks, m unknowns per subsegment
   // b: velocity-product forces minus drag, at (q, v).

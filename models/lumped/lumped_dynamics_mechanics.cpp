@@ -136,13 +136,53 @@ void LumpedDynamics::mass_blocks() {
   }
 }
 
-void LumpedDynamics::mass_matrix() {
-  // Composite inertias from the tip: IC_j = sum of the disks k >= j.
-  IC_[N_ + 1].setZero();
-  for (int k = N_; k >= 1; --k) {
+void LumpedDynamics::body_inertias() {
+  for (int k = 1; k <= N_; ++k) {
     const Frame& f = frames_b_[k];
     const Mat3 Ic = f.R * inertia_[k].asDiagonal() * f.R.transpose();
     Io_[k] = spatial_inertia(mass_[k], f.p, Ic);
+  }
+}
+
+void LumpedDynamics::articulated(Eigen::Map<Eigen::VectorXd>& qdd) {
+  // Featherstone's articulated-body algorithm in base coordinates: joint k's motion subspace is
+  // T_k (3 columns), its velocity-product acceleration c_k = T_k' v_k = A_k - A_{k-1} (bias()),
+  // the bodies' velocity-product and drag wrenches pbody_ (bias()), tau = Q - D v.
+  // Inward: the articulated inertia IA and bias force pA of the chain distal of joint k.
+  Mat6 IA = Io_[N_];
+  Vec6 pA = pbody_[N_];
+  for (int k = N_; k >= 1; --k) {
+    const auto Tk = T_.middleCols<3>(3 * (k - 1));
+    Eigen::Matrix<double, 6, 3>& U = aba_U_[k];
+    U.noalias() = IA * Tk;
+    const Mat3 D = Tk.transpose() * U;
+    aba_Dinv_[k] = D.inverse();
+    aba_u_[k] = rhs_.segment<3>(3 * (k - 1)) - Tk.transpose() * pA;
+    if (k > 1) {
+      const Vec6 c = A_[k] - A_[k - 1];
+      const Eigen::Matrix<double, 6, 3> UD = U * aba_Dinv_[k];
+      const Mat6 Ia = IA - UD * U.transpose();
+      const Vec6 pa = pA + Ia * c + UD * aba_u_[k];
+      IA = Io_[k - 1] + Ia;
+      pA = pbody_[k - 1] + pa;
+    }
+  }
+  // Outward: the accelerations.
+  Vec6 a = Vec6::Zero();
+  for (int k = 1; k <= N_; ++k) {
+    const auto Tk = T_.middleCols<3>(3 * (k - 1));
+    a += A_[k] - A_[k - 1];
+    const Vec3 x = aba_Dinv_[k] * (aba_u_[k] - aba_U_[k].transpose() * a);
+    qdd.segment<3>(3 * (k - 1)) = x;
+    a.noalias() += Tk * x;
+  }
+}
+
+void LumpedDynamics::mass_matrix() {
+  // Composite inertias from the tip: IC_j = sum of the disks k >= j.
+  body_inertias();
+  IC_[N_ + 1].setZero();
+  for (int k = N_; k >= 1; --k) {
     IC_[k] = IC_[k + 1] + Io_[k];
     // PRB: the links of subsegment k + 1 are rigid with disk k.
     if (links_ && k < N_)
@@ -209,7 +249,7 @@ void LumpedDynamics::bias(const double* q, const double* v) {
   Vec6 F = Vec6::Zero();
   for (int k = N_; k >= 1; --k) {
     Vec6 f = Vec6::Zero();
-    if (moving) f = Io_[k] * A_[k] + cross_force(V_[k], Io_[k] * V_[k]);
+    if (moving) f = cross_force(V_[k], Io_[k] * V_[k]);
     if (settings_.air_drag > 0.0) {
       const Vec3& p = frames_b_[k].p;
       const Vec3 vel = V_[k].tail<3>() + V_[k].head<3>().cross(p);
@@ -217,6 +257,8 @@ void LumpedDynamics::bias(const double* q, const double* v) {
       f.head<3>() -= p.cross(drag);
       f.tail<3>() -= drag;
     }
+    pbody_[k] = f;  // articulated(): the body's wrench at zero acceleration
+    if (moving) f += Io_[k] * A_[k];
     F += f;
     Eigen::Matrix<double, 5, 1> own = Eigen::Matrix<double, 5, 1>::Zero();
     if (links_ && moving) {
