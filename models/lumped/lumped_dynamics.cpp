@@ -110,17 +110,12 @@ LumpedDynamics::LumpedDynamics(const LumpedModel& model, const LumpedBody& body,
   schur_M_.setZero(n_, n_);
   last_y_.setZero(2 * n_);
   damp_const_.setZero(n_);
-  aba_ = m_ == 3 && !links_;
   pbody_.assign(N_ + 1, Vec6::Zero());
-  aba_U_.assign(N_ + 1, Eigen::Matrix<double, 6, 3>::Zero());
-  aba_Dinv_.assign(N_ + 1, Mat3::Zero());
-  aba_u_.assign(N_ + 1, Vec3::Zero());
+  aba3_.size(N_);
+  aba5_.size(N_);
   for (int i = 0; i < n_; ++i) damp_const_[i] = settings_.bending_damping_time * spring(i, q_.data());
   schur_b_.setZero(n_);
   schur_lu_ = Eigen::PartialPivLU<Eigen::MatrixXd>(n_);
-  // Sized by a first factorisation (of the identity): assigning LLT(n_) would copy its
-  // uninitialised status (Eigen 3.4 leaves LLT(Index)'s m_info unset; UBSan names the load).
-  llt_.compute(Eigen::MatrixXd::Identity(n_, n_));
   IC_.assign(N_ + 2, Mat6::Zero());
   Io_.assign(N_ + 1, Mat6::Zero());
   V_.assign(N_ + 1, Vec6::Zero());
@@ -164,10 +159,7 @@ int LumpedDynamics::rhs_fn(sunrealtype t, N_Vector y, N_Vector yd, void* user) {
   s.input_at(t);
   s.twists(q, s.T_);
   if (!s.generalized_force(q)) return 1;  // recoverable: CVODE retries a smaller step
-  if (s.aba_)
-    s.body_inertias();
-  else
-    s.mass_matrix();
+  s.body_inertias();  // no M: the accelerations by the articulated-body algorithm
   s.bias(q, v);
   Eigen::Map<const Eigen::VectorXd> vv(v, n);
   // D = tau_bt K: constant but for PRB's phi rows (their stiffness grows with the bend a^2).
@@ -176,19 +168,8 @@ int LumpedDynamics::rhs_fn(sunrealtype t, N_Vector y, N_Vector yd, void* user) {
     for (int j = 0; j < s.N_; ++j) s.damp_[5 * j + 3] = s.settings_.bending_damping_time * s.spring(5 * j + 3, q);
   Eigen::Map<Eigen::VectorXd> dq(d, n), dv(d + n, n);
   dq = vv;
-  if (s.aba_) {
-    s.rhs_ = s.Q_ - s.damp_.cwiseProduct(vv);  // the velocity products are the bodies' (pbody_)
-    s.articulated(dv);
-    if (!dv.allFinite()) return 1;
-    s.last_valid_ = true;
-    s.last_t_ = t;
-    s.last_y_ = Eigen::Map<const Eigen::VectorXd>(yv, 2 * n);
-    return 0;
-  }
-  s.rhs_ = s.Q_ - s.damp_.cwiseProduct(vv) - s.b_;
-  s.llt_.compute(s.M_);
-  if (s.llt_.info() != Eigen::Success) return 1;
-  dv = s.llt_.solve(s.rhs_);
+  s.rhs_ = s.Q_ - s.damp_.cwiseProduct(vv);  // the velocity products are the bodies' (pbody_)
+  s.articulated(dv);
   if (!dv.allFinite()) return 1;
   s.last_valid_ = true;
   s.last_t_ = t;
@@ -206,7 +187,7 @@ int LumpedDynamics::jac_fn(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix J, 
   // same (t, y) (its prediction), otherwise it is evaluated again here.
   Eigen::Map<const Eigen::VectorXd> yy(q, 2 * n);
   if (!(s.last_valid_ && t == s.last_t_ && yy == s.last_y_) && rhs_fn(t, y, tmp1, user) != 0) return 1;
-  if (s.aba_) s.mass_matrix();  // the right-hand side has no M
+  s.mass_matrix();  // the right-hand side forms no M
   Eigen::Map<const Eigen::VectorXd> x(q, n);
   if (!s.problem_->jacobian(x, s.r_, s.Jr_)) return 1;
   // dQ/dq ~ -S dr/dq (S's own derivative meets r, zero at every equilibrium); d(b)/d(q, q') and

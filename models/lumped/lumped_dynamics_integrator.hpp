@@ -97,14 +97,34 @@ class LumpedDynamics final : public DynamicsIntegrator {
   void mass_matrix();
   // The disks' spatial inertias Io_ at frames_b_ (mass_matrix() computes them too).
   void body_inertias();
-  // CCsub: q'' = M^-1 rhs_ by the articulated-body algorithm, O(N) (no M, no Cholesky), from
-  // T_, Io_, and bias()'s A_ and pbody_.
+  // q'' = M^-1 rhs_ by the articulated-body algorithm, O(N) (no M, no Cholesky), from T_, Io_,
+  // PRB's links, and bias()'s V_, A_, pbody_ and link stencils.
   void articulated(Eigen::Map<Eigen::VectorXd>& qdd);
-  bool aba_ = false;  // CCsub (3 unknowns, no links): articulated() in the right-hand side
+  template <int m>
+  void articulated_m(Eigen::Map<Eigen::VectorXd>& qdd);
   std::vector<Vec6> pbody_;
-  std::vector<Eigen::Matrix<double, 6, 3>> aba_U_;
-  std::vector<Mat3> aba_Dinv_;
-  std::vector<Vec3> aba_u_;
+  double bias_h_ = 0.0;          // bias()'s step along q' (0: at rest)
+  const double* qs_v_ = nullptr;  // bias()'s q'
+  template <int m>
+  struct AbaStore {
+    std::vector<Eigen::Matrix<double, 6, m>> U;
+    std::vector<Eigen::Matrix<double, m, m>> Dinv;
+    std::vector<Eigen::Matrix<double, m, 1>> u;
+    void size(int N) {
+      U.assign(N + 1, Eigen::Matrix<double, 6, m>::Zero());
+      Dinv.assign(N + 1, Eigen::Matrix<double, m, m>::Zero());
+      u.assign(N + 1, Eigen::Matrix<double, m, 1>::Zero());
+    }
+  };
+  AbaStore<3> aba3_;
+  AbaStore<5> aba5_;
+  template <int m>
+  AbaStore<m>& aba_store() {
+    if constexpr (m == 3)
+      return aba3_;
+    else
+      return aba5_;
+  }
   template <int m>
   void mass_blocks();  // mass_matrix()'s blocks, m unknowns per subsegment
   // b: velocity-product forces minus drag, at (q, v).
@@ -164,7 +184,6 @@ class LumpedDynamics final : public DynamicsIntegrator {
   Eigen::VectorXd damp_const_;  // tau_bt K of the constant springs (PRB's phi rows: recomputed)
   std::vector<Mat3> S_;  // per subsegment m x m (top-left) of S
   Eigen::MatrixXd M_, Jr_, K_;
-  Eigen::LLT<Eigen::MatrixXd> llt_;
   // The Newton systems (I - gamma J) x = b by their Schur complement (lumped_dynamics.cpp,
   // make_schur_solver): n x n instead of 2n x 2n, since J's first block row is [0 I].
   Eigen::MatrixXd schur_, schur_A21_, schur_M_;

@@ -144,38 +144,92 @@ void LumpedDynamics::body_inertias() {
   }
 }
 
-void LumpedDynamics::articulated(Eigen::Map<Eigen::VectorXd>& qdd) {
-  // Featherstone's articulated-body algorithm in base coordinates: joint k's motion subspace is
-  // T_k (3 columns), its velocity-product acceleration c_k = T_k' v_k = A_k - A_{k-1} (bias()),
-  // the bodies' velocity-product and drag wrenches pbody_ (bias()), tau = Q - D v.
-  // Inward: the articulated inertia IA and bias force pA of the chain distal of joint k.
+template <int m>
+void LumpedDynamics::articulated_m(Eigen::Map<Eigen::VectorXd>& qdd) {
+  // Featherstone's articulated-body algorithm in base coordinates. Joint k (the m unknowns of
+  // subsegment k) carries the subtree at disk k (motion subspace T_k, velocity-product
+  // acceleration c_k = T_k' v_k = A_k - A_{k-1}, bias()) and, PRB, the four link masses of
+  // subsegment k, each a child of the same joint with its own subspace S_l = (0; J_l) (a point
+  // mass moving with disk k-1's rotation and its own translation J_l v_k). For children b with
+  // articulated inertias IA_b, bias wrenches pA_b and accelerations a_b = a_{k-1} + c_b + S_b q'':
+  //   U = sum IA_b S_b, D = sum S_b^T IA_b S_b (+ PRB's phi inertia), w_b = pA_b + IA_b c_b,
+  //   u = tau - sum S_b^T w_b, q'' = D^-1 (u - U^T a_{k-1}),
+  // and disk k-1 receives sum IA_b - U D^-1 U^T and sum w_b + U D^-1 u. tau = Q - D v (rhs_).
+  using Um = Eigen::Matrix<double, 6, m>;
+  using Mm = Eigen::Matrix<double, m, m>;
+  using Vm = Eigen::Matrix<double, m, 1>;
+  auto& Us = aba_store<m>().U;
+  auto& Dinvs = aba_store<m>().Dinv;
+  auto& us = aba_store<m>().u;
   Mat6 IA = Io_[N_];
   Vec6 pA = pbody_[N_];
   for (int k = N_; k >= 1; --k) {
-    const auto Tk = T_.middleCols<3>(3 * (k - 1));
-    Eigen::Matrix<double, 6, 3>& U = aba_U_[k];
-    U.noalias() = IA * Tk;
-    const Mat3 D = Tk.transpose() * U;
-    aba_Dinv_[k] = D.inverse();
-    aba_u_[k] = rhs_.segment<3>(3 * (k - 1)) - Tk.transpose() * pA;
+    const auto Tk = T_.middleCols<m>(m * (k - 1));
+    const Vec6 c = A_[k] - A_[k - 1];
+    Um U = IA * Tk;
+    Mm D = Tk.transpose() * U;
+    Vec6 w = pA + IA * c;
+    Vm u = rhs_.segment<m>(m * (k - 1)) - Tk.transpose() * w;
+    Mat6 IAsum = IA;
+    Vec6 wsum = w;
+    if constexpr (m == 5) {
+      if (links_) {
+        const Vec6& Vp = V_[k - 1];
+        const Vec6& Ap = A_[k - 1];
+        const Vm vk = Eigen::Map<const Eigen::VectorXd>(qs_v_, n_).segment<m>(m * (k - 1));
+        for (int i = 0; i < kLinks; ++i) {
+          const int l = kLinks * k + i;
+          const double ml = link_mass_[l];
+          const Vec3& cl = link_c_[l];
+          const Eigen::Matrix<double, 3, 5>& J = link_J_[l];
+          const Mat6 Il = spatial_inertia(ml, cl, Mat3::Zero());
+          // IA_l S_l = (m [c] J; m J); S_l^T IA_l S_l = m J^T J.
+          Um IS;
+          IS.template topRows<3>() = ml * lie::hat(cl) * J;
+          IS.template bottomRows<3>() = ml * J;
+          U += IS;
+          D.noalias() += ml * J.transpose() * J;
+          // The link's velocity and its acceleration at q'' = 0 (second differences, bias()).
+          const Vec3 own = J * vk;
+          Vec6 Vl = Vp;
+          Vl.tail<3>() += own;
+          const Vec3 vel = Vp.tail<3>() + Vp.head<3>().cross(cl) + own;
+          const Vec3 acc = bias_h_ > 0.0 ? Vec3(link_force(l, bias_h_) / ml) : Vec3::Zero();
+          Vec6 cb = Vec6::Zero();
+          cb.tail<3>() = acc - (Ap.tail<3>() + Ap.head<3>().cross(cl) + Vp.head<3>().cross(vel));
+          const Vec6 wl = cross_force(Vl, Il * Vl) + Il * cb;
+          u -= J.transpose() * wl.tail<3>();
+          IAsum += Il;
+          wsum += wl;
+        }
+        D(3, 3) += kPhiInertia * phi_mass(k) * length_[k] * length_[k];
+      }
+    }
+    const Mm Dinv = D.inverse();
+    Us[k] = U;
+    Dinvs[k] = Dinv;
+    us[k] = u;
     if (k > 1) {
-      const Vec6 c = A_[k] - A_[k - 1];
-      const Eigen::Matrix<double, 6, 3> UD = U * aba_Dinv_[k];
-      const Mat6 Ia = IA - UD * U.transpose();
-      const Vec6 pa = pA + Ia * c + UD * aba_u_[k];
-      IA = Io_[k - 1] + Ia;
-      pA = pbody_[k - 1] + pa;
+      const Um UD = U * Dinv;
+      IA = Io_[k - 1] + IAsum - UD * U.transpose();
+      pA = pbody_[k - 1] + wsum + UD * u;
     }
   }
   // Outward: the accelerations.
   Vec6 a = Vec6::Zero();
   for (int k = 1; k <= N_; ++k) {
-    const auto Tk = T_.middleCols<3>(3 * (k - 1));
+    const Vm x = Dinvs[k] * (us[k] - Us[k].transpose() * a);
+    qdd.segment<m>(m * (k - 1)) = x;
     a += A_[k] - A_[k - 1];
-    const Vec3 x = aba_Dinv_[k] * (aba_u_[k] - aba_U_[k].transpose() * a);
-    qdd.segment<3>(3 * (k - 1)) = x;
-    a.noalias() += Tk * x;
+    a.noalias() += T_.middleCols<m>(m * (k - 1)) * x;
   }
+}
+
+void LumpedDynamics::articulated(Eigen::Map<Eigen::VectorXd>& qdd) {
+  if (m_ == 3)
+    articulated_m<3>(qdd);
+  else
+    articulated_m<5>(qdd);
 }
 
 void LumpedDynamics::mass_matrix() {
@@ -221,12 +275,15 @@ void LumpedDynamics::bias(const double* q, const double* v) {
   // The columns' rates T' = dT/dq q' by a central difference along q'.
   Vec6 Tdot_v_sum = Vec6::Zero();
   const bool moving = vn > 0.0;
+  bias_h_ = 0.0;
+  qs_v_ = v;
   double h = 0.0;
   if (moving) {
     // Central differences along q' (the twists themselves are fourth order: their noise ~1e-13
     // over the step 1e-3 leaves ~1e-10; the truncation, ~1e-6 of the velocity terms, is far below
     // the integration's tolerance). PRB: the links' positions too, for their accelerations.
     h = kBiasStep / vn;
+    bias_h_ = h;
     qs_ = qv + h * vv;
     twists(qs_.data(), Tp_, &link_stencil_[2]);
     qs_ = qv - h * vv;
