@@ -95,7 +95,6 @@ LumpedDynamics::LumpedDynamics(const LumpedModel& model, const LumpedBody& body,
   Tm_.setZero(6, n_);
   r_.setZero(n_);
   Q_.setZero(n_);
-  b_.setZero(n_);
   rhs_.setZero(n_);
   damp_.setZero(n_);
   q_.setZero(n_);

@@ -127,7 +127,8 @@ class LumpedDynamics final : public DynamicsIntegrator {
   }
   template <int m>
   void mass_blocks();  // mass_matrix()'s blocks, m unknowns per subsegment
-  // b: velocity-product forces minus drag, at (q, v).
+  // The velocity terms at (q, v): the disks' velocities V_ and accelerations at q'' = 0 A_, their
+  // wrenches pbody_ (velocity products minus drag), the links' position stencils (PRB).
   void bias(const double* q, const double* v);
   double potential_energy(const double* q);
   // v^T M v / 2 at the q of the last twists() (frames_b_, T_, link_c_, link_J_), without M.
@@ -180,7 +181,7 @@ class LumpedDynamics final : public DynamicsIntegrator {
   std::vector<Frame> frames_, frames_b_;
   std::vector<SubsegmentPose> poses_;
   Twists T_, Tp_, Tm_;
-  Eigen::VectorXd r_, Q_, b_, rhs_, damp_;
+  Eigen::VectorXd r_, Q_, rhs_, damp_;
   Eigen::VectorXd damp_const_;  // tau_bt K of the constant springs (PRB's phi rows: recomputed)
   std::vector<Mat3> S_;  // per subsegment m x m (top-left) of S
   Eigen::MatrixXd M_, Jr_, K_;

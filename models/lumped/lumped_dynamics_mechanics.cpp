@@ -273,7 +273,6 @@ void LumpedDynamics::bias(const double* q, const double* v) {
   Eigen::Map<const Eigen::VectorXd> qv(q, n_), vv(v, n_);
   const double vn = vv.norm();
   // The columns' rates T' = dT/dq q' by a central difference along q'.
-  Vec6 Tdot_v_sum = Vec6::Zero();
   const bool moving = vn > 0.0;
   bias_h_ = 0.0;
   qs_v_ = v;
@@ -300,10 +299,8 @@ void LumpedDynamics::bias(const double* q, const double* v) {
     V_[k] = V;
     A_[k] = A;
   }
-  (void)Tdot_v_sum;
-  // Forces of the disks (momentum rates at q'' = 0, minus drag), summed from the tip, and their
-  // generalized forces.
-  Vec6 F = Vec6::Zero();
+  // The disks' wrenches at zero acceleration: velocity products, minus drag (articulated()
+  // adds the inertial part, and PRB's links).
   for (int k = N_; k >= 1; --k) {
     Vec6 f = Vec6::Zero();
     if (moving) f = cross_force(V_[k], Io_[k] * V_[k]);
@@ -314,25 +311,7 @@ void LumpedDynamics::bias(const double* q, const double* v) {
       f.head<3>() -= p.cross(drag);
       f.tail<3>() -= drag;
     }
-    pbody_[k] = f;  // articulated(): the body's wrench at zero acceleration
-    if (moving) f += Io_[k] * A_[k];
-    F += f;
-    Eigen::Matrix<double, 5, 1> own = Eigen::Matrix<double, 5, 1>::Zero();
-    if (links_ && moving) {
-      // The links of subsegment k + 1 are rigid with disk k; those of k move through link_J_.
-      for (int i = 0; i < kLinks && k < N_; ++i) {
-        const int l = kLinks * (k + 1) + i;
-        const Vec3 fl = link_force(l, h);
-        F.head<3>() += link_c_[l].cross(fl);
-        F.tail<3>() += fl;
-      }
-      for (int i = 0; i < kLinks; ++i) {
-        const int l = kLinks * k + i;
-        own += link_J_[l].transpose() * link_force(l, h);
-      }
-    }
-    b_.segment(m_ * (k - 1), m_).noalias() = T_.middleCols(m_ * (k - 1), m_).transpose() * F;
-    if (links_) b_.segment(m_ * (k - 1), m_) += own.head(m_);
+    pbody_[k] = f;
   }
 }
 
