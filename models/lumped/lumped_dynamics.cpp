@@ -1,5 +1,6 @@
 // The equations of motion of CCsub and PRB (lumped_dynamics.hpp, docs/dynamics.md), integrated
-// by CVODE (BDF, dense Newton matrices from the model's structured Jacobian).
+// by CVODE (BDF; Newton matrices M, K, D from the model's structured Jacobian, solved as one
+// n x n system).
 #include <algorithm>
 #include <cmath>
 #include <string>
