@@ -28,6 +28,22 @@ struct ArcCoefficients {
   }
 };
 
+// The derivatives of s1 and c2 in t^2: (cos t - s1) / (2 t^2) and (s1 - 2 c2) / (2 t^2), by
+// their series below t^2 = 1e-2 (where the closed forms lose up to 1e-16 / t^2; the series'
+// first omitted term is below 1e-16 there).
+struct ArcRates {
+  double ds1, dc2;
+  ArcRates(double t2, const ArcCoefficients& a) {
+    if (t2 < 1e-2) {
+      ds1 = -1.0 / 6.0 + t2 * (1.0 / 60.0 + t2 * (-1.0 / 1680.0 + t2 * (1.0 / 90720.0 - t2 * (5.0 / 39916800.0))));
+      dc2 = -1.0 / 24.0 + t2 * (1.0 / 360.0 + t2 * (-1.0 / 13440.0 + t2 * (1.0 / 907200.0 - t2 * (5.0 / 479001600.0))));
+    } else {
+      ds1 = (std::cos(std::sqrt(t2)) - a.s1) / (2.0 * t2);
+      dc2 = (a.s1 - 2.0 * a.c2) / (2.0 * t2);
+    }
+  }
+};
+
 // Automatic formulation: structured Newton steps (the recursive Jacobian's factors as a
 // block-banded system, KLU) from this many loaded subsegments on. Crossover with the dense LU of
 // the same Jacobian, paper robot configuration 5 (bench_lumped --sweep-only --quick,
@@ -77,6 +93,24 @@ class CcsubBody final : public detail::LumpedBody {
     g.R.col(1) = -se * Rb.col(0) + ce * Rb.col(1);
     g.R.col(2) = Rb.col(2);
     g.c = Vec3(by * l * a.g3, -bx * l * a.g3, l * a.c2);
+  }
+
+  // R = exp([u]) R_z(eps), u = (b_x, b_y, 0): the rates of b_x, b_y are the left Jacobian of
+  // exp, I + c2 [u] + g3 [u]^2, times e_x, e_y; that of eps is R e_z. p = l (b_y c2, -b_x c2, s1).
+  bool local_rates(int j, const double* xj, detail::SubsegmentPose& g, detail::SubsegmentRates& d) const override {
+    local(j, xj, g);
+    const double l = statics.length(j);
+    const double bx = xj[0], by = xj[1];
+    const double t2 = bx * bx + by * by;
+    const ArcCoefficients a(t2);
+    const ArcRates r(t2, a);
+    d.w[0] = Vec3(1.0 - a.g3 * by * by, a.g3 * bx * by, -a.c2 * by);
+    d.w[1] = Vec3(a.g3 * bx * by, 1.0 - a.g3 * bx * bx, a.c2 * bx);
+    d.w[2] = g.R.col(2);
+    d.dp[0] = l * Vec3(2.0 * r.dc2 * bx * by, -a.c2 - 2.0 * r.dc2 * bx * bx, 2.0 * r.ds1 * bx);
+    d.dp[1] = l * Vec3(a.c2 + 2.0 * r.dc2 * by * by, -2.0 * r.dc2 * bx * by, 2.0 * r.ds1 * by);
+    d.dp[2] = Vec3::Zero();
+    return true;
   }
 };
 

@@ -1,5 +1,6 @@
 // The equations of motion of CCsub and PRB (lumped_dynamics.hpp, docs/dynamics.md), integrated
-// by CVODE (BDF, dense Newton matrices from the model's structured Jacobian).
+// by CVODE (BDF; Newton matrices M, K, D from the model's structured Jacobian, solved as one
+// n x n system).
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -67,14 +68,26 @@ LumpedDynamics::LumpedDynamics(const LumpedModel& model, const LumpedBody& body,
     if (links_)
       for (int i = 0; i < kLinks; ++i) link_mass_[kLinks * j + i] = mu * length_[j] * prb.gamma[i] / gsum;
   }
-  // Accuracy: the static solve's tip tolerance as an angle, CVODE's relative tolerance.
+  // Accuracy (docs/dynamics.md, "Accuracy"): CVODE's absolute tolerance on q is the tip
+  // tolerance as an angle, tip_tolerance / L; on q' that over the output step. A scene without
+  // its own solver.tip_tolerance (0) gets the dynamics' default kDynamicsTipToleranceOverLength L,
+  // not the statics' (1e-7 L): on the paper robot's tension step (bench_dynamics) that keeps the
+  // tip within 2-4 mm of a converged run, below the Cosserat models' own time discretisation
+  // error at dt = 1/60 s (1.7 cm), at 1/3 (CCsub) to 1/4 (PRB) of the CVODE steps of 1e-7 L.
+  // The relative tolerance is solver.cvode_rtol as given.
   const double L = body.length;
-  const double tip_tol = solver.tip_tolerance > 0.0 ? solver.tip_tolerance : SolverOptions::kTipToleranceOverLength * L;
+  const double tip_tol = solver.tip_tolerance > 0.0 ? solver.tip_tolerance : kDynamicsTipToleranceOverLength * L;
   rtol_ = std::max(solver.cvode_rtol, 1e-12);
   atol_q_ = tip_tol / L;
   atol_v_ = atol_q_ / std::max(dt_, 1e-6);
 
   problem_ = body.make_problem();
+  {
+    const std::vector<double> zero(m_, 0.0);
+    SubsegmentPose g;
+    SubsegmentRates d;
+    rates_ = body.local_rates(1, zero.data(), g, d);
+  }
   frames_.resize(N_ + 1);
   frames_b_.resize(N_ + 1);
   poses_.resize(N_ + 1);
@@ -83,7 +96,6 @@ LumpedDynamics::LumpedDynamics(const LumpedModel& model, const LumpedBody& body,
   Tm_.setZero(6, n_);
   r_.setZero(n_);
   Q_.setZero(n_);
-  b_.setZero(n_);
   rhs_.setZero(n_);
   damp_.setZero(n_);
   q_.setZero(n_);
@@ -95,11 +107,15 @@ LumpedDynamics::LumpedDynamics(const LumpedModel& model, const LumpedBody& body,
   K_.setZero(n_, n_);
   schur_.setZero(n_, n_);
   schur_A21_.setZero(n_, n_);
+  schur_M_.setZero(n_, n_);
+  last_y_.setZero(2 * n_);
+  damp_const_.setZero(n_);
+  pbody_.assign(N_ + 1, Vec6::Zero());
+  aba3_.size(N_);
+  aba5_.size(N_);
+  for (int i = 0; i < n_; ++i) damp_const_[i] = settings_.bending_damping_time * spring(i, q_.data());
   schur_b_.setZero(n_);
   schur_lu_ = Eigen::PartialPivLU<Eigen::MatrixXd>(n_);
-  // Sized by a first factorisation (of the identity): assigning LLT(n_) would copy its
-  // uninitialised status (Eigen 3.4 leaves LLT(Index)'s m_info unset; UBSan names the load).
-  llt_.compute(Eigen::MatrixXd::Identity(n_, n_));
   IC_.assign(N_ + 2, Mat6::Zero());
   Io_.assign(N_ + 1, Mat6::Zero());
   V_.assign(N_ + 1, Vec6::Zero());
@@ -124,8 +140,8 @@ void LumpedDynamics::input_at(double t) {
   if (bound_valid_ && input_.actuation.values == bound_.actuation.values && input_.loads.tip_force == bound_.loads.tip_force &&
       input_.loads.tip_moment == bound_.loads.tip_moment && input_.loads.gravity == bound_.loads.gravity)
     return;
-  // A new input: binding resolves its loads (this allocates; between constant timeline entries
-  // it happens once per entry).
+  // A new input (every right-hand side along a ramp): binding resolves its loads in place, the
+  // buffers keep their sizes (tests/test_dynamics_lumped.cpp, RampAllocatesNothing).
   problem_->bind_all(input_);
   problem_->set_parameter(1.0);
   bound_ = input_;
@@ -139,20 +155,26 @@ int LumpedDynamics::rhs_fn(sunrealtype t, N_Vector y, N_Vector yd, void* user) {
   const int n = s.n_;
   const double* q = yv;
   const double* v = yv + n;
+  s.last_valid_ = false;
   s.input_at(t);
   s.twists(q, s.T_);
   if (!s.generalized_force(q)) return 1;  // recoverable: CVODE retries a smaller step
-  s.mass_matrix();
+  s.body_inertias();  // no M: the accelerations by the articulated-body algorithm
   s.bias(q, v);
   Eigen::Map<const Eigen::VectorXd> vv(v, n);
-  for (int i = 0; i < n; ++i) s.damp_[i] = s.settings_.bending_damping_time * s.spring(i, q);
-  s.rhs_ = s.Q_ - s.damp_.cwiseProduct(vv) - s.b_;
-  s.llt_.compute(s.M_);
-  if (s.llt_.info() != Eigen::Success) return 1;
+  // D = tau_bt K: constant but for PRB's phi rows (their stiffness grows with the bend a^2).
+  s.damp_ = s.damp_const_;
+  if (s.m_ == 5)
+    for (int j = 0; j < s.N_; ++j) s.damp_[5 * j + 3] = s.settings_.bending_damping_time * s.spring(5 * j + 3, q);
   Eigen::Map<Eigen::VectorXd> dq(d, n), dv(d + n, n);
   dq = vv;
-  dv = s.llt_.solve(s.rhs_);
-  return dv.allFinite() ? 0 : 1;
+  s.rhs_ = s.Q_ - s.damp_.cwiseProduct(vv);  // the velocity products are the bodies' (pbody_)
+  s.articulated(dv);
+  if (!dv.allFinite()) return 1;
+  s.last_valid_ = true;
+  s.last_t_ = t;
+  s.last_y_ = Eigen::Map<const Eigen::VectorXd>(yv, 2 * n);
+  return 0;
 }
 
 int LumpedDynamics::jac_fn(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix J, void* user, N_Vector tmp1,
@@ -161,8 +183,11 @@ int LumpedDynamics::jac_fn(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix J, 
   auto& s = *static_cast<LumpedDynamics*>(user);
   const int n = s.n_;
   const double* q = N_VGetArrayPointer(y);
-  // Refresh every buffer at this y (rhs_fn's last call may have been elsewhere).
-  if (rhs_fn(t, y, tmp1, user) != 0) return 1;
+  // Every buffer at this y: CVODE's setups usually come right after the right-hand side at the
+  // same (t, y) (its prediction), otherwise it is evaluated again here.
+  Eigen::Map<const Eigen::VectorXd> yy(q, 2 * n);
+  if (!(s.last_valid_ && t == s.last_t_ && yy == s.last_y_) && rhs_fn(t, y, tmp1, user) != 0) return 1;
+  s.mass_matrix();  // the right-hand side forms no M
   Eigen::Map<const Eigen::VectorXd> x(q, n);
   if (!s.problem_->jacobian(x, s.r_, s.Jr_)) return 1;
   // dQ/dq ~ -S dr/dq (S's own derivative meets r, zero at every equilibrium); d(b)/d(q, q') and
@@ -175,24 +200,73 @@ int LumpedDynamics::jac_fn(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix J, 
     } else {
       s.K_.middleRows(r0, 5) = c * s.Jr_.middleRows(r0, 5);
       s.K_.row(r0 + 3) *= s.S_[j](0, 0);
+      // The phi row is Q_phi = -c a r_phi (a = theta_1 + theta_2 + theta_3): its factor's own
+      // derivative meets r_phi, which is not zero in motion; and its damping tau K_Theta c a^2 v_phi.
+      const double* v = q + n;
+      const double a = s.S_[j](0, 0);
+      const double kd = s.settings_.bending_damping_time * s.model_.effects().prb.k_theta[1] * c * 2.0 * a * v[r0 + 3];
+      for (int i = 0; i < 3; ++i) s.K_(r0 + 3, r0 + i) += c * s.r_[r0 + 3] + kd;
     }
   }
-  Eigen::Map<Eigen::MatrixXd> Jm(SUNDenseMatrix_Data(J), 2 * n, 2 * n);
-  Jm.setZero();
-  Jm.topRightCorner(n, n).setIdentity();
-  auto J21 = Jm.bottomLeftCorner(n, n);
-  J21 = -s.K_;
-  s.llt_.solveInPlace(J21);
-  auto J22 = Jm.bottomRightCorner(n, n);
-  J22.diagonal() = -s.damp_;
-  s.llt_.solveInPlace(J22);
-  return Jm.allFinite() ? 0 : 1;
+  NewtonMatrix& nm = *static_cast<NewtonMatrix*>(J->content);
+  nm.M = s.M_;
+  nm.K = s.K_;
+  nm.D = s.damp_;
+  nm.gamma = 0.0;
+  nm.scaled = false;
+  return nm.M.allFinite() && nm.K.allFinite() ? 0 : 1;
 }
 
-// CVODE's Newton matrix A = I - gamma J with J = [0 I; J21 J22] (q' = v exactly) is
-// [I, -gamma I; A21, A22]. Eliminating x1 = b1 + gamma x2 leaves (A22 + gamma A21) x2 =
-// b2 - A21 b1: one n x n LU (Eigen's, blocked) instead of SUNDIALS' unblocked 2n x 2n one, which
-// took 57 % of a CCsub run (perf, bench_dynamics).
+// The Jacobian of (q, v)' = (v, M^-1 (Q - D v - b)) without M's and b's own derivatives is
+// J = [0 I; -M^-1 K, -M^-1 D]: a NewtonMatrix keeps M, K and D (n x n, n x n, n) instead of the
+// dense 2n x 2n J, and CVODE's A = I - gamma J as gamma alone (CVODE copies and scales it between
+// steps: on the dense 2n x 2n matrix those copies took 14 % of a run, perf, bench_dynamics).
+SUNMatrix LumpedDynamics::make_newton_matrix(SUNContext ctx, int n) {
+  SUNMatrix A = SUNMatNewEmpty(ctx);
+  if (!A) return nullptr;
+  auto* c = new NewtonMatrix;
+  c->M.setZero(n, n);
+  c->K.setZero(n, n);
+  c->D.setZero(n);
+  A->content = c;
+  A->ops->getid = [](SUNMatrix) { return SUNMATRIX_CUSTOM; };
+  A->ops->clone = [](SUNMatrix A) -> SUNMatrix {
+    return make_newton_matrix(A->sunctx, static_cast<int>(static_cast<NewtonMatrix*>(A->content)->D.size()));
+  };
+  A->ops->destroy = [](SUNMatrix A) {
+    delete static_cast<NewtonMatrix*>(A->content);
+    A->content = nullptr;
+    SUNMatFreeEmpty(A);
+  };
+  A->ops->zero = [](SUNMatrix A) -> int {
+    auto& c = *static_cast<NewtonMatrix*>(A->content);
+    c.M.setZero();
+    c.K.setZero();
+    c.D.setZero();
+    c.gamma = 0.0;
+    c.scaled = false;
+    return 0;
+  };
+  A->ops->copy = [](SUNMatrix A, SUNMatrix B) -> int {
+    *static_cast<NewtonMatrix*>(B->content) = *static_cast<const NewtonMatrix*>(A->content);
+    return 0;
+  };
+  // A = c A + I: CVODE's c = -gamma on a fresh copy of J.
+  A->ops->scaleaddi = [](sunrealtype c, SUNMatrix A) -> int {
+    auto& m = *static_cast<NewtonMatrix*>(A->content);
+    if (m.scaled) return -1;
+    m.gamma = -c;
+    m.scaled = true;
+    return 0;
+  };
+  return A;
+}
+
+// CVODE's Newton systems (I - gamma J) x = b with J = [0 I; -M^-1 K, -M^-1 D]: the first block
+// row gives x1 = b1 + gamma x2, and the second, times M, (M + gamma D + gamma^2 K) x2 =
+// M b2 - gamma K b1: one n x n LU (Eigen's, blocked) of M, D, K as the model has them, no
+// inverse of M and no 2n x 2n matrix (SUNDIALS' unblocked 2n x 2n LU took 57 % of a CCsub run,
+// perf, bench_dynamics).
 SUNLinearSolver LumpedDynamics::make_schur_solver() {
   SUNLinearSolver S = SUNLinSolNewEmpty(ctx_);
   if (!S) throw std::runtime_error("lumped dynamics: SUNLinSolNewEmpty failed");
@@ -201,21 +275,26 @@ SUNLinearSolver LumpedDynamics::make_schur_solver() {
   S->ops->getid = [](SUNLinearSolver) { return SUNLINEARSOLVER_CUSTOM; };
   S->ops->setup = [](SUNLinearSolver ls, SUNMatrix A) -> int {
     auto& d = *static_cast<LumpedDynamics*>(ls->content);
-    const int n = d.n_;
-    Eigen::Map<const Eigen::MatrixXd> Am(SUNDenseMatrix_Data(A), 2 * n, 2 * n);
-    d.schur_gamma_ = -Am(0, n);
-    d.schur_A21_ = Am.bottomLeftCorner(n, n);
-    d.schur_ = Am.bottomRightCorner(n, n) + d.schur_gamma_ * d.schur_A21_;
+    const NewtonMatrix& m = *static_cast<const NewtonMatrix*>(A->content);
+    const double g = m.scaled ? m.gamma : 0.0;
+    d.schur_gamma_ = g;
+    d.schur_A21_ = m.K;  // K and M of this Newton matrix, for solve()
+    d.schur_M_ = m.M;
+    d.schur_ = m.M + (g * g) * m.K;
+    d.schur_.diagonal() += g * m.D;
     d.schur_lu_.compute(d.schur_);
     // A singular or non-finite block: recoverable, CVODE retries with a smaller step.
-    return d.schur_lu_.rcond() > 1e-300 && d.schur_.allFinite() ? 0 : 1;
+    // (The pivots, not rcond(): its estimate allocates.)
+    const double pivot = d.schur_lu_.matrixLU().diagonal().cwiseAbs().minCoeff();
+    return pivot > 0.0 && d.schur_.allFinite() ? 0 : 1;
   };
   S->ops->solve = [](SUNLinearSolver ls, SUNMatrix, N_Vector x, N_Vector b, sunrealtype) -> int {
     auto& d = *static_cast<LumpedDynamics*>(ls->content);
     const int n = d.n_;
     Eigen::Map<const Eigen::VectorXd> bb(N_VGetArrayPointer(b), 2 * n);
     Eigen::Map<Eigen::VectorXd> xx(N_VGetArrayPointer(x), 2 * n);
-    d.schur_b_.noalias() = bb.tail(n) - d.schur_A21_ * bb.head(n);
+    d.schur_b_.noalias() = d.schur_M_ * bb.tail(n);
+    d.schur_b_.noalias() -= d.schur_gamma_ * (d.schur_A21_ * bb.head(n));
     xx.tail(n) = d.schur_lu_.solve(d.schur_b_);
     xx.head(n) = bb.head(n) + d.schur_gamma_ * xx.tail(n);
     return xx.allFinite() ? 0 : 1;
@@ -235,6 +314,7 @@ void LumpedDynamics::initialize(const Solution& at_rest, const ModelInput& input
   timeline_ = nullptr;
   input_ = input;
   bound_valid_ = false;
+  last_valid_ = false;
   input_at(0.0);
   Eigen::VectorXd y0(2 * n_);
   y0.head(n_) = at_rest.unknowns;
@@ -264,7 +344,7 @@ void LumpedDynamics::initialize(const Solution& at_rest, const ModelInput& input
   // Per output step: a step that needs more has met a singularity (e.g. a CCsub subsegment bent
   // to 90 deg, where its twist law degenerates), not a hard stretch of motion.
   check(CVodeSetMaxNumSteps(cvode_, kMaxStepsPerOutput), "CVodeSetMaxNumSteps");
-  A_mat_ = SUNDenseMatrix(2 * n_, 2 * n_, ctx_);
+  A_mat_ = make_newton_matrix(ctx_, n_);
   ls_ = make_schur_solver();
   if (!A_mat_ || !ls_) throw std::runtime_error("lumped dynamics: dense matrix or solver creation failed");
   check(CVodeSetLinearSolver(cvode_, ls_, A_mat_), "CVodeSetLinearSolver");
@@ -280,11 +360,15 @@ SimulationStep LumpedDynamics::advance(double t_next, const Timeline& timeline) 
   long steps = 0;  // summed per CVode call: CVodeReInit (at timeline entries) resets the count
   int flag = CV_SUCCESS;
   while (t_ < t_next) {
-    // Stop at the timeline's entries: the input's slope jumps there, and CVODE restarts.
-    double stop = t_next;
+    // Stop at the timeline's entries: the input's slope jumps there, and CVODE restarts. Output
+    // times are no stops: CVODE steps past them and interpolates (its steps follow the motion,
+    // not the output step).
+    double entry = INFINITY;
     for (const TimelineEntry& e : timeline.entries)
-      if (e.t > t_ * (1.0 + 1e-14) + 1e-300 && e.t < stop) stop = e.t;
-    check(CVodeSetStopTime(cvode_, stop), "CVodeSetStopTime");
+      if (e.t > t_ * (1.0 + 1e-14) + 1e-300 && e.t < entry) entry = e.t;
+    const bool to_entry = entry <= t_next;
+    const double stop = to_entry ? entry : t_next;
+    check(CVodeSetStopTime(cvode_, std::isfinite(entry) ? entry : 1e300), "CVodeSetStopTime");
     sunrealtype reached = t_;
     cvode_message_.clear();
     long n0 = 0, n1 = 0;
@@ -297,8 +381,10 @@ SimulationStep LumpedDynamics::advance(double t_next, const Timeline& timeline) 
       break;
     }
     t_ = reached;
-    if (stop < t_next && t_ >= stop) check(CVodeReInit(cvode_, t_, y_), "CVodeReInit");
-    if (t_ >= stop) t_ = stop;
+    if (t_ >= stop) {
+      t_ = stop;
+      if (to_entry) check(CVodeReInit(cvode_, t_, y_), "CVodeReInit");
+    }
   }
   const double* yv = N_VGetArrayPointer(y_);
   q_ = Eigen::Map<const Eigen::VectorXd>(yv, n_);
@@ -309,11 +395,12 @@ SimulationStep LumpedDynamics::advance(double t_next, const Timeline& timeline) 
   if (CVodeGetEstLocalErrors(cvode_, ele_) == CV_SUCCESS && CVodeGetErrWeights(cvode_, ewt_) == CV_SUCCESS)
     step.residual = N_VWrmsNorm(ele_, ewt_);
   step.status = flag < 0 ? TerminationType::IntegrationFailed : TerminationType::Converged;
-  // Energies and the tip at the reached state.
+  // Energies and the tip at the reached state (the buffers are no longer those of CVODE's last
+  // right-hand side).
+  last_valid_ = false;
   input_at(step.t);
   twists(q_.data(), T_);
-  mass_matrix();
-  step.kinetic_energy = 0.5 * v_.dot(M_ * v_);
+  step.kinetic_energy = kinetic_energy(v_.data());
   step.potential_energy = potential_energy(q_.data());
   step.tip = frames_b_[N_];
   return step;
@@ -327,6 +414,7 @@ double LumpedDynamics::potential_energy() {
 
 void LumpedDynamics::choose_bending_planes(const Timeline& timeline) {
   chart_chosen_ = true;
+  last_valid_ = false;
   if (m_ != 5) return;
   double* y = N_VGetArrayPointer(y_);
   std::vector<bool> open(N_ + 1, false);
@@ -346,6 +434,26 @@ void LumpedDynamics::choose_bending_planes(const Timeline& timeline) {
       if (open[j] && std::abs(x[0]) + std::abs(x[1]) + std::abs(x[2]) > 1e-9) {
         y[m_ * (j - 1) + 3] = x[3];
         open[j] = false;
+      }
+    }
+  }
+  // Subsegments no static answer bends (e.g. a segment without pulled tendons, swung by the
+  // others): the plane of the nearest bent subsegment, proximal first, so that a planar motion
+  // stays in one plane (its straight subsegments would otherwise swing through straight by
+  // turning phi, the singular way).
+  std::vector<double> phi(N_ + 1, 0.0);
+  std::vector<bool> set(N_ + 1, false);
+  for (int j = 1; j <= N_; ++j) set[j] = !open[j], phi[j] = y[m_ * (j - 1) + 3];
+  for (int j = 1; j <= N_; ++j) {
+    if (set[j]) continue;
+    for (int d = 1; d < N_; ++d) {
+      if (j - d >= 1 && set[j - d]) {
+        y[m_ * (j - 1) + 3] = phi[j - d];
+        break;
+      }
+      if (j + d <= N_ && set[j + d]) {
+        y[m_ * (j - 1) + 3] = phi[j + d];
+        break;
       }
     }
   }

@@ -5,11 +5,12 @@
 //
 //   M(q) q'' = Q(q, t) - D q' - b(q, q')
 //
-// M = sum over disks of (m J_v^T J_v + J_w^T I J_w) (composite inertias, O(N^2 m^2));
+// M = sum over bodies of (m J_v^T J_v + J_w^T I J_w) (composite inertias, O(N^2 m^2));
 // Q = -S(q) r(q): the model's own static residual r mapped by S so that its spring part is
 // exactly the gradient of the springs' energy (so Q = 0 is the model's statics, and without
 // loads Q is conservative); D = tau_bt K (the springs' stiffness); b the velocity-product
-// (Coriolis, centrifugal, gyroscopic) forces and the air drag.
+// (Coriolis, centrifugal, gyroscopic) forces and the air drag. The right-hand side solves for
+// q'' by the articulated-body algorithm (O(N), no M); M is formed for CVODE's Newton matrix.
 #pragma once
 
 #include <memory>

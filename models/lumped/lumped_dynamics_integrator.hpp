@@ -5,8 +5,6 @@
 
 #include <cvode/cvode.h>
 #include <nvector/nvector_serial.h>
-#include <sunlinsol/sunlinsol_dense.h>
-#include <sunmatrix/sunmatrix_dense.h>
 
 #include <memory>
 #include <stdexcept>
@@ -33,10 +31,13 @@ constexpr double kTwistStep = 1e-3;
 // Step (rad) of the velocity-product terms' differences along q' (bias accelerations).
 constexpr double kBiasStep = 1e-3;
 // PRB: inertia added to the bending-plane angle phi of a subsegment, as a fraction of m l^2 (its
-// disk's mass, its length): that of turning the plane of a bend of sqrt(kPhiInertia) rad. phi
+// disk's and its links' mass, its length): that of turning the plane of a bend of sqrt(kPhiInertia) rad. phi
 // has no inertia of its own where the subsegment is straight (a polar angle at zero bend):
 // without it M is singular there. It only slows a plane's turning near straight.
 constexpr double kPhiInertia = 1e-2;
+// The dynamics' tip tolerance over the robot's length where the scene gives no
+// solver.tip_tolerance (lumped_dynamics.cpp, docs/dynamics.md "Accuracy").
+constexpr double kDynamicsTipToleranceOverLength = 1e-4;
 // CVODE steps allowed per output step.
 constexpr long kMaxStepsPerOutput = 20000;
 
@@ -95,9 +96,46 @@ class LumpedDynamics final : public DynamicsIntegrator {
   bool generalized_force(const double* q);
   // M at q from T_ (frames_ of q); the composite inertias kept in IC_.
   void mass_matrix();
-  // b: velocity-product forces minus drag, at (q, v).
+  // The disks' spatial inertias Io_ at frames_b_ (mass_matrix() computes them too).
+  void body_inertias();
+  // q'' = M^-1 rhs_ by the articulated-body algorithm, O(N) (no M, no Cholesky), from T_, Io_,
+  // PRB's links, and bias()'s V_, A_, pbody_ and link stencils.
+  void articulated(Eigen::Map<Eigen::VectorXd>& qdd);
+  template <int m>
+  void articulated_m(Eigen::Map<Eigen::VectorXd>& qdd);
+  std::vector<Vec6> pbody_;
+  double bias_h_ = 0.0;          // bias()'s step along q' (0: at rest)
+  const double* qs_v_ = nullptr;  // bias()'s q'
+  template <int m>
+  struct AbaStore {
+    std::vector<Eigen::Matrix<double, 6, m>> U;
+    std::vector<Eigen::Matrix<double, m, m>> Dinv;
+    std::vector<Eigen::Matrix<double, m, 1>> u;
+    void size(int N) {
+      U.assign(N + 1, Eigen::Matrix<double, 6, m>::Zero());
+      Dinv.assign(N + 1, Eigen::Matrix<double, m, m>::Zero());
+      u.assign(N + 1, Eigen::Matrix<double, m, 1>::Zero());
+    }
+  };
+  AbaStore<3> aba3_;
+  AbaStore<5> aba5_;
+  template <int m>
+  AbaStore<m>& aba_store() {
+    if constexpr (m == 3)
+      return aba3_;
+    else
+      return aba5_;
+  }
+  template <int m>
+  void mass_blocks();  // mass_matrix()'s blocks, m unknowns per subsegment
+  // The velocity terms at (q, v): the disks' velocities V_ and accelerations at q'' = 0 A_, their
+  // wrenches pbody_ (velocity products minus drag), the links' position stencils (PRB).
   void bias(const double* q, const double* v);
   double potential_energy(const double* q);
+  // v^T M v / 2 at the q of the last twists() (frames_b_, T_, link_c_, link_J_), without M.
+  double kinetic_energy(const double* v) const;
+  // PRB: the mass of kPhiInertia's m l^2 for subsegment j.
+  double phi_mass(int j) const;
   // PRB: m a of link l at q'' = 0 from bias()'s stencil of positions (step h along q').
   Vec3 link_force(int l, double h) const {
     const Vec3 acc = (link_stencil_[2][l] - 2.0 * link_c_[l] + link_stencil_[3][l]) / (h * h);
@@ -131,6 +169,9 @@ class LumpedDynamics final : public DynamicsIntegrator {
   // the local Jacobian (base frame) of link i of subsegment j at index 4 j + i.
   static constexpr int kLinks = 4;
   bool links_ = false;
+  // The body has closed-form rates of its subsegments' poses (LumpedBody::local_rates); else
+  // the twists are fourth-order differences of local().
+  bool rates_ = false;
   std::vector<double> link_mass_;
   std::vector<Vec3> link_c_, link_stencil_[4];
   std::vector<Eigen::Matrix<double, 3, 5>> link_J_;
@@ -141,17 +182,31 @@ class LumpedDynamics final : public DynamicsIntegrator {
   std::vector<Frame> frames_, frames_b_;
   std::vector<SubsegmentPose> poses_;
   Twists T_, Tp_, Tm_;
-  Eigen::VectorXd r_, Q_, b_, rhs_, damp_;
+  Eigen::VectorXd r_, Q_, rhs_, damp_;
+  Eigen::VectorXd damp_const_;  // tau_bt K of the constant springs (PRB's phi rows: recomputed)
   std::vector<Mat3> S_;  // per subsegment m x m (top-left) of S
   Eigen::MatrixXd M_, Jr_, K_;
-  Eigen::LLT<Eigen::MatrixXd> llt_;
   // The Newton systems (I - gamma J) x = b by their Schur complement (lumped_dynamics.cpp,
   // make_schur_solver): n x n instead of 2n x 2n, since J's first block row is [0 I].
-  Eigen::MatrixXd schur_, schur_A21_;
+  Eigen::MatrixXd schur_, schur_A21_, schur_M_;
   Eigen::PartialPivLU<Eigen::MatrixXd> schur_lu_;
   Eigen::VectorXd schur_b_;
   double schur_gamma_ = 0.0;
   SUNLinearSolver make_schur_solver();
+  // The (t, y) of the last successful right-hand side: the buffers (M_, S_, r_, damp_, the
+  // problem's residual state) are those of that point.
+  bool last_valid_ = false;
+  double last_t_ = 0.0;
+  Eigen::VectorXd last_y_;
+  // CVODE's Newton matrix (lumped_dynamics.cpp, make_newton_matrix): J's blocks M, K, D and
+  // CVODE's gamma, not the dense 2n x 2n matrix.
+  struct NewtonMatrix {
+    Eigen::MatrixXd M, K;
+    Eigen::VectorXd D;
+    double gamma = 0.0;
+    bool scaled = false;
+  };
+  static SUNMatrix make_newton_matrix(SUNContext ctx, int n);
   std::vector<Mat6> IC_, Io_;
   std::vector<Vec6> V_, A_;
   Eigen::VectorXd qs_;

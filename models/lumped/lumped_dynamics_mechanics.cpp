@@ -16,13 +16,37 @@
 namespace tdcr::detail {
 
 void LumpedDynamics::twists(const double* q, Twists& T, std::vector<Vec3>* points) {
-  body_.compute_frames(q, N_, problem_->stretch(), frames_b_.data(), poses_.data());
-  if (links_) {
-    std::vector<Vec3>& c = points ? *points : link_c_;
+  std::vector<Vec3>& c = points ? *points : link_c_;
+  const double* stretch = problem_->stretch();  // the tendons' compression (effects.shear_extension)
+  if (rates_) {
+    // Closed-form rates of the subsegments' poses (LumpedBody::local_rates), the frames from the
+    // same poses in one pass (as LumpedBody::compute_frames).
+    SubsegmentRates d;
+    frames_b_[0] = Frame{};
+    for (int j = 1; j <= N_; ++j) {
+      SubsegmentPose& g = poses_[j];
+      body_.pose_rates(j, q + m_ * (j - 1), stretch ? stretch[j] : 1.0, g, d);
+      const Frame& prev = frames_b_[j - 1];
+      Frame& f = frames_b_[j];
+      f.R = prev.R * g.R;
+      f.p = prev.p + prev.R * g.p;
+      const Mat3& R0 = prev.R;
+      if (links_)
+        for (int i = 0; i < kLinks; ++i) c[kLinks * j + i] = prev.p + R0 * g.aux[3 + i];
+      for (int i = 0; i < m_; ++i) {
+        const Vec3 w = R0 * d.w[i];
+        T.col(m_ * (j - 1) + i) << w, R0 * d.dp[i] - w.cross(f.p);
+        if (links_ && !points)
+          for (int l = 0; l < kLinks; ++l) link_J_[kLinks * j + l].col(i) = R0 * d.dmid[l][i];
+      }
+    }
+    return;
+  }
+  body_.compute_frames(q, N_, stretch, frames_b_.data(), poses_.data());
+  if (links_)
     for (int j = 1; j <= N_; ++j)
       for (int i = 0; i < kLinks; ++i)
         c[kLinks * j + i] = frames_b_[j - 1].p + frames_b_[j - 1].R * poses_[j].aux[3 + i];
-  }
   double xs[8];
   SubsegmentPose g[4];
   static constexpr double kOffset[4] = {2.0, 1.0, -1.0, -2.0};
@@ -92,13 +116,128 @@ bool LumpedDynamics::generalized_force(const double* q) {
   return Q_.allFinite();
 }
 
-void LumpedDynamics::mass_matrix() {
-  // Composite inertias from the tip: IC_j = sum of the disks k >= j.
-  IC_[N_ + 1].setZero();
-  for (int k = N_; k >= 1; --k) {
+template <int m>
+void LumpedDynamics::mass_blocks() {
+  for (int bj = 1; bj <= N_; ++bj) {
+    Eigen::Matrix<double, 6, m> U = IC_[bj] * T_.middleCols<m>(m * (bj - 1));
+    if (links_)
+      for (int i = 0; i < kLinks; ++i) {
+        const int l = kLinks * bj + i;
+        const Eigen::Matrix<double, 3, 5>& J = link_J_[l];
+        for (int c = 0; c < m; ++c) {
+          U.col(c).template head<3>() += link_mass_[l] * link_c_[l].cross(Vec3(J.col(c)));
+          U.col(c).template tail<3>() += link_mass_[l] * J.col(c);
+        }
+      }
+    for (int aj = 1; aj <= bj; ++aj) {
+      const Eigen::Matrix<double, m, m> B = T_.middleCols<m>(m * (aj - 1)).transpose() * U;
+      M_.block<m, m>(m * (aj - 1), m * (bj - 1)) = B;
+      if (aj != bj) M_.block<m, m>(m * (bj - 1), m * (aj - 1)) = B.transpose();
+    }
+  }
+}
+
+void LumpedDynamics::body_inertias() {
+  for (int k = 1; k <= N_; ++k) {
     const Frame& f = frames_b_[k];
     const Mat3 Ic = f.R * inertia_[k].asDiagonal() * f.R.transpose();
     Io_[k] = spatial_inertia(mass_[k], f.p, Ic);
+  }
+}
+
+template <int m>
+void LumpedDynamics::articulated_m(Eigen::Map<Eigen::VectorXd>& qdd) {
+  // Featherstone's articulated-body algorithm in base coordinates. Joint k (the m unknowns of
+  // subsegment k) carries the subtree at disk k (motion subspace T_k, velocity-product
+  // acceleration c_k = T_k' v_k = A_k - A_{k-1}, bias()) and, PRB, the four link masses of
+  // subsegment k, each a child of the same joint with its own subspace S_l = (0; J_l) (a point
+  // mass moving with disk k-1's rotation and its own translation J_l v_k). For children b with
+  // articulated inertias IA_b, bias wrenches pA_b and accelerations a_b = a_{k-1} + c_b + S_b q'':
+  //   U = sum IA_b S_b, D = sum S_b^T IA_b S_b (+ PRB's phi inertia), w_b = pA_b + IA_b c_b,
+  //   u = tau - sum S_b^T w_b, q'' = D^-1 (u - U^T a_{k-1}),
+  // and disk k-1 receives sum IA_b - U D^-1 U^T and sum w_b + U D^-1 u. tau = Q - D v (rhs_).
+  using Um = Eigen::Matrix<double, 6, m>;
+  using Mm = Eigen::Matrix<double, m, m>;
+  using Vm = Eigen::Matrix<double, m, 1>;
+  auto& Us = aba_store<m>().U;
+  auto& Dinvs = aba_store<m>().Dinv;
+  auto& us = aba_store<m>().u;
+  Mat6 IA = Io_[N_];
+  Vec6 pA = pbody_[N_];
+  for (int k = N_; k >= 1; --k) {
+    const auto Tk = T_.middleCols<m>(m * (k - 1));
+    const Vec6 c = A_[k] - A_[k - 1];
+    Um U = IA * Tk;
+    Mm D = Tk.transpose() * U;
+    Vec6 w = pA + IA * c;
+    Vm u = rhs_.segment<m>(m * (k - 1)) - Tk.transpose() * w;
+    Mat6 IAsum = IA;
+    Vec6 wsum = w;
+    if constexpr (m == 5) {
+      if (links_) {
+        const Vec6& Vp = V_[k - 1];
+        const Vec6& Ap = A_[k - 1];
+        const Vm vk = Eigen::Map<const Eigen::VectorXd>(qs_v_, n_).segment<m>(m * (k - 1));
+        for (int i = 0; i < kLinks; ++i) {
+          const int l = kLinks * k + i;
+          const double ml = link_mass_[l];
+          const Vec3& cl = link_c_[l];
+          const Eigen::Matrix<double, 3, 5>& J = link_J_[l];
+          const Mat6 Il = spatial_inertia(ml, cl, Mat3::Zero());
+          // IA_l S_l = (m [c] J; m J); S_l^T IA_l S_l = m J^T J.
+          Um IS;
+          IS.template topRows<3>() = ml * lie::hat(cl) * J;
+          IS.template bottomRows<3>() = ml * J;
+          U += IS;
+          D.noalias() += ml * J.transpose() * J;
+          // The link's velocity and its acceleration at q'' = 0 (second differences, bias()).
+          const Vec3 own = J * vk;
+          Vec6 Vl = Vp;
+          Vl.tail<3>() += own;
+          const Vec3 vel = Vp.tail<3>() + Vp.head<3>().cross(cl) + own;
+          const Vec3 acc = bias_h_ > 0.0 ? Vec3(link_force(l, bias_h_) / ml) : Vec3::Zero();
+          Vec6 cb = Vec6::Zero();
+          cb.tail<3>() = acc - (Ap.tail<3>() + Ap.head<3>().cross(cl) + Vp.head<3>().cross(vel));
+          const Vec6 wl = cross_force(Vl, Il * Vl) + Il * cb;
+          u -= J.transpose() * wl.tail<3>();
+          IAsum += Il;
+          wsum += wl;
+        }
+        D(3, 3) += kPhiInertia * phi_mass(k) * length_[k] * length_[k];
+      }
+    }
+    const Mm Dinv = D.inverse();
+    Us[k] = U;
+    Dinvs[k] = Dinv;
+    us[k] = u;
+    if (k > 1) {
+      const Um UD = U * Dinv;
+      IA = Io_[k - 1] + IAsum - UD * U.transpose();
+      pA = pbody_[k - 1] + wsum + UD * u;
+    }
+  }
+  // Outward: the accelerations.
+  Vec6 a = Vec6::Zero();
+  for (int k = 1; k <= N_; ++k) {
+    const Vm x = Dinvs[k] * (us[k] - Us[k].transpose() * a);
+    qdd.segment<m>(m * (k - 1)) = x;
+    a += A_[k] - A_[k - 1];
+    a.noalias() += T_.middleCols<m>(m * (k - 1)) * x;
+  }
+}
+
+void LumpedDynamics::articulated(Eigen::Map<Eigen::VectorXd>& qdd) {
+  if (m_ == 3)
+    articulated_m<3>(qdd);
+  else
+    articulated_m<5>(qdd);
+}
+
+void LumpedDynamics::mass_matrix() {
+  // Composite inertias from the tip: IC_j = sum of the disks k >= j.
+  body_inertias();
+  IC_[N_ + 1].setZero();
+  for (int k = N_; k >= 1; --k) {
     IC_[k] = IC_[k + 1] + Io_[k];
     // PRB: the links of subsegment k + 1 are rigid with disk k.
     if (links_ && k < N_)
@@ -107,39 +246,27 @@ void LumpedDynamics::mass_matrix() {
   }
   // Block (a, b), a <= b: the bodies moving rigidly with both columns are the disks k >= b and
   // the links of subsegments > b; PRB: the links of b move with its columns through link_J_.
-  for (int bj = 1; bj <= N_; ++bj) {
-    // At most 5 columns: on the stack (no allocation in CVODE's right-hand side).
-    Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::ColMajor, 6, 5> U(6, m_);
-    U.noalias() = IC_[bj] * T_.middleCols(m_ * (bj - 1), m_);
-    if (links_)
-      for (int i = 0; i < kLinks; ++i) {
-        const int l = kLinks * bj + i;
-        const Eigen::Matrix<double, 3, 5>& J = link_J_[l];
-        for (int c = 0; c < m_; ++c) {
-          U.col(c).head<3>() += link_mass_[l] * link_c_[l].cross(Vec3(J.col(c)));
-          U.col(c).tail<3>() += link_mass_[l] * J.col(c);
-        }
-      }
-    for (int aj = 1; aj <= bj; ++aj) {
-      M_.block(m_ * (aj - 1), m_ * (bj - 1), m_, m_).noalias() = T_.middleCols(m_ * (aj - 1), m_).transpose() * U;
-      if (aj != bj) M_.block(m_ * (bj - 1), m_ * (aj - 1), m_, m_) = M_.block(m_ * (aj - 1), m_ * (bj - 1), m_, m_).transpose();
-    }
-  }
+  // Fixed-size blocks (CCsub 3, PRB 5 columns per subsegment).
+  if (m_ == 3)
+    mass_blocks<3>();
+  else
+    mass_blocks<5>();
   if (links_)
     for (int j = 1; j <= N_; ++j) {
       // The diagonal block's own links: U above holds their rigid part (twist T of b), which
       // for b's own columns is not their motion: replace it by J^T m J.
+      const auto Tj = T_.middleCols<5>(5 * (j - 1));
+      Eigen::Matrix<double, 5, 5> own = Eigen::Matrix<double, 5, 5>::Zero();
       for (int i = 0; i < kLinks; ++i) {
         const int l = kLinks * j + i;
         const Eigen::Matrix<double, 3, 5>& J = link_J_[l];
-        const auto Tj = T_.middleCols(m_ * (j - 1), m_);
-        Eigen::Matrix<double, 5, 5> rigid;
-        for (int c = 0; c < m_; ++c)
-          for (int r = 0; r < m_; ++r)
-            rigid(r, c) = link_mass_[l] * (Tj.col(r).tail<3>() + Tj.col(r).head<3>().cross(link_c_[l])).dot(J.col(c));
-        M_.block(m_ * (j - 1), m_ * (j - 1), m_, m_) += link_mass_[l] * J.transpose() * J - rigid;
+        // The rigid motion of the link's point by the columns of b: v_o + w x c.
+        Eigen::Matrix<double, 3, 5> P;
+        for (int r = 0; r < 5; ++r) P.col(r) = Tj.col(r).tail<3>() + Tj.col(r).head<3>().cross(link_c_[l]);
+        own.noalias() += link_mass_[l] * ((J - P).transpose() * J);
       }
-      M_(m_ * (j - 1) + 3, m_ * (j - 1) + 3) += kPhiInertia * mass_[j] * length_[j] * length_[j];
+      M_.block<5, 5>(5 * (j - 1), 5 * (j - 1)) += own;
+      M_(m_ * (j - 1) + 3, m_ * (j - 1) + 3) += kPhiInertia * phi_mass(j) * length_[j] * length_[j];
     }
 }
 
@@ -147,14 +274,16 @@ void LumpedDynamics::bias(const double* q, const double* v) {
   Eigen::Map<const Eigen::VectorXd> qv(q, n_), vv(v, n_);
   const double vn = vv.norm();
   // The columns' rates T' = dT/dq q' by a central difference along q'.
-  Vec6 Tdot_v_sum = Vec6::Zero();
   const bool moving = vn > 0.0;
+  bias_h_ = 0.0;
+  qs_v_ = v;
   double h = 0.0;
   if (moving) {
     // Central differences along q' (the twists themselves are fourth order: their noise ~1e-13
     // over the step 1e-3 leaves ~1e-10; the truncation, ~1e-6 of the velocity terms, is far below
     // the integration's tolerance). PRB: the links' positions too, for their accelerations.
     h = kBiasStep / vn;
+    bias_h_ = h;
     qs_ = qv + h * vv;
     twists(qs_.data(), Tp_, &link_stencil_[2]);
     qs_ = qv - h * vv;
@@ -171,13 +300,11 @@ void LumpedDynamics::bias(const double* q, const double* v) {
     V_[k] = V;
     A_[k] = A;
   }
-  (void)Tdot_v_sum;
-  // Forces of the disks (momentum rates at q'' = 0, minus drag), summed from the tip, and their
-  // generalized forces.
-  Vec6 F = Vec6::Zero();
+  // The disks' wrenches at zero acceleration: velocity products, minus drag (articulated()
+  // adds the inertial part, and PRB's links).
   for (int k = N_; k >= 1; --k) {
     Vec6 f = Vec6::Zero();
-    if (moving) f = Io_[k] * A_[k] + cross_force(V_[k], Io_[k] * V_[k]);
+    if (moving) f = cross_force(V_[k], Io_[k] * V_[k]);
     if (settings_.air_drag > 0.0) {
       const Vec3& p = frames_b_[k].p;
       const Vec3 vel = V_[k].tail<3>() + V_[k].head<3>().cross(p);
@@ -185,23 +312,7 @@ void LumpedDynamics::bias(const double* q, const double* v) {
       f.head<3>() -= p.cross(drag);
       f.tail<3>() -= drag;
     }
-    F += f;
-    Eigen::Matrix<double, 5, 1> own = Eigen::Matrix<double, 5, 1>::Zero();
-    if (links_ && moving) {
-      // The links of subsegment k + 1 are rigid with disk k; those of k move through link_J_.
-      for (int i = 0; i < kLinks && k < N_; ++i) {
-        const int l = kLinks * (k + 1) + i;
-        const Vec3 fl = link_force(l, h);
-        F.head<3>() += link_c_[l].cross(fl);
-        F.tail<3>() += fl;
-      }
-      for (int i = 0; i < kLinks; ++i) {
-        const int l = kLinks * k + i;
-        own += link_J_[l].transpose() * link_force(l, h);
-      }
-    }
-    b_.segment(m_ * (k - 1), m_).noalias() = T_.middleCols(m_ * (k - 1), m_).transpose() * F;
-    if (links_) b_.segment(m_ * (k - 1), m_) += own.head(m_);
+    pbody_[k] = f;
   }
 }
 
@@ -215,6 +326,37 @@ double LumpedDynamics::spring(int i, const double* q) const {
   // phi: turning the plane of a bend a changes the curvature vector's direction at the rate a.
   const double a = q[m_ * (j - 1)] + q[m_ * (j - 1) + 1] + q[m_ * (j - 1) + 2];
   return prb.k_theta[1] * EI / l * a * a;
+}
+
+double LumpedDynamics::kinetic_energy(const double* v) const {
+  // v^T M v / 2 body by body (O(N), M is not formed): disk k moves with the spatial velocity
+  // V_k = sum_{j <= k} T_j v_j; the links of subsegment k with V_{k-1} and their own rates.
+  Eigen::Map<const Eigen::VectorXd> vv(v, n_);
+  double ke = 0.0;
+  Vec6 V = Vec6::Zero();
+  for (int k = 1; k <= N_; ++k) {
+    const auto vk = vv.segment(m_ * (k - 1), m_);
+    if (links_) {
+      for (int i = 0; i < kLinks; ++i) {
+        const int l = kLinks * k + i;
+        const Vec3 vel = V.tail<3>() + V.head<3>().cross(link_c_[l]) + link_J_[l].leftCols(m_) * vk;
+        ke += 0.5 * link_mass_[l] * vel.squaredNorm();
+      }
+      ke += 0.5 * kPhiInertia * phi_mass(k) * length_[k] * length_[k] * vk[3] * vk[3];
+    }
+    V.noalias() += T_.middleCols(m_ * (k - 1), m_) * vk;
+    const Frame& f = frames_b_[k];
+    const Vec3 w_body = f.R.transpose() * V.head<3>();
+    const Vec3 vel = V.tail<3>() + V.head<3>().cross(f.p);
+    ke += 0.5 * (mass_[k] * vel.squaredNorm() + w_body.dot(inertia_[k].asDiagonal() * w_body));
+  }
+  return ke;
+}
+
+double LumpedDynamics::phi_mass(int j) const {
+  double mj = mass_[j];  // disk j and the subsegment's links (massless disks: the links alone)
+  for (int i = 0; i < kLinks; ++i) mj += link_mass_[kLinks * j + i];
+  return mj;
 }
 
 double LumpedDynamics::potential_energy(const double* q) {
@@ -247,6 +389,7 @@ double LumpedDynamics::potential_energy(const double* q) {
 }
 
 Eigen::VectorXd LumpedDynamics::frequencies(const Eigen::VectorXd& x, const ModelInput& input) {
+  last_valid_ = false;
   timeline_ = nullptr;
   input_ = input;
   bound_valid_ = false;

@@ -54,6 +54,19 @@ void LumpedBody::pose(int j, const double* xj, double stretch, SubsegmentPose& g
   for (Vec3& a : g.aux) a *= stretch;
 }
 
+bool LumpedBody::pose_rates(int j, const double* xj, double stretch, SubsegmentPose& g, SubsegmentRates& d) const {
+  if (!local_rates(j, xj, g, d)) return false;
+  if (stretch == 1.0) return true;
+  g.p *= stretch;
+  g.c *= stretch;
+  for (Vec3& a : g.aux) a *= stretch;
+  for (int i = 0; i < per_subsegment; ++i) {
+    d.dp[i] *= stretch;
+    for (Vec3* mid : {d.dmid[0], d.dmid[1], d.dmid[2], d.dmid[3]}) mid[i] *= stretch;
+  }
+  return true;
+}
+
 void LumpedBody::compute_frames(const double* x, int J, const double* stretch, Frame* frames, SubsegmentPose* poses,
                                 Vec3* centroids, int from) const {
   if (from <= 1) {

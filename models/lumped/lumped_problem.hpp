@@ -42,6 +42,15 @@ struct SubsegmentPose {
   double cphi = 1.0, sphi = 0.0;  ///< PRB: cos and sin of the bending-plane angle of the unknowns.
 };
 
+/// The first derivatives of a SubsegmentPose in the unknowns x_j (frame of disk j-1), for the
+/// bodies' velocity Jacobians in the dynamics (lumped_dynamics_mechanics.cpp): column i of
+/// unknown i: the rotation's rate w[i] = vee(dR/dx_i R^T), the end's dp[i] = dp/dx_i and (PRB)
+/// the link midpoints' dmid[k][i] = d aux[3 + k] / dx_i.
+struct SubsegmentRates {
+  Vec3 w[5], dp[5];
+  Vec3 dmid[4][5];
+};
+
 /// The subsegments of one lumped model, their stiffness and kinematics.
 class LumpedBody {
  public:
@@ -51,9 +60,17 @@ class LumpedBody {
 
   /// Geometry of subsegment j (1-based) from its unknowns xj (per_subsegment values).
   virtual void local(int j, const double* xj, SubsegmentPose& g) const = 0;
+  /// local() and its first derivatives in closed form (g and d at xj), if the model has them
+  /// (false: the dynamics differentiate local() numerically).
+  virtual bool local_rates(int j, const double* xj, SubsegmentPose& g, SubsegmentRates& d) const {
+    (void)j, (void)xj, (void)g, (void)d;
+    return false;
+  }
   /// The same at axial stretch `stretch` (SubsegmentLoads::stretch): the tendons' compression
   /// shortens a subsegment uniformly and leaves its bend and twist, so its points scale.
   void pose(int j, const double* xj, double stretch, SubsegmentPose& g) const;
+  /// local_rates() at axial stretch `stretch` (points and their rates scaled as pose()).
+  bool pose_rates(int j, const double* xj, double stretch, SubsegmentPose& g, SubsegmentRates& d) const;
   /// The problem of a new workspace.
   virtual std::unique_ptr<LumpedProblem> make_problem() const = 0;
   /// Disk frames 0..N (base disk first) from the unknowns of subsegments 1..J (x holds at least

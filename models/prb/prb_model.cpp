@@ -93,6 +93,48 @@ class PrbBody final : public detail::LumpedBody {
     g.R.col(2) = A.col(2);
   }
 
+  // local() and its rates: the joints turn about Rz(phi) e_y, eps about the end's axis A e_z,
+  // phi about e_z less the end's axis (R = Rz(phi) Ry(a) Rz(eps) Rz(-phi)); the in-plane points
+  // move with the joints proximal of them and turn with phi.
+  bool local_rates(int j, const double* xj, detail::SubsegmentPose& g, detail::SubsegmentRates& d) const override {
+    local(j, xj, g);
+    const double l = statics.length(j);
+    const double cp = g.cphi, sp = g.sphi;
+    // Partial angles a_q after joint q, their sines and cosines, the links' lengths.
+    double L[3], sa[3], ca[3], a = 0.0;
+    for (int q = 0; q < 3; ++q) {
+      a += xj[q];
+      L[q] = gamma[q + 1] * l;
+      sa[q] = std::sin(a);
+      ca[q] = std::cos(a);
+    }
+    auto plane = [&](double dx, double dz) { return Vec3(dx * cp, dx * sp, dz); };
+    auto turn = [&](const Vec3& v) { return Vec3(-v.y(), v.x(), 0.0); };  // d/dphi of a point
+    const Vec3 axis(cp * sa[2], sp * sa[2], ca[2]);
+    for (int i = 0; i < 3; ++i) {
+      d.w[i] = Vec3(-sp, cp, 0.0);
+      double dx = 0.0, dz = 0.0;  // in-plane rate of the chain's point after joint q
+      d.dmid[0][i].setZero();
+      for (int q = 0; q < 3; ++q) {
+        if (q < i) {
+          d.dmid[q + 1][i].setZero();
+          continue;
+        }
+        d.dmid[q + 1][i] = plane(dx + 0.5 * L[q] * ca[q], dz - 0.5 * L[q] * sa[q]);
+        dx += L[q] * ca[q];
+        dz -= L[q] * sa[q];
+      }
+      d.dp[i] = plane(dx, dz);
+    }
+    d.w[3] = Vec3(0.0, 0.0, 1.0) - axis;
+    d.dp[3] = turn(g.p);
+    for (int k = 0; k < 4; ++k) d.dmid[k][3] = turn(g.aux[kMid + k]);
+    d.w[4] = axis;
+    d.dp[4].setZero();
+    for (int k = 0; k < 4; ++k) d.dmid[k][4].setZero();
+    return true;
+  }
+
   double gamma[4] = {};
   double gamma_sum = 1.0;
   double k_theta[3] = {};
