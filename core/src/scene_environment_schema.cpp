@@ -12,7 +12,7 @@ namespace tdcr::detail {
 
 namespace {
 
-constexpr const char* kContact = "CCsub, PRB (contact)";
+constexpr const char* kContact = "CCsub, PRB, VC, VCref (contact)";
 
 const Names<Obstacle::Type> kObstacleTypes = {{"plane", Obstacle::Type::Plane},
                                               {"sphere", Obstacle::Type::Sphere},

@@ -33,14 +33,14 @@ const Names<TendonRoutingSpec::Type> kRoutingTypes = {{"straight", TendonRouting
 constexpr const char* kAll = "all";
 constexpr const char* kStatic = "CCsub, PRB, VC, VCref";
 constexpr const char* kGravity = "CCsub, PRB, VC, VCref (gravity)";
-constexpr const char* kContact = "CCsub, PRB (contact)";
+constexpr const char* kContact = "CCsub, PRB, VC, VCref (contact)";
 
 const Schema<BackboneStiffness>& stiffness_schema() {
   using S = BackboneStiffness;
   static const Schema<S> s({
       number_field("EI", &S::EI, {"N m^2", nullptr, "> 0", kAll}).required(),
       number_field("GJ", &S::GJ, {"N m^2", nullptr, "> 0", kStatic}).required(),
-      number_field("EA", &S::EA, {"N", nullptr, "> 0", "VC, VCref, CC (see `shear_extension`)"}).required(),
+      number_field("EA", &S::EA, {"N", nullptr, "> 0", "every model (see `shear_extension`)"}).required(),
       number_field("GA", &S::GA, {"N", nullptr, "> 0", "VC, VCref (see `shear_extension`)"}).required(),
   });
   return s;
@@ -357,8 +357,9 @@ const Schema<Effects>& effects_schema() {
                     {"", nullptr,
                      "`true`: Cosserat rod with shear and extension; `false`: inextensible, unshearable "
                      "(Kirchhoff) rod",
-                     "VC, VCref; CC with tension input (axial strain 1 - sum T / EA). CCsub and PRB are "
-                     "inextensible."}),
+                     "VC, VCref; CC with tension input (axial strain - sum T / EA per segment); CCsub and "
+                     "PRB: each subsegment shortened by the tensions of the tendons through it over EA (its "
+                     "bend and twist unchanged). `false` reproduces the paper's CCsub and PRB."}),
       choice_field("disk_normal_force", &E::disk_normal_force, kDiskNormalForce,
                    {"", nullptr,
                     "`\"kept\"`: a frictionless hole, one tension on both sides of a disk the tendon passes "
@@ -405,7 +406,8 @@ const Schema<DynamicsSettings>& dynamics_schema() {
       number_field("bending_damping_time", &D::bending_damping_time,
                    {"s", nullptr, "Kelvin-Voigt retardation time of bending and torsion, >= 0 (0: undamped)", kDynamics}),
       number_field("shear_damping_time", &D::shear_damping_time,
-                   {"s", nullptr, "the same for shear and extension, >= 0", "VC, VCref (CCsub and PRB are inextensible)"}),
+                   {"s", nullptr, "the same for shear and extension, >= 0", "VC, VCref (CCsub's and PRB's axial compression follows the tensions at once: it has no mass "
+                   "or damping of its own)"}),
       number_field("air_drag", &D::air_drag,
                    {"N s^2/m^3", nullptr, "quadratic drag per length, f = -air_drag norm(v) v; >= 0", kDynamics}),
       choice_field("scheme", &D::scheme, kTimeSchemes,
