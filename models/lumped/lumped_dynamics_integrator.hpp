@@ -181,6 +181,9 @@ class LumpedDynamics final : public DynamicsIntegrator {
   Eigen::VectorXd q_, v_;
   std::vector<Frame> frames_, frames_b_;
   std::vector<SubsegmentPose> poses_;
+  std::vector<Frame> frames_q_;           // bias(): the frames and poses at q while it
+  std::vector<SubsegmentPose> poses_q_;   // evaluates the twists at q +- h q'
+
   Twists T_, Tp_, Tm_;
   Eigen::VectorXd r_, Q_, rhs_, damp_;
   Eigen::VectorXd damp_const_;  // tau_bt K of the constant springs (PRB's phi rows: recomputed)

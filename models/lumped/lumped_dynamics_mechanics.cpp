@@ -284,13 +284,18 @@ void LumpedDynamics::bias(const double* q, const double* v) {
     // the integration's tolerance). PRB: the links' positions too, for their accelerations.
     h = kBiasStep / vn;
     bias_h_ = h;
+    // The stencil's twists() overwrite the frames and poses: keep those of q (a copy, not a
+    // third pose set at q: its sines and cosines were a tenth of PRB's right-hand side).
+    std::copy(frames_b_.begin(), frames_b_.end(), frames_q_.begin());
+    std::copy(poses_.begin(), poses_.end(), poses_q_.begin());
     qs_ = qv + h * vv;
     twists(qs_.data(), Tp_, &link_stencil_[2]);
     qs_ = qv - h * vv;
     twists(qs_.data(), Tm_, &link_stencil_[3]);
     Tp_ -= Tm_;
     Tp_ /= 2.0 * h;
-    body_.compute_frames(q, N_, problem_->stretch(), frames_b_.data(), poses_.data());  // back to q
+    frames_b_.swap(frames_q_);  // back to q
+    poses_.swap(poses_q_);
   }
   // Spatial velocities and bias accelerations of the disks, from the base.
   Vec6 V = Vec6::Zero(), A = Vec6::Zero();
