@@ -105,7 +105,6 @@ class LumpedDynamics final : public DynamicsIntegrator {
   void articulated_m(Eigen::Map<Eigen::VectorXd>& qdd);
   std::vector<Vec6> pbody_;
   double bias_h_ = 0.0;          // bias()'s step along q' (0: at rest)
-  const double* qs_v_ = nullptr;  // bias()'s q'
   template <int m>
   struct AbaStore {
     std::vector<Eigen::Matrix<double, 6, m>> U;

@@ -175,34 +175,42 @@ void LumpedDynamics::articulated_m(Eigen::Map<Eigen::VectorXd>& qdd) {
     Vec6 wsum = w;
     if constexpr (m == 5) {
       if (links_) {
-        const Vec6& Vp = V_[k - 1];
         const Vec6& Ap = A_[k - 1];
-        const Vm vk = Eigen::Map<const Eigen::VectorXd>(qs_v_, n_).segment<m>(m * (k - 1));
+        // The links are point masses: IA_l = spatial_inertia(m, c, 0), summed into IAsum as
+        // their total mass, first and second moments; the wrench w_l = IA_l c_l + V_l x* IA_l V_l
+        // of a point is (c x f, f) with f = m times its acceleration less the parent's a_{k-1}
+        // part (Ap.v + Ap.w x c): m acc from bias()'s second differences.
+        double msum = 0.0, m2 = 0.0;
+        Vec3 mc = Vec3::Zero();
+        Mat3 mcc = Mat3::Zero();
         for (int i = 0; i < kLinks; ++i) {
           const int l = kLinks * k + i;
           const double ml = link_mass_[l];
           const Vec3& cl = link_c_[l];
           const Eigen::Matrix<double, 3, 5>& J = link_J_[l];
-          const Mat6 Il = spatial_inertia(ml, cl, Mat3::Zero());
           // IA_l S_l = (m [c] J; m J); S_l^T IA_l S_l = m J^T J.
-          Um IS;
-          IS.template topRows<3>() = ml * lie::hat(cl) * J;
-          IS.template bottomRows<3>() = ml * J;
-          U += IS;
+          for (int col = 0; col < 5; ++col) {
+            const Vec3 mJ = ml * J.col(col);
+            U.col(col).template head<3>() += cl.cross(mJ);
+            U.col(col).template tail<3>() += mJ;
+          }
           D.noalias() += ml * J.transpose() * J;
-          // The link's velocity and its acceleration at q'' = 0 (second differences, bias()).
-          const Vec3 own = J * vk;
-          Vec6 Vl = Vp;
-          Vl.tail<3>() += own;
-          const Vec3 vel = Vp.tail<3>() + Vp.head<3>().cross(cl) + own;
-          const Vec3 acc = bias_h_ > 0.0 ? Vec3(link_force(l, bias_h_) / ml) : Vec3::Zero();
-          Vec6 cb = Vec6::Zero();
-          cb.tail<3>() = acc - (Ap.tail<3>() + Ap.head<3>().cross(cl) + Vp.head<3>().cross(vel));
-          const Vec6 wl = cross_force(Vl, Il * Vl) + Il * cb;
-          u -= J.transpose() * wl.tail<3>();
-          IAsum += Il;
-          wsum += wl;
+          Vec3 f = bias_h_ > 0.0 ? link_force(l, bias_h_) : Vec3::Zero();
+          f -= ml * (Ap.tail<3>() + Ap.head<3>().cross(cl));
+          u -= J.transpose() * f;
+          wsum.head<3>() += cl.cross(f);
+          wsum.tail<3>() += f;
+          msum += ml;
+          m2 += ml * cl.squaredNorm();
+          mc += ml * cl;
+          mcc.noalias() += ml * cl * cl.transpose();
         }
+        // sum of spatial_inertia(m, c, 0): (m [c]^T [c], m [c]; m [c]^T, m I).
+        const Mat3 C = lie::hat(mc);
+        IAsum.template topLeftCorner<3, 3>() += m2 * Mat3::Identity() - mcc;
+        IAsum.template topRightCorner<3, 3>() += C;
+        IAsum.template bottomLeftCorner<3, 3>() += C.transpose();
+        IAsum.template bottomRightCorner<3, 3>().diagonal().array() += msum;
         D(3, 3) += kPhiInertia * phi_mass(k) * length_[k] * length_[k];
       }
     }
@@ -276,7 +284,6 @@ void LumpedDynamics::bias(const double* q, const double* v) {
   // The columns' rates T' = dT/dq q' by a central difference along q'.
   const bool moving = vn > 0.0;
   bias_h_ = 0.0;
-  qs_v_ = v;
   double h = 0.0;
   if (moving) {
     // Central differences along q' (the twists themselves are fourth order: their noise ~1e-13
