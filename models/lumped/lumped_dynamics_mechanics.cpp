@@ -194,7 +194,10 @@ void LumpedDynamics::articulated_m(Eigen::Map<Eigen::VectorXd>& qdd) {
             U.col(col).template head<3>() += cl.cross(mJ);
             U.col(col).template tail<3>() += mJ;
           }
-          D.noalias() += ml * J.transpose() * J;
+          {
+            const Eigen::Matrix<double, 3, 5> mJ = ml * J;
+            D.noalias() += J.transpose() * mJ;
+          }
           Vec3 f = bias_h_ > 0.0 ? link_force(l, bias_h_) : Vec3::Zero();
           f -= ml * (Ap.tail<3>() + Ap.head<3>().cross(cl));
           u -= J.transpose() * f;
@@ -214,7 +217,11 @@ void LumpedDynamics::articulated_m(Eigen::Map<Eigen::VectorXd>& qdd) {
         D(3, 3) += kPhiInertia * phi_mass(k) * length_[k] * length_[k];
       }
     }
-    const Mm Dinv = D.inverse();
+    // D = S^T IA S is symmetric positive definite (an articulated inertia; PRB's phi has its
+    // added inertia): Cholesky, cheaper than the pivoted LU of inverse(), which stays the
+    // fallback should rounding make D indefinite.
+    const Eigen::LLT<Mm> llt(D);
+    const Mm Dinv = llt.info() == Eigen::Success ? Mm(llt.solve(Mm::Identity())) : Mm(D.inverse());
     Us[k] = U;
     Dinvs[k] = Dinv;
     us[k] = u;
