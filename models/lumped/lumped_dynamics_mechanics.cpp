@@ -145,6 +145,48 @@ void LumpedDynamics::body_inertias() {
   }
 }
 
+namespace {
+
+// The inverse of a symmetric positive definite m x m matrix A (its lower triangle read) by
+// Cholesky, A = L L^T, A^-1 = L^-T L^-1, in plain loops (Eigen's LLT solve with a matrix
+// right-hand side goes through its general blocked triangular solver, slow at m = 3, 5).
+// False where A is not numerically positive definite.
+template <int m>
+bool spd_inverse(const Eigen::Matrix<double, m, m>& A, Eigen::Matrix<double, m, m>& inv) {
+  double L[m][m] = {}, Li[m][m] = {};
+  for (int j = 0; j < m; ++j) {
+    double d = A(j, j);
+    for (int k = 0; k < j; ++k) d -= L[j][k] * L[j][k];
+    if (!(d > 0.0)) return false;
+    L[j][j] = std::sqrt(d);
+    for (int i = j + 1; i < m; ++i) {
+      double s = A(i, j);
+      for (int k = 0; k < j; ++k) s -= L[i][k] * L[j][k];
+      L[i][j] = s / L[j][j];
+    }
+  }
+  // Li = L^-1 (lower triangular), column by column.
+  for (int j = 0; j < m; ++j) {
+    Li[j][j] = 1.0 / L[j][j];
+    for (int i = j + 1; i < m; ++i) {
+      double s = 0.0;
+      for (int k = j; k < i; ++k) s -= L[i][k] * Li[k][j];
+      Li[i][j] = s / L[i][i];
+    }
+  }
+  // inv = Li^T Li (symmetric).
+  for (int i = 0; i < m; ++i)
+    for (int j = 0; j <= i; ++j) {
+      double s = 0.0;
+      for (int k = i; k < m; ++k) s += Li[k][i] * Li[k][j];
+      inv(i, j) = s;
+      inv(j, i) = s;
+    }
+  return true;
+}
+
+}  // namespace
+
 template <int m>
 void LumpedDynamics::articulated_m(Eigen::Map<Eigen::VectorXd>& qdd) {
   // Featherstone's articulated-body algorithm in base coordinates. Joint k (the m unknowns of
@@ -218,10 +260,10 @@ void LumpedDynamics::articulated_m(Eigen::Map<Eigen::VectorXd>& qdd) {
       }
     }
     // D = S^T IA S is symmetric positive definite (an articulated inertia; PRB's phi has its
-    // added inertia): Cholesky, cheaper than the pivoted LU of inverse(), which stays the
-    // fallback should rounding make D indefinite.
-    const Eigen::LLT<Mm> llt(D);
-    const Mm Dinv = llt.info() == Eigen::Success ? Mm(llt.solve(Mm::Identity())) : Mm(D.inverse());
+    // added inertia): its inverse by Cholesky, cheaper than the pivoted LU of inverse(), which
+    // stays the fallback should rounding make D indefinite.
+    Mm Dinv;
+    if (!spd_inverse<m>(D, Dinv)) Dinv = D.inverse();
     Us[k] = U;
     Dinvs[k] = Dinv;
     us[k] = u;
