@@ -260,10 +260,11 @@ void LumpedDynamics::articulated_m(Eigen::Map<Eigen::VectorXd>& qdd) {
       }
     }
     // D = S^T IA S is symmetric positive definite (an articulated inertia; PRB's phi has its
-    // added inertia): its inverse by Cholesky, cheaper than the pivoted LU of inverse(), which
-    // stays the fallback should rounding make D indefinite.
+    // added inertia): PRB's 5 x 5 inverse by Cholesky, cheaper than the pivoted LU of inverse(),
+    // which stays the fallback should rounding make D indefinite.
+    // (CCsub's 3 x 3: Eigen's closed-form inverse is cheaper still.)
     Mm Dinv;
-    if (!spd_inverse<m>(D, Dinv)) Dinv = D.inverse();
+    if (m == 3 || !spd_inverse<m>(D, Dinv)) Dinv = D.inverse();
     Us[k] = U;
     Dinvs[k] = Dinv;
     us[k] = u;
