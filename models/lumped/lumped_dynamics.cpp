@@ -91,6 +91,8 @@ LumpedDynamics::LumpedDynamics(const LumpedModel& model, const LumpedBody& body,
   frames_.resize(N_ + 1);
   frames_b_.resize(N_ + 1);
   poses_.resize(N_ + 1);
+  frames_q_.resize(N_ + 1);
+  poses_q_.resize(N_ + 1);
   T_.setZero(6, n_);
   Tp_.setZero(6, n_);
   Tm_.setZero(6, n_);

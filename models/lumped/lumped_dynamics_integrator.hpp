@@ -105,7 +105,6 @@ class LumpedDynamics final : public DynamicsIntegrator {
   void articulated_m(Eigen::Map<Eigen::VectorXd>& qdd);
   std::vector<Vec6> pbody_;
   double bias_h_ = 0.0;          // bias()'s step along q' (0: at rest)
-  const double* qs_v_ = nullptr;  // bias()'s q'
   template <int m>
   struct AbaStore {
     std::vector<Eigen::Matrix<double, 6, m>> U;
@@ -181,6 +180,9 @@ class LumpedDynamics final : public DynamicsIntegrator {
   Eigen::VectorXd q_, v_;
   std::vector<Frame> frames_, frames_b_;
   std::vector<SubsegmentPose> poses_;
+  std::vector<Frame> frames_q_;           // bias(): the frames and poses at q while it
+  std::vector<SubsegmentPose> poses_q_;   // evaluates the twists at q +- h q'
+
   Twists T_, Tp_, Tm_;
   Eigen::VectorXd r_, Q_, rhs_, damp_;
   Eigen::VectorXd damp_const_;  // tau_bt K of the constant springs (PRB's phi rows: recomputed)

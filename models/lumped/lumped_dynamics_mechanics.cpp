@@ -145,6 +145,48 @@ void LumpedDynamics::body_inertias() {
   }
 }
 
+namespace {
+
+// The inverse of a symmetric positive definite m x m matrix A (its lower triangle read) by
+// Cholesky, A = L L^T, A^-1 = L^-T L^-1, in plain loops (Eigen's LLT solve with a matrix
+// right-hand side goes through its general blocked triangular solver, slow at m = 3, 5).
+// False where A is not numerically positive definite.
+template <int m>
+bool spd_inverse(const Eigen::Matrix<double, m, m>& A, Eigen::Matrix<double, m, m>& inv) {
+  double L[m][m] = {}, Li[m][m] = {};
+  for (int j = 0; j < m; ++j) {
+    double d = A(j, j);
+    for (int k = 0; k < j; ++k) d -= L[j][k] * L[j][k];
+    if (!(d > 0.0)) return false;
+    L[j][j] = std::sqrt(d);
+    for (int i = j + 1; i < m; ++i) {
+      double s = A(i, j);
+      for (int k = 0; k < j; ++k) s -= L[i][k] * L[j][k];
+      L[i][j] = s / L[j][j];
+    }
+  }
+  // Li = L^-1 (lower triangular), column by column.
+  for (int j = 0; j < m; ++j) {
+    Li[j][j] = 1.0 / L[j][j];
+    for (int i = j + 1; i < m; ++i) {
+      double s = 0.0;
+      for (int k = j; k < i; ++k) s -= L[i][k] * Li[k][j];
+      Li[i][j] = s / L[i][i];
+    }
+  }
+  // inv = Li^T Li (symmetric).
+  for (int i = 0; i < m; ++i)
+    for (int j = 0; j <= i; ++j) {
+      double s = 0.0;
+      for (int k = i; k < m; ++k) s += Li[k][i] * Li[k][j];
+      inv(i, j) = s;
+      inv(j, i) = s;
+    }
+  return true;
+}
+
+}  // namespace
+
 template <int m>
 void LumpedDynamics::articulated_m(Eigen::Map<Eigen::VectorXd>& qdd) {
   // Featherstone's articulated-body algorithm in base coordinates. Joint k (the m unknowns of
@@ -175,38 +217,54 @@ void LumpedDynamics::articulated_m(Eigen::Map<Eigen::VectorXd>& qdd) {
     Vec6 wsum = w;
     if constexpr (m == 5) {
       if (links_) {
-        const Vec6& Vp = V_[k - 1];
         const Vec6& Ap = A_[k - 1];
-        const Vm vk = Eigen::Map<const Eigen::VectorXd>(qs_v_, n_).segment<m>(m * (k - 1));
+        // The links are point masses: IA_l = spatial_inertia(m, c, 0), summed into IAsum as
+        // their total mass, first and second moments; the wrench w_l = IA_l c_l + V_l x* IA_l V_l
+        // of a point is (c x f, f) with f = m times its acceleration less the parent's a_{k-1}
+        // part (Ap.v + Ap.w x c): m acc from bias()'s second differences.
+        double msum = 0.0, m2 = 0.0;
+        Vec3 mc = Vec3::Zero();
+        Mat3 mcc = Mat3::Zero();
         for (int i = 0; i < kLinks; ++i) {
           const int l = kLinks * k + i;
           const double ml = link_mass_[l];
           const Vec3& cl = link_c_[l];
           const Eigen::Matrix<double, 3, 5>& J = link_J_[l];
-          const Mat6 Il = spatial_inertia(ml, cl, Mat3::Zero());
           // IA_l S_l = (m [c] J; m J); S_l^T IA_l S_l = m J^T J.
-          Um IS;
-          IS.template topRows<3>() = ml * lie::hat(cl) * J;
-          IS.template bottomRows<3>() = ml * J;
-          U += IS;
-          D.noalias() += ml * J.transpose() * J;
-          // The link's velocity and its acceleration at q'' = 0 (second differences, bias()).
-          const Vec3 own = J * vk;
-          Vec6 Vl = Vp;
-          Vl.tail<3>() += own;
-          const Vec3 vel = Vp.tail<3>() + Vp.head<3>().cross(cl) + own;
-          const Vec3 acc = bias_h_ > 0.0 ? Vec3(link_force(l, bias_h_) / ml) : Vec3::Zero();
-          Vec6 cb = Vec6::Zero();
-          cb.tail<3>() = acc - (Ap.tail<3>() + Ap.head<3>().cross(cl) + Vp.head<3>().cross(vel));
-          const Vec6 wl = cross_force(Vl, Il * Vl) + Il * cb;
-          u -= J.transpose() * wl.tail<3>();
-          IAsum += Il;
-          wsum += wl;
+          for (int col = 0; col < 5; ++col) {
+            const Vec3 mJ = ml * J.col(col);
+            U.col(col).template head<3>() += cl.cross(mJ);
+            U.col(col).template tail<3>() += mJ;
+          }
+          {
+            const Eigen::Matrix<double, 3, 5> mJ = ml * J;
+            D.noalias() += J.transpose() * mJ;
+          }
+          Vec3 f = bias_h_ > 0.0 ? link_force(l, bias_h_) : Vec3::Zero();
+          f -= ml * (Ap.tail<3>() + Ap.head<3>().cross(cl));
+          u -= J.transpose() * f;
+          wsum.head<3>() += cl.cross(f);
+          wsum.tail<3>() += f;
+          msum += ml;
+          m2 += ml * cl.squaredNorm();
+          mc += ml * cl;
+          mcc.noalias() += ml * cl * cl.transpose();
         }
+        // sum of spatial_inertia(m, c, 0): (m [c]^T [c], m [c]; m [c]^T, m I).
+        const Mat3 C = lie::hat(mc);
+        IAsum.template topLeftCorner<3, 3>() += m2 * Mat3::Identity() - mcc;
+        IAsum.template topRightCorner<3, 3>() += C;
+        IAsum.template bottomLeftCorner<3, 3>() += C.transpose();
+        IAsum.template bottomRightCorner<3, 3>().diagonal().array() += msum;
         D(3, 3) += kPhiInertia * phi_mass(k) * length_[k] * length_[k];
       }
     }
-    const Mm Dinv = D.inverse();
+    // D = S^T IA S is symmetric positive definite (an articulated inertia; PRB's phi has its
+    // added inertia): PRB's 5 x 5 inverse by Cholesky, cheaper than the pivoted LU of inverse(),
+    // which stays the fallback should rounding make D indefinite.
+    // (CCsub's 3 x 3: Eigen's closed-form inverse is cheaper still.)
+    Mm Dinv;
+    if (m == 3 || !spd_inverse<m>(D, Dinv)) Dinv = D.inverse();
     Us[k] = U;
     Dinvs[k] = Dinv;
     us[k] = u;
@@ -276,7 +334,6 @@ void LumpedDynamics::bias(const double* q, const double* v) {
   // The columns' rates T' = dT/dq q' by a central difference along q'.
   const bool moving = vn > 0.0;
   bias_h_ = 0.0;
-  qs_v_ = v;
   double h = 0.0;
   if (moving) {
     // Central differences along q' (the twists themselves are fourth order: their noise ~1e-13
@@ -284,13 +341,18 @@ void LumpedDynamics::bias(const double* q, const double* v) {
     // the integration's tolerance). PRB: the links' positions too, for their accelerations.
     h = kBiasStep / vn;
     bias_h_ = h;
+    // The stencil's twists() overwrite the frames and poses: keep those of q (a copy, not a
+    // third pose set at q: its sines and cosines were a tenth of PRB's right-hand side).
+    std::copy(frames_b_.begin(), frames_b_.end(), frames_q_.begin());
+    std::copy(poses_.begin(), poses_.end(), poses_q_.begin());
     qs_ = qv + h * vv;
     twists(qs_.data(), Tp_, &link_stencil_[2]);
     qs_ = qv - h * vv;
     twists(qs_.data(), Tm_, &link_stencil_[3]);
     Tp_ -= Tm_;
     Tp_ /= 2.0 * h;
-    body_.compute_frames(q, N_, problem_->stretch(), frames_b_.data(), poses_.data());  // back to q
+    frames_b_.swap(frames_q_);  // back to q
+    poses_.swap(poses_q_);
   }
   // Spatial velocities and bias accelerations of the disks, from the base.
   Vec6 V = Vec6::Zero(), A = Vec6::Zero();
