@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "contact_scenes.hpp"
 #include "elastica_reference.hpp"
 #include "lumped/lumped_problem.hpp"
 #include "tdcr/core/contact_geometry.hpp"
@@ -23,73 +24,13 @@
 #include "tdcr/models/static_model.hpp"
 
 using namespace tdcr;
+using namespace contact_test;
 
 namespace {
-
-// The paper robot (two 0.05 m segments, n disks each, EI = 4.24e-3 N m^2), default effects.
-Scene robot_scene(const std::string& model, int n) {
-  Scene s = paper::scene(n, 1, model);
-  s.effects = Effects{};
-  s.actuation.values = {0, 0, 0, 0};
-  return s;
-}
-
-Solution run(const Scene& s, const Solution* warm = nullptr) { return tdcr::solve(s, warm); }
-
-Obstacle sphere(const Vec3& c, double r) {
-  Obstacle o;
-  o.type = Obstacle::Type::Sphere;
-  o.center = c;
-  o.radius = r;
-  return o;
-}
-
-Obstacle plane(const Vec3& p, const Vec3& n) {
-  Obstacle o;
-  o.type = Obstacle::Type::Plane;
-  o.point = p;
-  o.normal = n;
-  return o;
-}
-
-// The smallest gap of any body part (backbone at every disk, disk rims) to any obstacle.
-double smallest_gap(const Scene& s, const Solution& sol) {
-  const TendonRouting routing = TendonRouting::from(s.robot);
-  double g = INFINITY;
-  for (int j = 1; j < static_cast<int>(sol.disk_frames.size()); ++j)
-    for (const Obstacle& o : s.environment.obstacles) {
-      g = std::min(g, contact_point(o, sol.disk_frames[j], ContactBody::Backbone, s.robot.backbone.outer_radius).gap);
-      const double r = s.robot.segments[routing.disk_segment[j]].disk_radius;
-      if (r > 0.0) g = std::min(g, contact_point(o, sol.disk_frames[j], ContactBody::Disk, r).gap);
-    }
-  return g;
-}
 
 class ContactLumped : public ::testing::TestWithParam<std::string> {};
 
 }  // namespace
-
-// Obstacles the free-space answer does not reach leave it as it is (1e-12 m): a far wall, a
-// sphere beside the robot, a wide lumen around it.
-TEST_P(ContactLumped, UntouchedObstaclesGiveTheFreeSpaceAnswer) {
-  Scene s = robot_scene(GetParam(), 10);
-  s.actuation.values = {0.5, 0, 0.3, 0};
-  s.loads.tip_force = Vec3(0.01, 0.0, 0.0);
-  const Solution free = run(s);
-  ASSERT_TRUE(free.converged()) << free.summary.message;
-  s.environment.obstacles = {plane(Vec3(0, -0.05, 0), Vec3(0, 1, 0)), sphere(Vec3(0.05, -0.03, 0.05), 0.01)};
-  Obstacle lumen;
-  lumen.type = Obstacle::Type::Lumen;
-  lumen.radius = 0.2;
-  lumen.centreline = {Vec3(0, 0, -0.1), Vec3(0, 0, 0.3)};
-  s.environment.obstacles.push_back(lumen);
-  const Solution touched = run(s);
-  ASSERT_TRUE(touched.converged()) << touched.summary.message;
-  EXPECT_TRUE(touched.contacts.empty());
-  ASSERT_EQ(touched.disk_frames.size(), free.disk_frames.size());
-  for (std::size_t j = 0; j < free.disk_frames.size(); ++j)
-    EXPECT_LE((touched.disk_frames[j].p - free.disk_frames[j].p).norm(), 1e-12) << "disk " << j;
-}
 
 // A straight cantilever (length L = 0.1 m) with a tip force P across it, on a rigid point
 // support (a 1 mm sphere touching the backbone, gap 0) at the disk at s = a: linear beam theory
@@ -118,27 +59,6 @@ TEST_P(ContactLumped, ProppedCantileverReaction) {
   // Measured at n = 40: CCsub 1.1e-2 (about 0.44 / n: its arcs take the moment at their base
   // disk), PRB 1.6e-5.
   EXPECT_LT(last, GetParam() == "ccsub" ? 0.015 : 1e-4);
-}
-
-// Two supports mirror-symmetric about the x-z plane (1 mm spheres at +-45 deg about the x axis,
-// touching the backbone at s = 0.05 m) under a tip force along x: equal forces, mirrored.
-TEST_P(ContactLumped, SymmetricSupportsCarryEqualForces) {
-  Scene s = robot_scene(GetParam(), 10);
-  s.loads.tip_force = Vec3(0.004, 0, 0);
-  const double d = s.robot.backbone.outer_radius + 0.001;
-  s.environment.obstacles = {sphere(Vec3(d * std::sqrt(0.5), d * std::sqrt(0.5), 0.05), 0.001),
-                             sphere(Vec3(d * std::sqrt(0.5), -d * std::sqrt(0.5), 0.05), 0.001)};
-  const Solution sol = run(s);
-  ASSERT_TRUE(sol.converged()) << sol.summary.message;
-  ASSERT_EQ(sol.contacts.size(), 2u);
-  const Contact& a = sol.contacts[0].obstacle == 0 ? sol.contacts[0] : sol.contacts[1];
-  const Contact& b = sol.contacts[0].obstacle == 0 ? sol.contacts[1] : sol.contacts[0];
-  EXPECT_NEAR(a.force, b.force, 1e-10 * a.force);
-  EXPECT_NEAR(a.normal.x(), b.normal.x(), 1e-10);
-  EXPECT_NEAR(a.normal.y(), -b.normal.y(), 1e-10);
-  EXPECT_NEAR(sol.tip().p.y(), 0.0, 1e-13);
-  // Together they hold what one support straight ahead would (beam theory: 2.5 P along x).
-  EXPECT_NEAR((a.force * a.normal + b.force * b.normal).x(), -2.5 * 0.004, 0.05 * 2.5 * 0.004);
 }
 
 // Global equilibrium (CCsub: the backbone's moment at the base is EI / l_1 times the first
@@ -177,69 +97,6 @@ TEST(ContactLumpedEquilibrium, MomentAboutTheBaseBalances) {
   const Vec3 backbone = (k.EI / l1) * (Vec3(x[0], x[1], 0.0) + (k.GJ / k.EI) * x[2] * z);
   EXPECT_LT((m - backbone).norm(), 1e-8 * scale) << "moment of the loads " << m.transpose() << ", backbone "
                                                   << backbone.transpose();
-}
-
-// A robot bent by its tendons against a wall, disks with a 10 mm rim: no part penetrates
-// (1e-9 m), every force is non-negative and every reported contact closed (gap ~ 0).
-TEST_P(ContactLumped, NoPenetrationAgainstAWall) {
-  Scene s = robot_scene(GetParam(), 10);
-  s.actuation.values = {1.5, 0, 0.8, 0};
-  for (Segment& g : s.robot.segments) g.disk_radius = 0.01;
-  s.environment.obstacles = {plane(Vec3(0, 0.025, 0), Vec3(0, -1, 0))};
-  const Solution sol = run(s);
-  ASSERT_TRUE(sol.converged()) << sol.summary.message;
-  ASSERT_FALSE(sol.contacts.empty());
-  EXPECT_GE(smallest_gap(s, sol), -1e-9);
-  for (const Contact& c : sol.contacts) {
-    EXPECT_GE(c.force, 0.0);
-    EXPECT_NEAR(c.gap, 0.0, 1e-9);
-    EXPECT_TRUE(c.disk);  // the rims stand out 9.6 mm beyond the backbone
-  }
-  std::printf("%s: %zu contacts, smallest gap %.3g m, %s\n", GetParam().c_str(), sol.contacts.size(),
-              smallest_gap(s, sol), sol.summary.brief_report().c_str());
-}
-
-// Compliant contact tends to rigid contact as its stiffness grows: the reaction of the propped
-// cantilever approaches the rigid one about in proportion to 1 / k.
-TEST_P(ContactLumped, CompliantTendsToRigid) {
-  Scene s = robot_scene(GetParam(), 10);
-  s.loads.tip_force = Vec3(0.002, 0, 0);
-  const double r = s.robot.backbone.outer_radius;
-  s.environment.obstacles = {sphere(Vec3(r + 0.001, 0, 0.05), 0.001)};
-  const Solution rigid = run(s);
-  ASSERT_TRUE(rigid.converged()) << rigid.summary.message;
-  double last = INFINITY;
-  for (double k : {1e2, 1e3, 1e4, 1e5, 1e6}) {
-    s.environment.contact.stiffness = k;
-    const Solution sol = run(s);
-    ASSERT_TRUE(sol.converged()) << sol.summary.message;
-    ASSERT_EQ(sol.contacts.size(), 1u);
-    const double error = std::abs(sol.contacts[0].force - rigid.contacts[0].force);
-    // The force law to the solver's tolerance (scaled residual 1e-10 of the force scale EI / L^2).
-    EXPECT_NEAR(sol.contacts[0].force, -k * sol.contacts[0].gap, 1e-9);
-    if (k > 1e3) {
-      EXPECT_LT(error, 0.2 * last) << "k = " << k;
-    }
-    last = error;
-  }
-  EXPECT_LT(last, 1e-3 * rigid.contacts[0].force);
-}
-
-// A trajectory sliding along a wall, warm-started from step to step: each step converges, does
-// not penetrate, and carries its contacts on.
-TEST_P(ContactLumped, WarmTrajectoryAlongAWall) {
-  Scene s = robot_scene(GetParam(), 10);
-  for (Segment& g : s.robot.segments) g.disk_radius = 0.01;
-  s.environment.obstacles = {plane(Vec3(0, 0.025, 0), Vec3(0, -1, 0))};
-  Solution last;
-  for (int step = 0; step <= 20; ++step) {
-    s.actuation.values = {1.0 + 0.05 * step, 0, 0.8, 0.02 * step};
-    const Solution sol = run(s, last.converged() ? &last : nullptr);
-    ASSERT_TRUE(sol.converged()) << "step " << step << ": " << sol.summary.message;
-    EXPECT_GE(smallest_gap(s, sol), -1e-9) << "step " << step;
-    last = sol;
-  }
-  EXPECT_FALSE(last.contacts.empty());
 }
 
 // CCsub and PRB tend to one answer as the disks grow: a robot bent against a wall, and an

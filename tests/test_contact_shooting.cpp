@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "contact_scenes.hpp"
 #include "elastica_reference.hpp"
 #include "tdcr/core/contact_geometry.hpp"
 #include "tdcr/core/error.hpp"
@@ -25,71 +26,13 @@
 #include "tdcr/models/vcref.hpp"
 
 using namespace tdcr;
+using namespace contact_test;
 
 namespace {
-
-Scene robot_scene(const std::string& model, int n) {
-  Scene s = paper::scene(n, 1, model);
-  s.effects = Effects{};
-  s.actuation.values = {0, 0, 0, 0};
-  return s;
-}
-
-Solution run(const Scene& s, const Solution* warm = nullptr) { return tdcr::solve(s, warm); }
-
-Obstacle sphere(const Vec3& c, double r) {
-  Obstacle o;
-  o.type = Obstacle::Type::Sphere;
-  o.center = c;
-  o.radius = r;
-  return o;
-}
-
-Obstacle plane(const Vec3& p, const Vec3& n) {
-  Obstacle o;
-  o.type = Obstacle::Type::Plane;
-  o.point = p;
-  o.normal = n;
-  return o;
-}
-
-double smallest_gap(const Scene& s, const Solution& sol) {
-  const TendonRouting routing = TendonRouting::from(s.robot);
-  double g = INFINITY;
-  for (int j = 1; j < static_cast<int>(sol.disk_frames.size()); ++j)
-    for (const Obstacle& o : s.environment.obstacles) {
-      g = std::min(g, contact_point(o, sol.disk_frames[j], ContactBody::Backbone, s.robot.backbone.outer_radius).gap);
-      const double r = s.robot.segments[routing.disk_segment[j]].disk_radius;
-      if (r > 0.0) g = std::min(g, contact_point(o, sol.disk_frames[j], ContactBody::Disk, r).gap);
-    }
-  return g;
-}
 
 class ContactShooting : public ::testing::TestWithParam<std::string> {};
 
 }  // namespace
-
-TEST_P(ContactShooting, UntouchedObstaclesGiveTheFreeSpaceAnswer) {
-  Scene s = robot_scene(GetParam(), 10);
-  s.actuation.values = {0.5, 0, 0.3, 0};
-  s.loads.tip_force = Vec3(0.01, 0.0, 0.0);
-  const Solution free = run(s);
-  ASSERT_TRUE(free.converged()) << free.summary.message;
-  s.environment.obstacles = {plane(Vec3(0, -0.05, 0), Vec3(0, 1, 0)), sphere(Vec3(0.05, -0.03, 0.05), 0.01)};
-  Obstacle lumen;
-  lumen.type = Obstacle::Type::Lumen;
-  lumen.radius = 0.2;
-  lumen.centreline = {Vec3(0, 0, -0.1), Vec3(0, 0, 0.3)};
-  s.environment.obstacles.push_back(lumen);
-  const Solution touched = run(s);
-  ASSERT_TRUE(touched.converged()) << touched.summary.message;
-  EXPECT_TRUE(touched.contacts.empty());
-  ASSERT_EQ(touched.disk_frames.size(), free.disk_frames.size());
-  double worst = 0.0;
-  for (std::size_t j = 0; j < free.disk_frames.size(); ++j)
-    worst = std::max(worst, (touched.disk_frames[j].p - free.disk_frames[j].p).norm());
-  EXPECT_LE(worst, 1e-12);
-}
 
 // The propped cantilever of tests/test_contact_lumped.cpp (L = 0.1 m, tip force P = 2 mN, a 1 mm
 // sphere touching the backbone at s = a = 0.05 m): R = P (3 L - a) / (2 a) = 2.5 P.
@@ -171,25 +114,6 @@ TEST_P(ContactShooting, DisplacementInputWithObstaclesIsRefused) {
   }
 }
 
-// Two supports mirrored about the x-z plane: equal forces, mirrored normals, tip in the plane.
-TEST_P(ContactShooting, SymmetricSupportsCarryEqualForces) {
-  Scene s = robot_scene(GetParam(), 10);
-  s.loads.tip_force = Vec3(0.004, 0, 0);
-  const double d = s.robot.backbone.outer_radius + 0.001;
-  s.environment.obstacles = {sphere(Vec3(d * std::sqrt(0.5), d * std::sqrt(0.5), 0.05), 0.001),
-                             sphere(Vec3(d * std::sqrt(0.5), -d * std::sqrt(0.5), 0.05), 0.001)};
-  const Solution sol = run(s);
-  ASSERT_TRUE(sol.converged()) << sol.summary.message;
-  ASSERT_EQ(sol.contacts.size(), 2u);
-  const Contact& a = sol.contacts[0].obstacle == 0 ? sol.contacts[0] : sol.contacts[1];
-  const Contact& b = sol.contacts[0].obstacle == 0 ? sol.contacts[1] : sol.contacts[0];
-  EXPECT_NEAR(a.force, b.force, 1e-10 * a.force);
-  EXPECT_NEAR(a.normal.x(), b.normal.x(), 1e-10);
-  EXPECT_NEAR(a.normal.y(), -b.normal.y(), 1e-10);
-  EXPECT_NEAR(sol.tip().p.y(), 0.0, 1e-13);
-  EXPECT_NEAR((a.force * a.normal + b.force * b.normal).x(), -2.5 * 0.004, 0.05 * 2.5 * 0.004);
-}
-
 // Global equilibrium: the rod's wrench at the base (its unknowns n_0, m_0) balances the tendon
 // pulls (a tendon's forces on the disks add up to its pull along its first chord, through its
 // base hole), the tip force and the contact forces. A robot bent against a tilted wall.
@@ -227,63 +151,6 @@ TEST_P(ContactShooting, BaseWrenchBalancesEveryLoad) {
               (m - m0).norm(), ms);
   EXPECT_LT((f - n0).norm(), 1e-8 * fs);
   EXPECT_LT((m - m0).norm(), 1e-8 * ms);
-}
-
-TEST_P(ContactShooting, NoPenetrationAgainstAWall) {
-  Scene s = robot_scene(GetParam(), 10);
-  s.actuation.values = {1.5, 0, 0.8, 0};
-  for (Segment& g : s.robot.segments) g.disk_radius = 0.01;
-  s.environment.obstacles = {plane(Vec3(0, 0.025, 0), Vec3(0, -1, 0))};
-  const Solution sol = run(s);
-  ASSERT_TRUE(sol.converged()) << sol.summary.message;
-  ASSERT_FALSE(sol.contacts.empty());
-  EXPECT_GE(smallest_gap(s, sol), -1e-9);
-  for (const Contact& c : sol.contacts) {
-    EXPECT_GE(c.force, 0.0);
-    EXPECT_NEAR(c.gap, 0.0, 1e-9);
-    EXPECT_TRUE(c.disk);
-  }
-  std::printf("%s: %zu contacts, smallest gap %.3g m, %s\n", GetParam().c_str(), sol.contacts.size(), smallest_gap(s, sol),
-              sol.summary.brief_report().c_str());
-}
-
-TEST_P(ContactShooting, CompliantTendsToRigid) {
-  Scene s = robot_scene(GetParam(), 10);
-  s.loads.tip_force = Vec3(0.002, 0, 0);
-  const double r = s.robot.backbone.outer_radius;
-  s.environment.obstacles = {sphere(Vec3(r + 0.001, 0, 0.05), 0.001)};
-  const Solution rigid = run(s);
-  ASSERT_TRUE(rigid.converged()) << rigid.summary.message;
-  ASSERT_EQ(rigid.contacts.size(), 1u);
-  double last = INFINITY;
-  for (double k : {1e2, 1e3, 1e4, 1e5, 1e6}) {
-    s.environment.contact.stiffness = k;
-    const Solution sol = run(s);
-    ASSERT_TRUE(sol.converged()) << sol.summary.message;
-    ASSERT_EQ(sol.contacts.size(), 1u);
-    const double error = std::abs(sol.contacts[0].force - rigid.contacts[0].force);
-    EXPECT_NEAR(sol.contacts[0].force, -k * sol.contacts[0].gap, 1e-9);
-    if (k > 1e3) {
-      EXPECT_LT(error, 0.2 * last) << "k = " << k;
-    }
-    last = error;
-  }
-  EXPECT_LT(last, 1e-3 * rigid.contacts[0].force);
-}
-
-TEST_P(ContactShooting, WarmTrajectoryAlongAWall) {
-  Scene s = robot_scene(GetParam(), 10);
-  for (Segment& g : s.robot.segments) g.disk_radius = 0.01;
-  s.environment.obstacles = {plane(Vec3(0, 0.025, 0), Vec3(0, -1, 0))};
-  Solution last;
-  for (int step = 0; step <= 20; ++step) {
-    s.actuation.values = {1.0 + 0.05 * step, 0, 0.8, 0.02 * step};
-    const Solution sol = run(s, last.converged() ? &last : nullptr);
-    ASSERT_TRUE(sol.converged()) << "step " << step << ": " << sol.summary.message;
-    EXPECT_GE(smallest_gap(s, sol), -1e-9) << "step " << step;
-    last = sol;
-  }
-  EXPECT_FALSE(last.contacts.empty());
 }
 
 // The contact system's Jacobian (the shooting's with the contact forces in the disk equilibria,
