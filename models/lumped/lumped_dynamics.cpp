@@ -96,7 +96,6 @@ LumpedDynamics::LumpedDynamics(const LumpedModel& model, const LumpedBody& body,
   poses_q_.resize(N_ + 1);
   T_.setZero(6, n_);
   Tp_.setZero(6, n_);
-  Tm_.setZero(6, n_);
   r_.setZero(n_);
   Q_.setZero(n_);
   rhs_.setZero(n_);

@@ -129,7 +129,8 @@ class LumpedDynamics final : public DynamicsIntegrator {
   template <int m>
   void mass_blocks();  // mass_matrix()'s blocks, m unknowns per subsegment
   // The velocity terms at (q, v): the disks' velocities V_ and accelerations at q'' = 0 A_, their
-  // wrenches pbody_ (velocity products minus drag), the links' position stencils (PRB).
+  // wrenches pbody_ (velocity products minus drag), the links' accelerations (PRB:
+  // link_stencil_[2]; their positions at q + h q' in [3]).
   void bias(const double* q, const double* v);
   double potential_energy(const double* q);
   // v^T M v / 2 at the q of the last twists() (frames_b_, T_, link_c_, link_J_), without M.
@@ -179,9 +180,9 @@ class LumpedDynamics final : public DynamicsIntegrator {
   std::vector<Frame> frames_, frames_b_;
   std::vector<SubsegmentPose> poses_;
   std::vector<Frame> frames_q_;           // bias(): the frames and poses at q while it
-  std::vector<SubsegmentPose> poses_q_;   // evaluates the twists at q +- h q'
+  std::vector<SubsegmentPose> poses_q_;   // evaluates the twists at q + h q'
 
-  Twists T_, Tp_, Tm_;
+  Twists T_, Tp_;
   Eigen::VectorXd r_, Q_, rhs_, damp_;
   Eigen::VectorXd damp_const_;  // tau_bt K of the constant springs (PRB's phi rows: recomputed)
   std::vector<Mat3> S_;  // per subsegment m x m (top-left) of S

@@ -223,7 +223,7 @@ void LumpedDynamics::articulated_m(Eigen::Map<Eigen::VectorXd>& qdd) {
         // The links are point masses: IA_l = spatial_inertia(m, c, 0), summed into IAsum as
         // their total mass, first and second moments; the wrench w_l = IA_l c_l + V_l x* IA_l V_l
         // of a point is (c x f, f) with f = m times its acceleration less the parent's a_{k-1}
-        // part (Ap.v + Ap.w x c): m acc from bias()'s second differences.
+        // part (Ap.v + Ap.w x c): m acc from bias()'s forward difference.
         double msum = 0.0, m2 = 0.0;
         Vec3 mc = Vec3::Zero();
         Mat3 mcc = Mat3::Zero();
