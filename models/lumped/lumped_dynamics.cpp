@@ -50,6 +50,7 @@ LumpedDynamics::LumpedDynamics(const LumpedModel& model, const LumpedBody& body,
   link_c_.assign(kLinks * (N_ + 1), Vec3::Zero());
   for (auto& st : link_stencil_) st.assign(kLinks * (N_ + 1), Vec3::Zero());
   link_J_.assign(kLinks * (N_ + 1), Eigen::Matrix<double, 3, 5>::Zero());
+  link_J_step_ = link_J_;
   const PrbParameters& prb = model.effects().prb;
   const double gsum = prb.gamma[0] + prb.gamma[1] + prb.gamma[2] + prb.gamma[3];
   for (int j = 1; j <= N_; ++j) {
@@ -95,7 +96,6 @@ LumpedDynamics::LumpedDynamics(const LumpedModel& model, const LumpedBody& body,
   poses_q_.resize(N_ + 1);
   T_.setZero(6, n_);
   Tp_.setZero(6, n_);
-  Tm_.setZero(6, n_);
   r_.setZero(n_);
   Q_.setZero(n_);
   rhs_.setZero(n_);

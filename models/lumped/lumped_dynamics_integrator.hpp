@@ -28,8 +28,9 @@ using Twists = Eigen::Matrix<double, 6, Eigen::Dynamic>;
 // Step of the fourth-order differences of a subsegment's local pose in its unknowns (angles,
 // rad): truncation ~h^4 = 1e-12 relative, rounding ~1e-16 / h = 1e-13.
 constexpr double kTwistStep = 1e-3;
-// Step (rad) of the velocity-product terms' differences along q' (bias accelerations).
-constexpr double kBiasStep = 1e-3;
+// Step (rad) of the velocity-product terms' forward differences along q' (bias accelerations):
+// truncation ~1e-6 of those terms, rounding of the closed-form twists ~1e-16 / 1e-6 = 1e-10.
+constexpr double kBiasStep = 1e-6;
 // PRB: inertia added to the bending-plane angle phi of a subsegment, as a fraction of m l^2 (its
 // disk's and its links' mass, its length): that of turning the plane of a bend of sqrt(kPhiInertia) rad. phi
 // has no inertia of its own where the subsegment is straight (a polar angle at zero bend):
@@ -90,7 +91,7 @@ class LumpedDynamics final : public DynamicsIntegrator {
   // The input at t (from the timeline once advance() has one), bound to the problem if it changed.
   void input_at(double t);
   // Frames and the twist columns (omega; v_o) of every unknown at q into `T`.
-  // With `points`, the link midpoints go there (and the link Jacobians are not computed).
+  // With `points`, the link midpoints go there and the link Jacobians to link_J_step_.
   void twists(const double* q, Twists& T, std::vector<Vec3>* points = nullptr);
   // Q = -S r at q (frames_ and T_ must be those of q); S's diagonal blocks kept in S_.
   bool generalized_force(const double* q);
@@ -128,18 +129,16 @@ class LumpedDynamics final : public DynamicsIntegrator {
   template <int m>
   void mass_blocks();  // mass_matrix()'s blocks, m unknowns per subsegment
   // The velocity terms at (q, v): the disks' velocities V_ and accelerations at q'' = 0 A_, their
-  // wrenches pbody_ (velocity products minus drag), the links' position stencils (PRB).
+  // wrenches pbody_ (velocity products minus drag), the links' accelerations (PRB:
+  // link_stencil_[2]; their positions at q + h q' in [3]).
   void bias(const double* q, const double* v);
   double potential_energy(const double* q);
   // v^T M v / 2 at the q of the last twists() (frames_b_, T_, link_c_, link_J_), without M.
   double kinetic_energy(const double* v) const;
   // PRB: the mass of kPhiInertia's m l^2 for subsegment j.
   double phi_mass(int j) const;
-  // PRB: m a of link l at q'' = 0 from bias()'s stencil of positions (step h along q').
-  Vec3 link_force(int l, double h) const {
-    const Vec3 acc = (link_stencil_[2][l] - 2.0 * link_c_[l] + link_stencil_[3][l]) / (h * h);
-    return link_mass_[l] * acc;
-  }
+  // PRB: m a of link l at q'' = 0 (bias() keeps the accelerations in link_stencil_[2]).
+  Vec3 link_force(int l) const { return link_mass_[l] * link_stencil_[2][l]; }
   // PRB: the bending plane phi of a subsegment that is straight at rest is no state (a polar
   // angle at zero bend) but decides the plane it can start bending in: take it from the first
   // static answer along the timeline that bends the subsegment (planar motions start right).
@@ -173,7 +172,7 @@ class LumpedDynamics final : public DynamicsIntegrator {
   bool rates_ = false;
   std::vector<double> link_mass_;
   std::vector<Vec3> link_c_, link_stencil_[4];
-  std::vector<Eigen::Matrix<double, 3, 5>> link_J_;
+  std::vector<Eigen::Matrix<double, 3, 5>> link_J_, link_J_step_;  // at q, at bias()'s q + h q'
 
   // State and buffers, sized once.
   double t_ = 0.0;
@@ -181,9 +180,9 @@ class LumpedDynamics final : public DynamicsIntegrator {
   std::vector<Frame> frames_, frames_b_;
   std::vector<SubsegmentPose> poses_;
   std::vector<Frame> frames_q_;           // bias(): the frames and poses at q while it
-  std::vector<SubsegmentPose> poses_q_;   // evaluates the twists at q +- h q'
+  std::vector<SubsegmentPose> poses_q_;   // evaluates the twists at q + h q'
 
-  Twists T_, Tp_, Tm_;
+  Twists T_, Tp_;
   Eigen::VectorXd r_, Q_, rhs_, damp_;
   Eigen::VectorXd damp_const_;  // tau_bt K of the constant springs (PRB's phi rows: recomputed)
   std::vector<Mat3> S_;  // per subsegment m x m (top-left) of S

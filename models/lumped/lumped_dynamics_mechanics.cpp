@@ -36,8 +36,10 @@ void LumpedDynamics::twists(const double* q, Twists& T, std::vector<Vec3>* point
       for (int i = 0; i < m_; ++i) {
         const Vec3 w = R0 * d.w[i];
         T.col(m_ * (j - 1) + i) << w, R0 * d.dp[i] - w.cross(f.p);
-        if (links_ && !points)
-          for (int l = 0; l < kLinks; ++l) link_J_[kLinks * j + l].col(i) = R0 * d.dmid[l][i];
+        if (links_) {
+          auto& J = points ? link_J_step_ : link_J_;
+          for (int l = 0; l < kLinks; ++l) J[kLinks * j + l].col(i) = R0 * d.dmid[l][i];
+        }
       }
     }
     return;
@@ -72,11 +74,11 @@ void LumpedDynamics::twists(const double* q, Twists& T, std::vector<Vec3>* point
       dR /= kTwistStep;
       dp /= kTwistStep;
       const Vec3 w_loc = lie::vee(dR * poses_[j].R.transpose());
-      if (links_ && !points)
+      if (links_)
         for (int l = 0; l < kLinks; ++l) {
           Vec3 dc = Vec3::Zero();
           for (int k = 0; k < 4; ++k) dc += kWeight[k] * g[k].aux[3 + l];
-          link_J_[kLinks * j + l].col(i) = R0 * dc / kTwistStep;
+          (points ? link_J_step_ : link_J_)[kLinks * j + l].col(i) = R0 * dc / kTwistStep;
         }
       const Vec3 a = R0 * dp;
       const Vec3 w = R0 * w_loc;
@@ -221,7 +223,7 @@ void LumpedDynamics::articulated_m(Eigen::Map<Eigen::VectorXd>& qdd) {
         // The links are point masses: IA_l = spatial_inertia(m, c, 0), summed into IAsum as
         // their total mass, first and second moments; the wrench w_l = IA_l c_l + V_l x* IA_l V_l
         // of a point is (c x f, f) with f = m times its acceleration less the parent's a_{k-1}
-        // part (Ap.v + Ap.w x c): m acc from bias()'s second differences.
+        // part (Ap.v + Ap.w x c): m acc from bias()'s forward difference.
         double msum = 0.0, m2 = 0.0;
         Vec3 mc = Vec3::Zero();
         Mat3 mcc = Mat3::Zero();
@@ -240,7 +242,7 @@ void LumpedDynamics::articulated_m(Eigen::Map<Eigen::VectorXd>& qdd) {
             const Eigen::Matrix<double, 3, 5> mJ = ml * J;
             D.noalias() += J.transpose() * mJ;
           }
-          Vec3 f = bias_h_ > 0.0 ? link_force(l, bias_h_) : Vec3::Zero();
+          Vec3 f = bias_h_ > 0.0 ? link_force(l) : Vec3::Zero();
           f -= ml * (Ap.tail<3>() + Ap.head<3>().cross(cl));
           u -= J.transpose() * f;
           wsum.head<3>() += cl.cross(f);
@@ -331,26 +333,43 @@ void LumpedDynamics::mass_matrix() {
 void LumpedDynamics::bias(const double* q, const double* v) {
   Eigen::Map<const Eigen::VectorXd> qv(q, n_), vv(v, n_);
   const double vn = vv.norm();
-  // The columns' rates T' = dT/dq q' by a central difference along q'.
+  // The columns' rates T' = dT/dq q' by a forward difference along q', from the twists at q
+  // (T_) and one more set at q + h q' (a central difference took two: with the closed-form
+  // rates the twists are exact to rounding, so the step can be small enough, kBiasStep, for a
+  // first-order difference; paper robot scene, bench_dynamics: PRB's right-hand side one twist
+  // set cheaper).
   const bool moving = vn > 0.0;
   bias_h_ = 0.0;
   double h = 0.0;
   if (moving) {
-    // Central differences along q' (the twists themselves are fourth order: their noise ~1e-13
-    // over the step 1e-3 leaves ~1e-10; the truncation, ~1e-6 of the velocity terms, is far below
-    // the integration's tolerance). PRB: the links' positions too, for their accelerations.
     h = kBiasStep / vn;
     bias_h_ = h;
-    // The stencil's twists() overwrite the frames and poses: keep those of q (a copy, not a
-    // third pose set at q: its sines and cosines were a tenth of PRB's right-hand side).
+    // The step's twists() overwrite the frames and poses: keep those of q (a copy, not a
+    // second pose set at q: its sines and cosines were a tenth of PRB's right-hand side).
     std::copy(frames_b_.begin(), frames_b_.end(), frames_q_.begin());
     std::copy(poses_.begin(), poses_.end(), poses_q_.begin());
     qs_ = qv + h * vv;
-    twists(qs_.data(), Tp_, &link_stencil_[2]);
-    qs_ = qv - h * vv;
-    twists(qs_.data(), Tm_, &link_stencil_[3]);
-    Tp_ -= Tm_;
-    Tp_ /= 2.0 * h;
+    twists(qs_.data(), Tp_, &link_stencil_[3]);
+    if (links_) {
+      // PRB: the links' accelerations at q'' = 0, d/dt of their velocities
+      // V_{j-1}.v + V_{j-1}.w x c + J_l v_j, by the same forward difference (into link_stencil_[2]).
+      Vec6 V0 = Vec6::Zero(), V1 = Vec6::Zero();
+      for (int j = 1; j <= N_; ++j) {
+        const auto vj = vv.segment<5>(5 * (j - 1));
+        for (int i = 0; i < kLinks; ++i) {
+          const int l = kLinks * j + i;
+          const Vec3& c0 = link_c_[l];
+          const Vec3& c1 = link_stencil_[3][l];
+          const Vec3 u0 = V0.tail<3>() + V0.head<3>().cross(c0) + link_J_[l] * vj;
+          const Vec3 u1 = V1.tail<3>() + V1.head<3>().cross(c1) + link_J_step_[l] * vj;
+          link_stencil_[2][l] = (u1 - u0) / h;
+        }
+        V0.noalias() += T_.middleCols<5>(5 * (j - 1)) * vj;
+        V1.noalias() += Tp_.middleCols<5>(5 * (j - 1)) * vj;
+      }
+    }
+    Tp_ -= T_;
+    Tp_ /= h;
     frames_b_.swap(frames_q_);  // back to q
     poses_.swap(poses_q_);
   }
