@@ -534,6 +534,42 @@ TEST_P(LumpedDisplacementTest, InextensibleDrivenTendonIsRefused) {
   EXPECT_TRUE(simulate(*model, damped(), mixed, o, SolverOptions{}).completed);
 }
 
+// A motor ramp (no slack events): the right-hand sides, the driven tensions' fixed point, the
+// Jacobians and Newton systems allocate nothing; what an advance allocates is its report (the
+// step's tensions and tendon displacements: 2 vectors).
+TEST_P(LumpedDisplacementTest, MotorRampAllocatesOnlyTheReport) {
+  const Robot robot = elastic_paper_robot(3);
+  auto model = make_model(GetParam(), robot, Effects());
+  using K = Actuation::Kind;
+  const Timeline tl = kinds_timeline({K::Displacements, K::Tensions, K::Tensions, K::Displacements}, {0.001, 0, 0, 0.001},
+                                     {0.006, 0, 0, 0.004}, 1.0);
+  auto integrator = make_dynamics_integrator(*model, damped(), 0.01);
+  auto ws = model->make_workspace();
+  const Solution rest = solve(*model, *ws, tl.entries.front().input);
+  ASSERT_TRUE(rest.converged());
+  integrator->initialize(rest, tl.entries.front().input);
+  ASSERT_EQ(integrator->advance(0.01, tl).status, TerminationType::Converged);
+  long events = 0, before = 0;
+#ifdef TDCR_COUNT_MALLOC
+  long mbefore = 0;
+#endif
+  for (int k = 2; k <= 20; ++k) {
+    before = g_allocations.load();
+#ifdef TDCR_COUNT_MALLOC
+    mbefore = g_mallocs.load();
+#endif
+    const SimulationStep s = integrator->advance(0.01 * k, tl);
+    const long allocations = g_allocations.load() - before;
+    ASSERT_EQ(s.status, TerminationType::Converged);
+    events += static_cast<long>(s.tendon_events.size());
+    EXPECT_LE(allocations, 2) << "t " << s.t;
+#ifdef TDCR_COUNT_MALLOC
+    EXPECT_LE(g_mallocs.load() - mbefore, 2) << "t " << s.t;
+#endif
+  }
+  EXPECT_EQ(events, 0);
+}
+
 INSTANTIATE_TEST_SUITE_P(Lumped, LumpedDisplacementTest, ::testing::Values(ModelKind::CCsub, ModelKind::PRB),
                          [](const auto& info) { return to_string(info.param); });
 

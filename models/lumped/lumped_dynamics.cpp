@@ -20,6 +20,13 @@ namespace {
 // robot's length, i.e. a pull change of 1e-14 L) or after kMaxTensionIterations.
 constexpr double kTensionFixedPointTol = 1e-14;
 constexpr int kMaxTensionIterations = 100;
+// Slack events: the band (over the robot's length) by which a tendon's gap delta - d must pass
+// zero before the root function fires again. At exactly zero a restarted CVODE would find the
+// root it just stopped at (CV_CLOSE_ROOTS), and so would a tendon that stays at its slack limit
+// (driven at 0 on the straight robot): each tendon is in one mode, taut or slack, and its root
+// function is gap + band (taut) or gap - band (slack). The kink is straddled by at most 1e-12 L
+// of pull: EA / L_free * 1e-12 L of tension (1e-9 N for EA = 400 N on the paper robot).
+constexpr double kEventBandOverLength = 1e-12;
 
 // Throws InputError naming `robot.segments[i].tendons[k].stiffness` for a tendon that `a` drives
 // by displacement and that has no stiffness (inextensible).
@@ -73,6 +80,7 @@ void LumpedDynamics::set_up_displacement_input(const ModelInput& input) {
   driven_T_.setZero(static_cast<Eigen::Index>(driven_.size()));
   gap_.setZero(static_cast<Eigen::Index>(driven_.size()));
   root_dir_.assign(driven_.size(), 0);
+  taut_.assign(driven_.size(), 0);
   pull_frames_.resize(N_ + 1);
   tension_form_ = input;
   tension_form_.actuation.kind = Actuation::Kind::Tensions;
@@ -116,8 +124,11 @@ int LumpedDynamics::root_fn(sunrealtype t, N_Vector y, sunrealtype* g, void* use
   s.last_valid_ = false;  // the problem's tensions are set at this y now
   s.input_at(t);
   if (!s.driven_tensions(N_VGetArrayPointer(y))) return 1;
-  // g_k = delta_k(t) - d_k(q): through zero where tendon k goes slack or taut (the kink of T_k).
-  for (Eigen::Index i = 0; i < s.gap_.size(); ++i) g[i] = s.gap_[i];
+  // g_k = delta_k(t) - d_k(q): through zero where tendon k goes slack or taut (the kink of T_k),
+  // shifted by the band away from the tendon's current mode.
+  const double band = kEventBandOverLength * s.body_.length;
+  for (Eigen::Index i = 0; i < s.gap_.size(); ++i)
+    g[i] = s.gap_[i] + (s.taut_[static_cast<std::size_t>(i)] ? band : -band);
   return 0;
 }
 
@@ -478,6 +489,9 @@ void LumpedDynamics::initialize(const Solution& at_rest, const ModelInput& input
   // Slack events: CVODE's root finding on g_k = delta_k(t) - d_k(q) stops the integration at the
   // kink of T_k (advance() restarts it there), so that no step straddles a tendon going slack or taut.
   if (displacement_) {
+    driven_tensions(q_.data());
+    for (std::size_t i = 0; i < driven_.size(); ++i) taut_[i] = gap_[static_cast<Eigen::Index>(i)] > 0.0;
+    last_valid_ = false;
     check(CVodeRootInit(cvode_, static_cast<int>(driven_.size()), &root_fn), "CVodeRootInit");
     check(CVodeSetNoInactiveRootWarn(cvode_), "CVodeSetNoInactiveRootWarn");
   }
@@ -517,6 +531,9 @@ SimulationStep LumpedDynamics::advance(double t_next, const Timeline& timeline) 
     if (flag == CV_ROOT_RETURN && t_ < stop) {
       // A driven tendon went slack or taut: restart at the kink of its tension.
       step.tendon_events.push_back(t_);
+      check(CVodeGetRootInfo(cvode_, root_dir_.data()), "CVodeGetRootInfo");
+      for (std::size_t i = 0; i < root_dir_.size(); ++i)
+        if (root_dir_[i] != 0) taut_[i] = !taut_[i];
       check(CVodeReInit(cvode_, t_, y_), "CVodeReInit");
       continue;
     }

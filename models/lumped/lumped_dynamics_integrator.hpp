@@ -179,6 +179,7 @@ class LumpedDynamics final : public DynamicsIntegrator {
   ModelInput tension_form_;
   std::vector<double> placeholder_;
   std::vector<int> root_dir_;        // CVodeGetRootInfo's
+  std::vector<char> taut_;           // per driven tendon: its mode for the root function (band)
 
   // Bodies: disk k = 1..N with its mass and rotational inertia (disk frame, diagonal).
   std::vector<double> mass_, air_length_;
