@@ -82,6 +82,11 @@ void LumpedDynamics::set_up_displacement_input(const ModelInput& input) {
   root_dir_.assign(driven_.size(), 0);
   taut_.assign(driven_.size(), 0);
   pull_frames_.resize(N_ + 1);
+  pull_base_.setZero(static_cast<Eigen::Index>(driven_.size()));
+  pert_T_.setZero(static_cast<Eigen::Index>(driven_.size()));
+  dd_.setZero(static_cast<Eigen::Index>(driven_.size()), n_);
+  r_pert_.setZero(n_);
+  u_.setZero(n_);
   tension_form_ = input;
   tension_form_.actuation.kind = Actuation::Kind::Tensions;
   tension_form_.actuation.kinds.clear();
@@ -117,6 +122,59 @@ bool LumpedDynamics::driven_tensions(const double* q) {
   }
   problem_->set_driven_tensions(driven_, driven_T_);
   return true;
+}
+
+bool LumpedDynamics::tendon_stiffness(const double* q) {
+  // K += S dr/dT_k (dT_k/dq)^T for every taut driven tendon, dT_k/dq = -(EA_k / L_k) dd_k/dq:
+  // dr/dT_k by a forward difference of the residual in T_k (one residual per taut tendon),
+  // dd_k/dq by forward differences of the pulls (frames only, n of them). The Newton matrix of
+  // a motor-driven robot then has the tendons' stiffness, which dominates the backbone's
+  // bending for a stiff tendon (EA = 400 N on the paper robot: about 6 times).
+  const TendonRouting& routing = body_.statics.routing();
+  const Actuation::DisplacementConvention conv = input_.actuation.convention;
+  const int nd = static_cast<int>(driven_.size());
+  Eigen::Map<const Eigen::VectorXd> x(q, n_);
+  const double* stretch = problem_->stretch();
+  bool any = false;
+  for (int i = 0; i < nd; ++i) any = any || driven_T_[i] > 0.0;
+  if (!any) return true;
+  // The pulls' derivatives (the frames at the current stretch; its own change with q is left out).
+  qs_ = x;
+  for (int i = 0; i < nd; ++i) pull_base_[i] = tendon::chord_displacement(frames_b_.data(), routing, driven_[static_cast<std::size_t>(i)], conv);
+  constexpr double h = 1e-7;
+  for (int c = 0; c < n_; ++c) {
+    qs_[c] = q[c] + h;
+    body_.compute_frames(qs_.data(), N_, stretch, pull_frames_.data());
+    for (int i = 0; i < nd; ++i)
+      dd_(i, c) = (tendon::chord_displacement(pull_frames_.data(), routing, driven_[static_cast<std::size_t>(i)], conv) -
+                   pull_base_[i]) / h;
+    qs_[c] = q[c];
+  }
+  for (int i = 0; i < nd; ++i) {
+    const double T = driven_T_[i];
+    if (!(T > 0.0)) continue;
+    const double hT = 1e-6 * std::max(1.0, T);
+    pert_T_ = driven_T_;
+    pert_T_[i] = T + hT;
+    problem_->set_driven_tensions(driven_, pert_T_);
+    if (!problem_->residual(x, r_pert_)) return false;
+    u_ = (r_pert_ - r_) / hT;  // dr/dT_i (r_: the residual at q, from the Jacobian's evaluation)
+    // Map as the rows of K (S dr for CCsub; c dr, the phi row times a, for PRB).
+    for (int j = 1; j <= N_; ++j) {
+      const int r0 = m_ * (j - 1);
+      if (m_ == 3) {
+        const Vec3 w = S_[j] * u_.segment<3>(r0);
+        u_.segment<3>(r0) = w;
+      } else {
+        u_.segment(r0, 5) *= body_.EI / length_[j];
+        u_[r0 + 3] *= S_[j](0, 0);
+      }
+    }
+    K_.noalias() -= ea_over_l_[static_cast<std::size_t>(i)] * u_ * dd_.row(i);
+  }
+  problem_->set_driven_tensions(driven_, driven_T_);
+  last_valid_ = false;  // the problem's residual state is that of the differences
+  return K_.allFinite();
 }
 
 int LumpedDynamics::root_fn(sunrealtype t, N_Vector y, sunrealtype* g, void* user) {
@@ -339,6 +397,7 @@ int LumpedDynamics::jac_fn(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix J, 
       for (int i = 0; i < 3; ++i) s.K_(r0 + 3, r0 + i) += c * s.r_[r0 + 3] + kd;
     }
   }
+  if (s.displacement_ && !s.tendon_stiffness(q)) return 1;
   NewtonMatrix& nm = *static_cast<NewtonMatrix*>(J->content);
   nm.M = s.M_;
   nm.K = s.K_;

@@ -171,6 +171,10 @@ class LumpedDynamics final : public DynamicsIntegrator {
   // T_k(q, t) of the driven tendons at the input_ of input_at(t), set on the problem (with the
   // backbone's compression under them: a fixed point, iterated); gap_ = delta - d. False if not finite.
   bool driven_tensions(const double* q);
+  // The taut tendons' stiffness in the Newton matrix's K_ (jac_fn, after K_ and r_ at q).
+  bool tendon_stiffness(const double* q);
+  Eigen::VectorXd pull_base_, pert_T_, r_pert_, u_;
+  Eigen::MatrixXd dd_;  // dd_k/dq, driven tendons x n
   bool displacement_ = false;
   std::vector<int> driven_;          // global tendon indices
   std::vector<double> ea_over_l_;    // EA_k / L_k (N/m), L_k the statics' free length
