@@ -553,6 +553,11 @@ void LumpedDynamics::initialize(const Solution& at_rest, const ModelInput& input
     last_valid_ = false;
     check(CVodeRootInit(cvode_, static_cast<int>(driven_.size()), &root_fn), "CVodeRootInit");
     check(CVodeSetNoInactiveRootWarn(cvode_), "CVodeSetNoInactiveRootWarn");
+    // The taut tendons add stiffness that the backbone's Kelvin-Voigt damping barely damps: at the
+    // default tolerance BDF orders 3-5 (not A-stable) kept such a mode ringing (CCsub, the motor
+    // example: tip +-1.3 mm at 2 s); stability limit detection lowers the order there (settled, 292
+    // CVODE steps instead of 351).
+    check(CVodeSetStabLimDet(cvode_, SUNTRUE), "CVodeSetStabLimDet");
   }
   cvode_ready_ = true;
 }
