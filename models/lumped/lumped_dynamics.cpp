@@ -592,14 +592,18 @@ SimulationStep LumpedDynamics::advance(double t_next, const Timeline& timeline) 
       break;
     }
     t_ = reached;
-    if (flag == CV_ROOT_RETURN && t_ < stop) {
-      // A driven tendon went slack or taut: restart at the kink of its tension.
+    if (flag == CV_ROOT_RETURN) {
+      // A driven tendon went slack or taut: its mode flips, and CVODE restarts at the kink of
+      // its tension (below, if the root is the stop itself).
       step.tendon_events.push_back(t_);
       check(CVodeGetRootInfo(cvode_, root_dir_.data()), "CVodeGetRootInfo");
       for (std::size_t i = 0; i < root_dir_.size(); ++i)
         if (root_dir_[i] != 0) taut_[i] = !taut_[i];
-      check(CVodeReInit(cvode_, t_, y_), "CVodeReInit");
-      continue;
+      if (t_ < stop) {
+        check(CVodeReInit(cvode_, t_, y_), "CVodeReInit");
+        continue;
+      }
+      if (!to_entry) check(CVodeReInit(cvode_, t_, y_), "CVodeReInit");
     }
     if (t_ >= stop) {
       t_ = stop;
