@@ -177,6 +177,23 @@ bool LumpedDynamics::tendon_stiffness(const double* q) {
   return K_.allFinite();
 }
 
+double LumpedDynamics::tendon_energy() const {
+  // Displacement (and mixed) input: the driven tendons' elastic energy (EA_k / 2 L_k) max(0,
+  // delta_k - d_k)^2, and the given tensions' potential T_k times the path length as for tension
+  // input (frames_b_ and gap_ of the current q).
+  if (!displacement_) return 0.0;
+  double U = 0.0;
+  for (std::size_t i = 0; i < driven_.size(); ++i) {
+    const double g = std::max(0.0, gap_[static_cast<Eigen::Index>(i)]);
+    U += 0.5 * ea_over_l_[i] * g * g;
+  }
+  const TendonRouting& routing = body_.statics.routing();
+  for (std::size_t k = 0; k < input_.actuation.values.size(); ++k)
+    if (input_.actuation.kind_of(k) == Actuation::Kind::Tensions && input_.actuation.values[k] != 0.0)
+      U += input_.actuation.values[k] * tendon::chord_length(frames_b_.data(), routing, static_cast<int>(k), 0);
+  return U;
+}
+
 int LumpedDynamics::root_fn(sunrealtype t, N_Vector y, sunrealtype* g, void* user) {
   auto& s = *static_cast<LumpedDynamics*>(user);
   s.last_valid_ = false;  // the problem's tensions are set at this y now
@@ -626,7 +643,7 @@ SimulationStep LumpedDynamics::advance(double t_next, const Timeline& timeline) 
   driven_tensions(q_.data());
   twists(q_.data(), T_);
   step.kinetic_energy = kinetic_energy(v_.data());
-  step.potential_energy = potential_energy(q_.data());
+  step.potential_energy = potential_energy(q_.data()) + tendon_energy();
   step.tip = frames_b_[N_];
   if (displacement_) {
     // The step's tensions: the driven ones computed (exactly 0 when slack), the rest as given;
@@ -647,7 +664,7 @@ double LumpedDynamics::potential_energy() {
   input_at(t_);
   driven_tensions(q_.data());
   twists(q_.data(), T_);
-  return potential_energy(q_.data());
+  return potential_energy(q_.data()) + tendon_energy();
 }
 
 void LumpedDynamics::choose_bending_planes(const Timeline& timeline) {

@@ -173,6 +173,8 @@ class LumpedDynamics final : public DynamicsIntegrator {
   bool driven_tensions(const double* q);
   // The taut tendons' stiffness in the Newton matrix's K_ (jac_fn, after K_ and r_ at q).
   bool tendon_stiffness(const double* q);
+  // The tendons' part of the potential energy under displacement input (lumped_dynamics.cpp).
+  double tendon_energy() const;
   Eigen::VectorXd pull_base_, pert_T_, r_pert_, u_;
   Eigen::MatrixXd dd_;  // dd_k/dq, driven tendons x n
   bool displacement_ = false;
