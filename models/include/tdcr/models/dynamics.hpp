@@ -47,7 +47,8 @@ struct SimulationStep {
   /// (displacement input; exactly 0 for a slack tendon).
   std::vector<double> tensions;
   /// m, per tendon: the pulls of the tendon paths (Solution::tendon_displacements; the Cosserat
-  /// models; empty where the integrator does not compute them).
+  /// models, and CCsub and PRB under displacement input with the elastic stretch added as the
+  /// statics report it; empty where the integrator does not compute them).
   std::vector<double> tendon_displacements;
   /// s: the times within the step at which a displacement-driven elastic tendon went slack or
   /// taut (the lumped dynamics stop and restart CVODE there; empty otherwise).
