@@ -16,3 +16,9 @@ add_test(NAME example_paper_robot_dynamics_simulate
 add_test(NAME example_dynamics_displacement_simulate
          COMMAND tdcr_cli simulate ${PROJECT_SOURCE_DIR}/examples/dynamics_displacement.json --duration 2
                  -o ${CMAKE_CURRENT_BINARY_DIR}/dynamics_displacement.npz)
+# Motors on elastic tendons in CCsub's and PRB's dynamics (docs/dynamics.md, "Displacement input").
+foreach(model ccsub prb)
+  add_test(NAME example_dynamics_motors_elastic_simulate_${model}
+           COMMAND tdcr_cli simulate ${PROJECT_SOURCE_DIR}/examples/dynamics_motors_elastic.json --duration 2
+                   --model ${model} -o ${CMAKE_CURRENT_BINARY_DIR}/dynamics_motors_elastic_${model}.csv)
+endforeach()

@@ -107,8 +107,9 @@ TEST_F(CliSimulate, FailedStepExitsOneWithTimeResidualIterations) {
   EXPECT_NE(csv.find("integration_failed"), std::string::npos) << csv;
 }
 
-// Displacement input is refused per model: CCsub's dynamics take tensions only so far (VC's
-// take displacements: the same timeline runs there).
+// Displacement input: CCsub's dynamics take motors on elastic tendons (their tension is then a
+// function of the shape) and refuse an inextensible driven tendon, naming its stiffness field;
+// VC's take both (the same inextensible timeline runs there).
 TEST_F(CliSimulate, DisplacementInputOnlyWhereTheModelTakesIt) {
   const std::string text =
       R"({"model": "ccsub", "robot": {"backbone": {"density": 6450}, "segments": [{"length": 0.05, "disks": 3,
@@ -118,16 +119,29 @@ TEST_F(CliSimulate, DisplacementInputOnlyWhereTheModelTakesIt) {
   const std::string path = scene(text);
   auto r = run(path + " --duration 0.04 --dt 0.01");
   EXPECT_EQ(r.status, 2) << r.err;
-  EXPECT_NE(r.err.find("timeline[0].actuation"), std::string::npos) << r.err;
-  r = run(path + " --duration 0.04 --dt 0.01 --model vc");
-  ASSERT_EQ(r.status, 0) << r.err;
-  const auto rows = lines(r.out);
-  ASSERT_EQ(rows.size(), 6u);
+  EXPECT_NE(r.err.find("robot.segments[0].tendons[0].stiffness"), std::string::npos) << r.err;
   // The tendons' solved tensions: tendon 1 pulled taut; tendon 2, its antagonist, let out by
   // 1 mm, more than the bend lengthens its path (about 0.5 mm): slack, exactly 0.
-  EXPECT_EQ(rows[5].substr(rows[5].size() - 2), ",0") << rows[5];
-  const double T1 = std::stod(rows[5].substr(rows[5].rfind(',', rows[5].size() - 3) + 1));
-  EXPECT_GT(T1, 0.1) << rows[5];
+  const auto check_tensions = [](const std::string& out) {
+    const auto rows = lines(out);
+    ASSERT_EQ(rows.size(), 6u);
+    EXPECT_EQ(rows[5].substr(rows[5].size() - 2), ",0") << rows[5];
+    const double T1 = std::stod(rows[5].substr(rows[5].rfind(',', rows[5].size() - 3) + 1));
+    EXPECT_GT(T1, 0.1) << rows[5];
+  };
+  r = run(path + " --duration 0.04 --dt 0.01 --model vc");
+  ASSERT_EQ(r.status, 0) << r.err;
+  check_tensions(r.out);
+  // Elastic tendons (EA = 400 N): CCsub's dynamics run the same timeline.
+  std::string elastic = text;
+  for (const std::string hole : {"{\"x\": 0, \"y\": 0.008}", "{\"x\": 0, \"y\": -0.008}"}) {
+    const std::size_t at = elastic.find(hole);
+    ASSERT_NE(at, std::string::npos);
+    elastic.replace(at, hole.size(), hole.substr(0, hole.size() - 1) + ", \"stiffness\": 400}");
+  }
+  r = run(scene(elastic) + " --duration 0.04 --dt 0.01");
+  ASSERT_EQ(r.status, 0) << r.err;
+  check_tensions(r.out);
 }
 
 // The progress bar: on a terminal (a pseudo-terminal by `script`), the time, the steps and the

@@ -51,6 +51,7 @@ SimulationResult simulate(const StaticModel& model, const DynamicsSettings& sett
   settings.validate();
   timeline.validate(model.robot());
   std::unique_ptr<DynamicsIntegrator> integrator = make_dynamics_integrator(model, settings, options.dt, solver);
+  if (integrator->takes_displacement_input()) integrator->check_displacement_input(timeline);
   if (!integrator->takes_displacement_input())
     for (std::size_t i = 0; i < timeline.entries.size(); ++i) {
       const Actuation& a = timeline.entries[i].input.actuation;

@@ -10,8 +10,202 @@
 #include "physics/tendon_path.hpp"
 #include "tdcr/core/error.hpp"
 #include "tdcr/models/static_model.hpp"
+#include "tdcr/models/tendon_physics.hpp"
 
 namespace tdcr::detail {
+
+namespace {
+// Displacement input: the fixed point of the driven tensions and the backbone's compression
+// under them (effects.shear_extension) stops at this change (relative to EA_k / L_k times the
+// robot's length, i.e. a pull change of 1e-14 L) or after kMaxTensionIterations.
+constexpr double kTensionFixedPointTol = 1e-14;
+constexpr int kMaxTensionIterations = 100;
+// Slack events: the band (over the robot's length) by which a tendon's gap delta - d must pass
+// zero before the root function fires again. At exactly zero a restarted CVODE would find the
+// root it just stopped at (CV_CLOSE_ROOTS), and so would a tendon that stays at its slack limit
+// (driven at 0 on the straight robot): each tendon is in one mode, taut or slack, and its root
+// function is gap + band (taut) or gap - band (slack). The kink is straddled by at most 1e-12 L
+// of pull: EA / L_free * 1e-12 L of tension (1e-9 N for EA = 400 N on the paper robot).
+constexpr double kEventBandOverLength = 1e-12;
+
+// Throws InputError naming `robot.segments[i].tendons[k].stiffness` for a tendon that `a` drives
+// by displacement and that has no stiffness (inextensible).
+void require_elastic_driven(const Robot& robot, const Actuation& a) {
+  if (a.kind == Actuation::Kind::Tensions && !a.mixed()) return;
+  std::size_t g = 0;
+  for (std::size_t i = 0; i < robot.segments.size(); ++i)
+    for (std::size_t k = 0; k < robot.segments[i].tendons.size(); ++k, ++g) {
+      if (g >= a.values.size() || a.kind_of(g) != Actuation::Kind::Displacements) continue;
+      if (!robot.segments[i].tendons[k].stiffness)
+        throw InputError("robot.segments[" + std::to_string(i) + "].tendons[" + std::to_string(k) + "].stiffness",
+                         "absent (inextensible)",
+                         "CCsub's and PRB's dynamics take a displacement-driven tendon only if it is elastic: its "
+                         "tension is then EA / L_free times its stretch, a function of the shape; an inextensible one "
+                         "is a constraint their equations of motion do not have (give its stiffness EA, or use VC "
+                         "or VCref, which take inextensible tendons)");
+    }
+}
+}  // namespace
+
+void LumpedDynamics::check_displacement_input(const Timeline& timeline) const {
+  for (const TimelineEntry& e : timeline.entries) require_elastic_driven(model_.robot(), e.input.actuation);
+}
+
+void LumpedDynamics::set_up_displacement_input(const ModelInput& input) {
+  const Actuation& a = input.actuation;
+  displacement_ = a.kind == Actuation::Kind::Displacements || a.mixed();
+  driven_.clear();
+  ea_over_l_.clear();
+  if (!displacement_) return;
+  require_elastic_driven(model_.robot(), a);
+  const TendonRouting& routing = body_.statics.routing();
+  const Robot& robot = model_.robot();
+  std::vector<double> ea;
+  for (const Segment& seg : robot.segments)
+    for (const TendonSpec& spec : seg.tendons) ea.push_back(spec.stiffness ? *spec.stiffness : 0.0);
+  const double EI = robot.backbone.effective_stiffness().EI;
+  placeholder_.assign(a.values.size(), 0.0);
+  for (std::size_t k = 0; k < a.values.size(); ++k) {
+    if (a.kind_of(k) != Actuation::Kind::Displacements) continue;
+    const RoutedTendon& t = routing.tendons[k];
+    // L_k as the statics' DisplacementProblem and tendon::add_elastic_stretch take it: the free
+    // length from the base to the end disk on the straight robot.
+    const double L_free = physics::rest_length(t, 0.0, routing.disk_s[static_cast<std::size_t>(t.end_disk)]);
+    driven_.push_back(static_cast<int>(k));
+    ea_over_l_.push_back(ea[k] / L_free);
+    // Bound with a positive tension so that the model lets the tendon act (its tension is then
+    // set per right-hand side): the statics' placeholder, EI / (r L_free).
+    placeholder_[k] = EI / (std::max(t.r.norm(), 1e-12) * L_free);
+  }
+  driven_T_.setZero(static_cast<Eigen::Index>(driven_.size()));
+  gap_.setZero(static_cast<Eigen::Index>(driven_.size()));
+  root_dir_.assign(driven_.size(), 0);
+  taut_.assign(driven_.size(), 0);
+  pull_frames_.resize(N_ + 1);
+  pull_base_.setZero(static_cast<Eigen::Index>(driven_.size()));
+  pert_T_.setZero(static_cast<Eigen::Index>(driven_.size()));
+  dd_.setZero(static_cast<Eigen::Index>(driven_.size()), n_);
+  r_pert_.setZero(n_);
+  u_.setZero(n_);
+  tension_form_ = input;
+  tension_form_.actuation.kind = Actuation::Kind::Tensions;
+  tension_form_.actuation.kinds.clear();
+}
+
+bool LumpedDynamics::driven_tensions(const double* q) {
+  if (!displacement_) return true;
+  const TendonRouting& routing = body_.statics.routing();
+  const Actuation::DisplacementConvention conv = input_.actuation.convention;
+  const int nd = static_cast<int>(driven_.size());
+  const double L = body_.length;
+  double omega = 1.0, last_change = INFINITY;
+  for (int it = 0; it < kMaxTensionIterations; ++it) {
+    // The backbone's compression under the current tensions, then the pulls of the paths at q.
+    problem_->set_driven_tensions(driven_, driven_T_);
+    const double* stretch = problem_->stretch();
+    body_.compute_frames(q, N_, stretch, pull_frames_.data());
+    double change = 0.0;
+    for (int i = 0; i < nd; ++i) {
+      const int k = driven_[static_cast<std::size_t>(i)];
+      const double d = tendon::chord_displacement(pull_frames_.data(), routing, k, conv);
+      gap_[i] = input_.actuation.values[static_cast<std::size_t>(k)] - d;
+      const double T = ea_over_l_[static_cast<std::size_t>(i)] * std::max(0.0, gap_[i]);
+      if (!std::isfinite(T)) return false;
+      change = std::max(change, std::abs(T - driven_T_[i]) / (ea_over_l_[static_cast<std::size_t>(i)] * L));
+      driven_T_[i] += omega * (T - driven_T_[i]);
+    }
+    // Inextensible backbone: the pulls do not depend on the tensions, one pass is exact.
+    if (!stretch || change <= kTensionFixedPointTol) break;
+    // A stiff tendon on a compliant backbone overshoots (the compression lowers its pull): relax.
+    if (change > 0.5 * last_change) omega *= 0.5;
+    last_change = change;
+  }
+  problem_->set_driven_tensions(driven_, driven_T_);
+  return true;
+}
+
+bool LumpedDynamics::tendon_stiffness(const double* q) {
+  // K += S dr/dT_k (dT_k/dq)^T for every taut driven tendon, dT_k/dq = -(EA_k / L_k) dd_k/dq:
+  // dr/dT_k by a forward difference of the residual in T_k (one residual per taut tendon),
+  // dd_k/dq by forward differences of the pulls (frames only, n of them). The Newton matrix of
+  // a motor-driven robot then has the tendons' stiffness, which dominates the backbone's
+  // bending for a stiff tendon (EA = 400 N on the paper robot: about 6 times).
+  const TendonRouting& routing = body_.statics.routing();
+  const Actuation::DisplacementConvention conv = input_.actuation.convention;
+  const int nd = static_cast<int>(driven_.size());
+  Eigen::Map<const Eigen::VectorXd> x(q, n_);
+  const double* stretch = problem_->stretch();
+  bool any = false;
+  for (int i = 0; i < nd; ++i) any = any || driven_T_[i] > 0.0;
+  if (!any) return true;
+  // The pulls' derivatives (the frames at the current stretch; its own change with q is left out).
+  qs_ = x;
+  for (int i = 0; i < nd; ++i) pull_base_[i] = tendon::chord_displacement(frames_b_.data(), routing, driven_[static_cast<std::size_t>(i)], conv);
+  constexpr double h = 1e-7;
+  for (int c = 0; c < n_; ++c) {
+    qs_[c] = q[c] + h;
+    body_.compute_frames(qs_.data(), N_, stretch, pull_frames_.data());
+    for (int i = 0; i < nd; ++i)
+      dd_(i, c) = (tendon::chord_displacement(pull_frames_.data(), routing, driven_[static_cast<std::size_t>(i)], conv) -
+                   pull_base_[i]) / h;
+    qs_[c] = q[c];
+  }
+  for (int i = 0; i < nd; ++i) {
+    const double T = driven_T_[i];
+    if (!(T > 0.0)) continue;
+    const double hT = 1e-6 * std::max(1.0, T);
+    pert_T_ = driven_T_;
+    pert_T_[i] = T + hT;
+    problem_->set_driven_tensions(driven_, pert_T_);
+    if (!problem_->residual(x, r_pert_)) return false;
+    u_ = (r_pert_ - r_) / hT;  // dr/dT_i (r_: the residual at q, from the Jacobian's evaluation)
+    // Map as the rows of K (S dr for CCsub; c dr, the phi row times a, for PRB).
+    for (int j = 1; j <= N_; ++j) {
+      const int r0 = m_ * (j - 1);
+      if (m_ == 3) {
+        const Vec3 w = S_[j] * u_.segment<3>(r0);
+        u_.segment<3>(r0) = w;
+      } else {
+        u_.segment(r0, 5) *= body_.EI / length_[j];
+        u_[r0 + 3] *= S_[j](0, 0);
+      }
+    }
+    K_.noalias() -= ea_over_l_[static_cast<std::size_t>(i)] * u_ * dd_.row(i);
+  }
+  problem_->set_driven_tensions(driven_, driven_T_);
+  last_valid_ = false;  // the problem's residual state is that of the differences
+  return K_.allFinite();
+}
+
+double LumpedDynamics::tendon_energy() const {
+  // Displacement (and mixed) input: the driven tendons' elastic energy (EA_k / 2 L_k) max(0,
+  // delta_k - d_k)^2, and the given tensions' potential T_k times the path length as for tension
+  // input (frames_b_ and gap_ of the current q).
+  if (!displacement_) return 0.0;
+  double U = 0.0;
+  for (std::size_t i = 0; i < driven_.size(); ++i) {
+    const double g = std::max(0.0, gap_[static_cast<Eigen::Index>(i)]);
+    U += 0.5 * ea_over_l_[i] * g * g;
+  }
+  const TendonRouting& routing = body_.statics.routing();
+  for (std::size_t k = 0; k < input_.actuation.values.size(); ++k)
+    if (input_.actuation.kind_of(k) == Actuation::Kind::Tensions && input_.actuation.values[k] != 0.0)
+      U += input_.actuation.values[k] * tendon::chord_length(frames_b_.data(), routing, static_cast<int>(k), 0);
+  return U;
+}
+
+int LumpedDynamics::root_fn(sunrealtype t, N_Vector y, sunrealtype* g, void* user) {
+  auto& s = *static_cast<LumpedDynamics*>(user);
+  s.last_valid_ = false;  // the problem's tensions are set at this y now
+  s.input_at(t);
+  if (!s.driven_tensions(N_VGetArrayPointer(y))) return 1;
+  // g_k = delta_k(t) - d_k(q): through zero where tendon k goes slack or taut (the kink of T_k),
+  // shifted by the band away from the tendon's current mode.
+  const double band = kEventBandOverLength * s.body_.length;
+  for (Eigen::Index i = 0; i < s.gap_.size(); ++i)
+    g[i] = s.gap_[i] + (s.taut_[static_cast<std::size_t>(i)] ? band : -band);
+  return 0;
+}
 
 
 LumpedDynamics::LumpedDynamics(const LumpedModel& model, const LumpedBody& body, const DynamicsSettings& settings,
@@ -139,14 +333,23 @@ void LumpedDynamics::free_cvode() {
 
 void LumpedDynamics::input_at(double t) {
   if (timeline_) timeline_->at(t, input_);
-  if (bound_valid_ && input_.actuation.values == bound_.actuation.values && input_.loads.tip_force == bound_.loads.tip_force &&
-      input_.loads.tip_moment == bound_.loads.tip_moment && input_.loads.gravity == bound_.loads.gravity)
+  if (displacement_) {
+    // The problem is bound with the tension form: the driven tendons' placeholders, the given
+    // tensions and the loads (a displacement ramp alone binds nothing anew).
+    tension_form_.loads = input_.loads;
+    for (std::size_t k = 0; k < input_.actuation.values.size(); ++k)
+      tension_form_.actuation.values[k] =
+          input_.actuation.kind_of(k) == Actuation::Kind::Displacements ? placeholder_[k] : input_.actuation.values[k];
+  }
+  const ModelInput& in = displacement_ ? tension_form_ : input_;
+  if (bound_valid_ && in.actuation.values == bound_.actuation.values && in.loads.tip_force == bound_.loads.tip_force &&
+      in.loads.tip_moment == bound_.loads.tip_moment && in.loads.gravity == bound_.loads.gravity)
     return;
   // A new input (every right-hand side along a ramp): binding resolves its loads in place, the
   // buffers keep their sizes (tests/test_dynamics_lumped.cpp, RampAllocatesNothing).
-  problem_->bind_all(input_);
+  problem_->bind_all(in);
   problem_->set_parameter(1.0);
-  bound_ = input_;
+  bound_ = in;
   bound_valid_ = true;
 }
 
@@ -159,6 +362,7 @@ int LumpedDynamics::rhs_fn(sunrealtype t, N_Vector y, N_Vector yd, void* user) {
   const double* v = yv + n;
   s.last_valid_ = false;
   s.input_at(t);
+  if (!s.driven_tensions(q)) return 1;  // displacement input: T_k(q, t) of the elastic tendons
   s.twists(q, s.T_);
   if (!s.generalized_force(q)) return 1;  // recoverable: CVODE retries a smaller step
   s.body_inertias();  // no M: the accelerations by the articulated-body algorithm
@@ -210,6 +414,7 @@ int LumpedDynamics::jac_fn(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix J, 
       for (int i = 0; i < 3; ++i) s.K_(r0 + 3, r0 + i) += c * s.r_[r0 + 3] + kd;
     }
   }
+  if (s.displacement_ && !s.tendon_stiffness(q)) return 1;
   NewtonMatrix& nm = *static_cast<NewtonMatrix*>(J->content);
   nm.M = s.M_;
   nm.K = s.K_;
@@ -317,7 +522,13 @@ void LumpedDynamics::initialize(const Solution& at_rest, const ModelInput& input
   input_ = input;
   bound_valid_ = false;
   last_valid_ = false;
+  set_up_displacement_input(input);
   input_at(0.0);
+  // The rest shape's tensions as the fixed point's start.
+  if (displacement_)
+    for (std::size_t i = 0; i < driven_.size(); ++i)
+      if (static_cast<std::size_t>(driven_[i]) < at_rest.tensions.size())
+        driven_T_[static_cast<Eigen::Index>(i)] = at_rest.tensions[static_cast<std::size_t>(driven_[i])];
   Eigen::VectorXd y0(2 * n_);
   y0.head(n_) = at_rest.unknowns;
   y0.tail(n_).setZero();
@@ -351,11 +562,26 @@ void LumpedDynamics::initialize(const Solution& at_rest, const ModelInput& input
   if (!A_mat_ || !ls_) throw std::runtime_error("lumped dynamics: dense matrix or solver creation failed");
   check(CVodeSetLinearSolver(cvode_, ls_, A_mat_), "CVodeSetLinearSolver");
   if (problem_->has_jacobian()) check(CVodeSetJacFn(cvode_, &jac_fn), "CVodeSetJacFn");
+  // Slack events: CVODE's root finding on g_k = delta_k(t) - d_k(q) stops the integration at the
+  // kink of T_k (advance() restarts it there), so that no step straddles a tendon going slack or taut.
+  if (displacement_) {
+    driven_tensions(q_.data());
+    for (std::size_t i = 0; i < driven_.size(); ++i) taut_[i] = gap_[static_cast<Eigen::Index>(i)] > 0.0;
+    last_valid_ = false;
+    check(CVodeRootInit(cvode_, static_cast<int>(driven_.size()), &root_fn), "CVodeRootInit");
+    check(CVodeSetNoInactiveRootWarn(cvode_), "CVodeSetNoInactiveRootWarn");
+    // The taut tendons add stiffness that the backbone's Kelvin-Voigt damping barely damps: at the
+    // default tolerance BDF orders 3-5 (not A-stable) kept such a mode ringing (CCsub, the motor
+    // example: tip +-1.3 mm at 2 s); stability limit detection lowers the order there (settled, 292
+    // CVODE steps instead of 351).
+    check(CVodeSetStabLimDet(cvode_, SUNTRUE), "CVodeSetStabLimDet");
+  }
   cvode_ready_ = true;
 }
 
 SimulationStep LumpedDynamics::advance(double t_next, const Timeline& timeline) {
   if (!cvode_ready_) throw std::logic_error("lumped dynamics: advance() before initialize()");
+  if (timeline_ != &timeline) check_displacement_input(timeline);
   timeline_ = &timeline;
   if (!chart_chosen_) choose_bending_planes(timeline);
   SimulationStep step;
@@ -383,6 +609,19 @@ SimulationStep LumpedDynamics::advance(double t_next, const Timeline& timeline) 
       break;
     }
     t_ = reached;
+    if (flag == CV_ROOT_RETURN) {
+      // A driven tendon went slack or taut: its mode flips, and CVODE restarts at the kink of
+      // its tension (below, if the root is the stop itself).
+      step.tendon_events.push_back(t_);
+      check(CVodeGetRootInfo(cvode_, root_dir_.data()), "CVodeGetRootInfo");
+      for (std::size_t i = 0; i < root_dir_.size(); ++i)
+        if (root_dir_[i] != 0) taut_[i] = !taut_[i];
+      if (t_ < stop) {
+        check(CVodeReInit(cvode_, t_, y_), "CVodeReInit");
+        continue;
+      }
+      if (!to_entry) check(CVodeReInit(cvode_, t_, y_), "CVodeReInit");
+    }
     if (t_ >= stop) {
       t_ = stop;
       if (to_entry) check(CVodeReInit(cvode_, t_, y_), "CVodeReInit");
@@ -401,17 +640,31 @@ SimulationStep LumpedDynamics::advance(double t_next, const Timeline& timeline) 
   // right-hand side).
   last_valid_ = false;
   input_at(step.t);
+  driven_tensions(q_.data());
   twists(q_.data(), T_);
   step.kinetic_energy = kinetic_energy(v_.data());
-  step.potential_energy = potential_energy(q_.data());
+  step.potential_energy = potential_energy(q_.data()) + tendon_energy();
   step.tip = frames_b_[N_];
+  if (displacement_) {
+    // The step's tensions: the driven ones computed (exactly 0 when slack), the rest as given;
+    // the tendon displacements as the statics report them (the path's pull plus the stretch).
+    const std::size_t m = input_.actuation.values.size();
+    step.tensions.assign(m, 0.0);
+    for (std::size_t k = 0; k < m; ++k)
+      if (input_.actuation.kind_of(k) == Actuation::Kind::Tensions) step.tensions[k] = input_.actuation.values[k];
+    for (std::size_t i = 0; i < driven_.size(); ++i)
+      step.tensions[static_cast<std::size_t>(driven_[i])] = driven_T_[static_cast<Eigen::Index>(i)];
+    step.tendon_displacements = tendon::chord_displacements(frames_b_, body_.statics.routing(), input_.actuation.convention);
+    tendon::add_elastic_stretch(model_.robot(), body_.statics.routing(), step.tensions, step.tendon_displacements);
+  }
   return step;
 }
 
 double LumpedDynamics::potential_energy() {
   input_at(t_);
+  driven_tensions(q_.data());
   twists(q_.data(), T_);
-  return potential_energy(q_.data());
+  return potential_energy(q_.data()) + tendon_energy();
 }
 
 void LumpedDynamics::choose_bending_planes(const Timeline& timeline) {

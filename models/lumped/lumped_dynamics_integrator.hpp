@@ -74,6 +74,9 @@ class LumpedDynamics final : public DynamicsIntegrator {
   SimulationStep advance(double t_next, const Timeline& timeline) override;
   Solution shape() const override;
   double potential_energy() override;
+  // Displacement input: every displacement-driven tendon must be elastic (lumped_dynamics.cpp).
+  bool takes_displacement_input() const override { return true; }
+  void check_displacement_input(const Timeline& timeline) const override;
 
   // (K, M) about x at rest under input: the natural frequencies (Hz).
   Eigen::VectorXd frequencies(const Eigen::VectorXd& x, const ModelInput& input);
@@ -84,6 +87,7 @@ class LumpedDynamics final : public DynamicsIntegrator {
   static void on_error(int, const char*, const char*, char* msg, void* user) {
     static_cast<LumpedDynamics*>(user)->cvode_message_ = msg;
   }
+  static int root_fn(sunrealtype t, N_Vector y, sunrealtype* g, void* user);
   void free_cvode();
   void check(int flag, const char* what) const {
     if (flag < 0) throw std::runtime_error(std::string("lumped dynamics: ") + what + " failed (" + std::to_string(flag) + ")");
@@ -157,6 +161,30 @@ class LumpedDynamics final : public DynamicsIntegrator {
   const Timeline* timeline_ = nullptr;
   ModelInput input_, bound_;
   bool bound_valid_ = false;
+
+  // Displacement input (elastic tendons; docs/dynamics.md, "Displacement input"): the tendons
+  // driven by displacement pull with T_k = (EA_k / L_k) max(0, delta_k(t) - d_k(q)), a function
+  // of the state; the problem is bound with them acting (tension_form_: placeholders) and their
+  // tensions set per right-hand side. Sized once (set_up_displacement_input()).
+  void set_up_displacement_input(const ModelInput& input);
+  // T_k(q, t) of the driven tendons at the input_ of input_at(t), set on the problem (with the
+  // backbone's compression under them: a fixed point, iterated); gap_ = delta - d. False if not finite.
+  bool driven_tensions(const double* q);
+  // The taut tendons' stiffness in the Newton matrix's K_ (jac_fn, after K_ and r_ at q).
+  bool tendon_stiffness(const double* q);
+  // The tendons' part of the potential energy under displacement input (lumped_dynamics.cpp).
+  double tendon_energy() const;
+  Eigen::VectorXd pull_base_, pert_T_, r_pert_, u_;
+  Eigen::MatrixXd dd_;  // dd_k/dq, driven tendons x n
+  bool displacement_ = false;
+  std::vector<int> driven_;          // global tendon indices
+  std::vector<double> ea_over_l_;    // EA_k / L_k (N/m), L_k the statics' free length
+  Eigen::VectorXd driven_T_, gap_;
+  std::vector<Frame> pull_frames_;
+  ModelInput tension_form_;
+  std::vector<double> placeholder_;
+  std::vector<int> root_dir_;        // CVodeGetRootInfo's
+  std::vector<char> taut_;           // per driven tendon: its mode for the root function (band)
 
   // Bodies: disk k = 1..N with its mass and rotational inertia (disk frame, diagonal).
   std::vector<double> mass_, air_length_;

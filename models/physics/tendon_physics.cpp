@@ -118,18 +118,22 @@ double rest_chord_length(const TendonRouting& routing, int k, int first) {
 
 }  // namespace
 
+double chord_displacement(const Frame* frames, const TendonRouting& routing, int k,
+                          Actuation::DisplacementConvention convention) {
+  const RoutedTendon& t = routing.tendons[static_cast<std::size_t>(k)];
+  int first = 0;
+  if (convention == Actuation::DisplacementConvention::PerSegment && t.segment > 0)
+    first = routing.segment_end_disk[t.segment - 1];
+  const double straight = t.straight() ? routing.disk_s[t.end_disk] - routing.disk_s[first]
+                                       : rest_chord_length(routing, k, first);
+  return straight - chord_length(frames, routing, k, first);
+}
+
 std::vector<double> chord_displacements(const std::vector<Frame>& frames, const TendonRouting& routing,
                                         Actuation::DisplacementConvention convention) {
   std::vector<double> d(routing.tendons.size(), 0.0);
-  for (std::size_t k = 0; k < routing.tendons.size(); ++k) {
-    const RoutedTendon& t = routing.tendons[k];
-    int first = 0;
-    if (convention == Actuation::DisplacementConvention::PerSegment && t.segment > 0)
-      first = routing.segment_end_disk[t.segment - 1];
-    const double straight = t.straight() ? routing.disk_s[t.end_disk] - routing.disk_s[first]
-                                         : rest_chord_length(routing, static_cast<int>(k), first);
-    d[k] = straight - chord_length(frames.data(), routing, static_cast<int>(k), first);
-  }
+  for (std::size_t k = 0; k < routing.tendons.size(); ++k)
+    d[k] = chord_displacement(frames.data(), routing, static_cast<int>(k), convention);
   return d;
 }
 

@@ -102,6 +102,7 @@ def test_simulate_displacement_input_reports_tensions():
     # measured 7.7e-11 m, 7e-12 N apart.
     assert np.linalg.norm(r["tip"][-1] - np.asarray(sol.tip_position)) < 1e-8
     assert abs(r["tensions"][-1, 0] - sol.tensions[0]) < 1e-8 * sol.tensions[0]
-    # CCsub's dynamics refuse it, naming the entry.
-    with pytest.raises(tdcr.InputError, match=r"timeline\[0\]\.actuation"):
+    # CCsub's dynamics refuse its inextensible driven tendon, naming the tendon's stiffness field
+    # (they take elastic ones: docs/dynamics.md, "Displacement input").
+    with pytest.raises(tdcr.InputError, match=r"robot\.segments\[0\]\.tendons\[0\]\.stiffness"):
         tdcr.simulate(tdcr.parse_scene(json.dumps(dict(scene, model="ccsub"))), 0.1)

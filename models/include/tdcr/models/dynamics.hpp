@@ -47,8 +47,12 @@ struct SimulationStep {
   /// (displacement input; exactly 0 for a slack tendon).
   std::vector<double> tensions;
   /// m, per tendon: the pulls of the tendon paths (Solution::tendon_displacements; the Cosserat
-  /// models; empty where the integrator does not compute them).
+  /// models, and CCsub and PRB under displacement input with the elastic stretch added as the
+  /// statics report it; empty where the integrator does not compute them).
   std::vector<double> tendon_displacements;
+  /// s: the times within the step at which a displacement-driven elastic tendon went slack or
+  /// taut (the lumped dynamics stop and restart CVODE there; empty otherwise).
+  std::vector<double> tendon_events;
 };
 
 /// @brief A model's time integrator: made for one model, one time step, one settings.
@@ -69,6 +73,11 @@ class DynamicsIntegrator {
   /// unknowns of every step). simulate() refuses such a timeline otherwise, naming
   /// `timeline[i].actuation`.
   virtual bool takes_displacement_input() const { return false; }
+  /// @brief Throws InputError naming the field if this integrator cannot take `timeline`'s
+  /// displacement-driven tendons (the lumped dynamics: an inextensible one, naming
+  /// `robot.segments[i].tendons[k].stiffness`). simulate() calls it where
+  /// takes_displacement_input() is true.
+  virtual void check_displacement_input(const Timeline& timeline) const { (void)timeline; }
 };
 
 /// @brief Options of `simulate`.

@@ -59,6 +59,11 @@ std::vector<double> end_tensions(const TendonRouting& routing, const double* cho
 /// between its holes in consecutive disks, from disk `first` to its terminating disk.
 double chord_length(const Frame* frames, const TendonRouting& routing, int k, int first = 0);
 
+/// @brief chord_displacements() of tendon k alone, from the disk frames `frames` (N + 1 of
+/// them); allocates nothing (the lumped dynamics' elastic tendons, every right-hand side).
+double chord_displacement(const Frame* frames, const TendonRouting& routing, int k,
+                          Actuation::DisplacementConvention convention);
+
 /// @brief Tendon displacements (m, positive when pulled) of every tendon from the chord lengths
 /// between disks: with AtBase, straight length (the arc length to its end disk) minus the path
 /// length from the base; with PerSegment, only over the tendon's own segment (the paper code's
