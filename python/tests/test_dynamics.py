@@ -6,19 +6,7 @@ import pytest
 
 import tdcr
 
-SCENE = {
-    "model": "ccsub",
-    "robot": {
-        "backbone": {"density": 6450},
-        "segments": [
-            {"length": 0.05, "disks": 3, "tendons": [{"x": 0, "y": 0.008}, {"x": 0, "y": -0.008}]},
-            {"length": 0.05, "disks": 3, "tendons": [{"x": 0, "y": 0.008}, {"x": 0, "y": -0.008}]},
-        ],
-    },
-    "actuation": {"tensions": [0, 0, 0, 0]},
-    "dynamics": {"bending_damping_time": 0.004},
-    "timeline": [{"t": 0}, {"t": 0.01, "actuation": {"tensions": [2, 0, 0, 0]}}],
-}
+from dynamics_scene import SCENE
 
 
 def test_simulate_settles_on_the_static_answer():
