@@ -9,10 +9,12 @@
 
 inline std::atomic<long> g_allocations{0};
 
-void* operator new(std::size_t n) {
+// Out of line: inlined, GCC pairs the malloc below with the free of operator delete and warns
+// (-Wmismatched-new-delete) at every delete of the including file.
+__attribute__((noinline)) void* operator new(std::size_t n) {
   ++g_allocations;
   if (void* p = std::malloc(n ? n : 1)) return p;
   throw std::bad_alloc();
 }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+__attribute__((noinline)) void operator delete(void* p) noexcept { std::free(p); }
+__attribute__((noinline)) void operator delete(void* p, std::size_t) noexcept { std::free(p); }

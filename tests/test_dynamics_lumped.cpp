@@ -403,10 +403,16 @@ class LumpedDisplacementTest : public ::testing::TestWithParam<ModelKind> {};
 
 // With damping, constant motor displacements (after a ramp) settle on the static displacement
 // solve of the same model and scene: the same tip to 1e-8 m and the same tensions. Mixed input:
-// tendons 1 and 4 by displacement, 2 and 3 by tension 0.
+// tendons 1 and 4 by displacement, 2 and 3 by tension 0. With shear and extension (the default:
+// the tensions and the backbone's compression are a fixed point at every right-hand side) and
+// without (one pass).
 TEST_P(LumpedDisplacementTest, SettlesOnTheStaticDisplacementSolve) {
+  for (bool shear_extension : {true, false}) {
+  SCOPED_TRACE(shear_extension ? "shear_extension" : "inextensible backbone");
   const Robot robot = elastic_paper_robot(3);
-  auto model = make_model(GetParam(), robot, Effects());
+  Effects effects;
+  effects.shear_extension = shear_extension;
+  auto model = make_model(GetParam(), robot, effects);
   using K = Actuation::Kind;
   const std::vector<K> kinds = {K::Displacements, K::Tensions, K::Tensions, K::Displacements};
   const Timeline tl = kinds_timeline(kinds, {0, 0, 0, 0}, {0.006, 0, 0, 0.004}, 0.01);
@@ -436,6 +442,7 @@ TEST_P(LumpedDisplacementTest, SettlesOnTheStaticDisplacementSolve) {
   std::cout << to_string(GetParam()) << ": tip " << tip_error << " m from the static solve; tensions "
             << last.tensions[0] << " (" << (last.tensions[0] - s.tensions[0]) / s.tensions[0] << " rel.), "
             << last.tensions[3] << " (" << (last.tensions[3] - s.tensions[3]) / s.tensions[3] << " rel.) N\n";
+  }
 }
 
 // A motor pulls tendon 1 and releases it past its rest (the others driven at 0): it goes slack

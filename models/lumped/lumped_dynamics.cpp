@@ -20,6 +20,10 @@ namespace {
 // robot's length, i.e. a pull change of 1e-14 L) or after kMaxTensionIterations.
 constexpr double kTensionFixedPointTol = 1e-14;
 constexpr int kMaxTensionIterations = 100;
+// ... and a right-hand side whose fixed point is still this far off after them fails (CVODE
+// retries a smaller step, then reports the step failed) rather than going on with tensions that
+// do not meet their motors.
+constexpr double kTensionFixedPointGiveUp = 1e-9;
 // Slack events: the band (over the robot's length) by which a tendon's gap delta - d must pass
 // zero before the root function fires again. At exactly zero a restarted CVODE would find the
 // root it just stopped at (CV_CLOSE_ROOTS), and so would a tendon that stays at its slack limit
@@ -98,13 +102,13 @@ bool LumpedDynamics::driven_tensions(const double* q) {
   const Actuation::DisplacementConvention conv = input_.actuation.convention;
   const int nd = static_cast<int>(driven_.size());
   const double L = body_.length;
-  double omega = 1.0, last_change = INFINITY;
+  double omega = 1.0, last_change = INFINITY, change = 0.0;
   for (int it = 0; it < kMaxTensionIterations; ++it) {
     // The backbone's compression under the current tensions, then the pulls of the paths at q.
     problem_->set_driven_tensions(driven_, driven_T_);
     const double* stretch = problem_->stretch();
     body_.compute_frames(q, N_, stretch, pull_frames_.data());
-    double change = 0.0;
+    change = 0.0;
     for (int i = 0; i < nd; ++i) {
       const int k = driven_[static_cast<std::size_t>(i)];
       const double d = tendon::chord_displacement(pull_frames_.data(), routing, k, conv);
@@ -121,7 +125,8 @@ bool LumpedDynamics::driven_tensions(const double* q) {
     last_change = change;
   }
   problem_->set_driven_tensions(driven_, driven_T_);
-  return true;
+  // Inextensible backbone: the one pass is exact, whatever it changed.
+  return !problem_->stretch() || change <= kTensionFixedPointGiveUp;
 }
 
 bool LumpedDynamics::tendon_stiffness(const double* q) {
