@@ -66,7 +66,8 @@ class SubsegmentStatics {
   const TendonRouting& routing() const { return *routing_; }
   /// @brief Number of subsegments N (= number of disks, base disk excluded).
   int subsegments() const { return n_; }
-  /// @brief Length l_j of subsegment j (m), j = 1..N.
+  /// @brief Length l_j of subsegment j (m), j = 1..N, unstretched (SubsegmentLoads::stretch
+  /// shortens it under the tendons' compression).
   double length(int j) const { return length_[j]; }
 
   /// @brief Resolve the loads of `input` (tension input) at load factor 1 and its J.

@@ -29,8 +29,10 @@
 ///
 /// Loads: tip force and moment (base frame) at the tip disk centre; gravity (base frame): the
 /// weight of every disk at its centre, and the backbone weight rho A g l_j of subsegment j at
-/// the exact centroid of its arc (the distributed weight integrated along the arc). Inextensible,
-/// no shear (effects.shear_extension is not used by this model).
+/// the exact centroid of its arc (the distributed weight integrated along the arc). No shear; with
+/// effects.shear_extension (the default) each subsegment shortens by the tensions of the tendons
+/// through it over EA (CC's axial strain per subsegment, docs/models.md), without it it is
+/// inextensible (the paper's CCsub).
 ///
 /// Solver (lumped_model.hpp): Newton on the 3J residuals of the loaded subsegments (recursive)
 /// or on these and the pose and balance residuals of every disk (banded), from the straight

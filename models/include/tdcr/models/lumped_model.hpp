@@ -4,7 +4,8 @@
 /// Both cut the robot into subsegments between consecutive disks, describe each by a few
 /// dimensionless unknowns, and balance the tendon forces at the disks (paper Eq. 30-33, 58), the
 /// tip wrench and gravity by the same recursion from the tip (Eq. 44-47); only the kinematics
-/// and the constitutive law of a subsegment differ. Tension input only; inextensible, no shear.
+/// and the constitutive law of a subsegment differ. No shear; the subsegments shorten under the
+/// tendons' compression with effects.shear_extension (SubsegmentLoads::stretch).
 ///
 /// Subsegments distal of the last loaded disk (no tendon with nonzero tension reaches them, no
 /// tip wrench, no gravity) are exactly straight: they are no unknowns of the solve

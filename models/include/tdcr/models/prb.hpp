@@ -38,7 +38,9 @@
 ///
 /// Loads: tip force and moment (base frame) at the tip disk centre; gravity (base frame): disk
 /// weights at disk centres and the backbone weight of each rigid link at its midpoint (the exact
-/// weight distribution of the rigid-link body). Inextensible, no shear.
+/// weight distribution of the rigid-link body). No shear; with effects.shear_extension (the default)
+/// every link of a subsegment shortens by the tensions of the tendons through it over EA, without
+/// it the links are rigid (the paper's PRB).
 ///
 /// Solver (lumped_model.hpp): Newton on the 5J residuals of the loaded subsegments (recursive;
 /// steps bounded to about one radian of joint angle) or on these and the pose and balance
