@@ -123,6 +123,51 @@ TEST(Rk4ToleranceVc, RefinedSolveReusesTheCoarseJacobian) {
   EXPECT_GT(s.summary.iterations, c.summary.iterations);  // the refined solve's work is counted
 }
 
+// Without external loads, with tendons that leave the base along the backbone, VC's cold guess
+// (the tendons' pull at the clamped base) is the answer: the refinement checks it on the mesh of
+// 4 steps per interval, with no Newton iteration and no Jacobian, and estimates that mesh's error
+// by one coarser shot. The answer is still within the tolerance of the CVODE reference and the
+// estimate is the error (the paper robot's two segments bent in different planes). A tolerance
+// the check's mesh does not meet (1e-12 m) goes on refining from there. Not such cases, and
+// solved by Newton as before: a tip force (the guess ignores the shape's lever) and the helical
+// example (a tendon leaving the base at an angle pulls along a direction the strains tilt).
+TEST(Rk4ToleranceVc, UnloadedColdGuessIsCheckedOnAFineMeshWithoutNewton) {
+  Scene scene = paper::scene(10, 1, "vc");
+  scene.actuation.values = {5.0, 0.0, 0.0, 2.5};
+  auto model = make_model(ModelKind::VC, scene);
+  auto ws = model->make_workspace();
+  const ModelInput in = scene.input();
+  const Solution ref = reference(*model, *ws, in);
+  for (double tol : {1e-7, 1e-8}) {
+    const Solution s = solve(*model, *ws, in, coarse(tol));
+    ASSERT_TRUE(s.converged()) << s.summary.brief_report();
+    EXPECT_EQ(s.summary.iterations, 0) << s.summary.brief_report();
+    EXPECT_EQ(s.summary.jacobian_evaluations, 0);
+    EXPECT_EQ(s.summary.rk4_halvings, 2);
+    const double err = (s.tip().p - ref.tip().p).norm();
+    EXPECT_LE(s.summary.tip_error_estimate, tol);
+    EXPECT_LE(err, tol);
+    EXPECT_LT(s.summary.tip_error_estimate, 2.0 * err);
+    EXPECT_GT(s.summary.tip_error_estimate, 0.5 * err);
+  }
+  const Solution tight = solve(*model, *ws, in, coarse(1e-12));
+  ASSERT_TRUE(tight.converged()) << tight.summary.brief_report();
+  EXPECT_GT(tight.summary.rk4_halvings, 2);
+  EXPECT_LE((tight.tip().p - ref.tip().p).norm(), 1e-12);
+
+  Scene loaded = scene;
+  loaded.loads.tip_force = Vec3(0.0, 0.05, 0.0);
+  const Scene helical = load_scene(std::string(TDCR_SOURCE_DIR) + "/examples/helical_tendon.json");
+  for (const Scene* other : std::vector<const Scene*>{&loaded, &helical}) {
+    auto m = make_model(ModelKind::VC, *other);
+    auto w = m->make_workspace();
+    const Solution s = solve(*m, *w, other->input(), coarse(1e-8));
+    ASSERT_TRUE(s.converged()) << s.summary.brief_report();
+    EXPECT_GT(s.summary.iterations, 0);
+    EXPECT_GT(s.summary.jacobian_evaluations, 0);
+  }
+}
+
 // The default: accuracy-driven RK4 to 1e-7 of the robot's length (1e-8 m here), Newton's
 // tolerance tied to it; the fixed mesh and CVODE on request; the lumped models integrate nothing.
 TEST(Rk4ToleranceVc, OnByDefaultAndIgnoredByFixedMeshCvodeAndLumpedModels) {

@@ -15,14 +15,21 @@ namespace tdcr::detail {
 // Runs a solve and leaves the workspace's warm-start history as it was before it.
 using KeepHistory = std::function<Solution(const std::function<Solution()>&)>;
 
+// One shot of unknowns x on the mesh of `options` at the bound input, no Newton step: false if it
+// cannot be evaluated, else the scaled residual's max norm and the tip frame.
+using ShotOnMesh =
+    std::function<bool(const SolverOptions& options, const Eigen::VectorXd& x, double& scaled_residual, Frame& tip)>;
+
 // The answer of accuracy-driven RK4 (IntegratorKind::AccuracyDrivenRK4) on the mesh whose
 // Richardson estimate of the tip error meets options.tip_tolerance. `path`: a cold tension solve
-// whose cold rule follows the loading path from rest; `last_options`: the options of the solve
-// that returned the answer; `test`: whether the stability rule asks for the answer's test (not
-// done here).
+// whose cold rule follows the loading path from rest; `guess_is_answer`: a cold solve whose
+// guess solves the continuous equations (ColdStart::guess_is_answer); `last_options`: the options
+// of the solve that returned the answer; `test`: whether the stability rule asks for the answer's
+// test (not done here).
 Solution solve_refined(const StaticModel& model, ModelWorkspace& workspace, const ModelInput& input,
-                       const SolverOptions& options, const Solution* warm_start, bool path,
-                       const KeepHistory& keep_history, SolverOptions& last_options, bool& test);
+                       const SolverOptions& options, const Solution* warm_start, bool path, bool guess_is_answer,
+                       const KeepHistory& keep_history, const ShotOnMesh& shoot, SolverOptions& last_options,
+                       bool& test);
 
 // Whether a cold solve of VC or VCref on RK4 should follow its loading path on the coarse mesh:
 // the path is the model's cold rule here (reason non-empty) and the requested mesh is finer.

@@ -233,6 +233,7 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
     // rows then depended on which samples a thread had solved before,
     // SweepRun.MergedShardsEqualOneRun under load).
     bool under_loads = false;
+    bool guess_is_answer = false;  // the cold guess is checked on a fine mesh first (ColdStart)
     const bool displacement = detail::needs_displacement_solve(model, input);
     // Cold solves only: a trajectory's warm step from a tested answer is not tested again (VCref's
     // test would add 92 % to a loaded trajectory's step); it is when its input path snaps.
@@ -245,8 +246,11 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
       first.rk4_max_step = SolverOptions::kFirstMeshRk4MaxStep;
       detail::ModelProblem& P = model.bind(workspace, input, first);
       under_loads = ask && P.automatic_stability_under_loads();
-      if (!warm_start && options.continuation && !displacement)
-        path = P.system() && !path_reason(model, input, P.cold_start()).empty();
+      if (!warm_start && options.continuation && !displacement) {
+        const detail::ColdStart cold = P.cold_start();
+        path = P.system() && !path_reason(model, input, cold).empty();
+        guess_is_answer = P.system() && !path && cold.guess_is_answer;
+      }
     }
     const detail::KeepHistory keep_history = [&workspace](const std::function<Solution()>& run) {
       detail::SolveHistory saved = workspace.history_;
@@ -254,9 +258,26 @@ Solution solve(const StaticModel& model, ModelWorkspace& workspace, const ModelI
       workspace.history_ = std::move(saved);
       return s;
     };
+    const detail::ShotOnMesh shoot = [&](const SolverOptions& mesh, const Eigen::VectorXd& x, double& scaled,
+                                         Frame& tip) {
+      detail::ModelProblem& P = model.bind(workspace, input, mesh);
+      bvp::ParameterizedSystem* sys = P.system();
+      if (!sys || sys->size() != x.size()) return false;
+      sys->set_parameter(1.0);
+      Eigen::VectorXd f(sys->size()), scale(sys->size());
+      if (!P.final_residual(x, f) || !f.allFinite()) return false;
+      sys->residual_scale(scale);
+      scaled = f.cwiseProduct(scale).cwiseAbs().maxCoeff();
+      Solution shot;
+      P.extract(x, true, shot);
+      if (shot.disk_frames.empty() || !shot.tip().p.allFinite()) return false;
+      tip = shot.tip();
+      return true;
+    };
     SolverOptions last;
     bool test = false;
-    Solution sol = detail::solve_refined(model, workspace, input, options, warm_start, path, keep_history, last, test);
+    Solution sol = detail::solve_refined(model, workspace, input, options, warm_start, path, guess_is_answer,
+                                                 keep_history, shoot, last, test);
     // solve_refined decides by the path alone. A direct answer under loads the model tests
     // (VCref): the problem bound with the options of the solve that returned it (its mesh, not
     // the estimate's) and tested at the answer's unknowns as a warm start gives them (VCref: its

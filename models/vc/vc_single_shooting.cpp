@@ -141,6 +141,23 @@ class SingleShooting final : public detail::ModelProblem, public detail::Contact
     options.reuse_jacobian = same_input || last_iterations_ <= kStaleAfterIterations;
     options.max_setup_calls = kReuseSetupCalls;
   }
+  // Without external loads (no tip wrench, weights or obstacles) the base reaction is the
+  // tendons' pull at the clamped base. Where every tendon leaves the base along the backbone
+  // (r_k'(0) = 0: straight routing), its direction there, v + u x r_k, is the backbone's tangent
+  // whatever the strains (u x r_k is along it for r_k in the cross-section, and no shear force
+  // arises), so the equilibrium guess is the exact answer. Curved routing tilts it by the strains.
+  detail::ColdStart cold_start() const override {
+    detail::ColdStart c;
+    const physics::LoadCase& L = W_.loads;
+    bool along_backbone = true;
+    for (const RoutedTendon& t : W_.model->routing().tendons) {
+      const Vec3 d = physics::rest_tangent(t, 0.0);
+      along_backbone = along_backbone && d.x() == 0.0 && d.y() == 0.0;
+    }
+    c.guess_is_answer = along_backbone && W_.model->options().initial_guess == VcInitialGuess::Equilibrium &&
+                        !L.has_tip_wrench() && !L.has_gravity() && W_.obstacles.empty();
+    return c;
+  }
   void cold_guess(Eigen::VectorXd& x) override {
     x = guess(W_.model->options().initial_guess);
     append_forces(x, true);

@@ -33,6 +33,12 @@ struct ColdStart {
   /// Bound on the corrector solves of a loading path of this problem (0: the path's own, at least
   /// 400): a path that is only a first attempt, with a fallback after it, is kept short.
   int max_path_steps = 0;
+  /// The cold guess solves the continuous equations: it is the answer up to the mesh's own
+  /// integration error (VC's base reaction of an unloaded robot whose tendons leave the base
+  /// along the backbone: their pull at the clamped base, whatever the shape). Accuracy-driven RK4 then checks the guess on a fine mesh
+  /// and estimates that mesh's error by one shot on the next coarser one, instead of solving on
+  /// the first mesh and refining (docs/models.md, "Accuracy-driven integration").
+  bool guess_is_answer = false;
 };
 
 /// @brief One bound solve of a model: the residual system at the bound input and what surrounds it.
