@@ -66,8 +66,9 @@ constexpr int kFinePathHalvings = 3;
 
 // A cold guess that solves the continuous equations (ColdStart::guess_is_answer) is checked on
 // the mesh of two halvings (4 steps per disk interval, h <= 2 mm): there the paper robot's
-// integration error is about 1e-11 m, so Newton's test accepts the guess with no iteration and
-// no Jacobian, where the first mesh's coarser steps cost one iteration.
+// residual at the guess is its integration error, 1e-12 to 1e-10 of the scale at n = 1-20, within
+// Newton's tolerance (1e-9), so the guess is taken with no iteration and no Jacobian, where the
+// first mesh's coarser steps cost one iteration.
 constexpr int kGuessHalvings = 2;
 
 // Whether `answer`, a converged solve on the mesh of `fine` (h halvings) whose unknowns x met
@@ -220,18 +221,32 @@ Solution solve_refined(const StaticModel& model, ModelWorkspace& workspace, cons
     if (warm_start && warm_start->summary.rk4_halvings > 0)
       halvings = std::min(warm_start->summary.rk4_halvings - 1, SolverOptions::kMaxRk4Halvings - 1);
     const bool check_guess = guess_is_answer && !warm_start && !path;
-    if (check_guess) halvings = kGuessHalvings;
+    if (check_guess) {
+      // Newton's test of a first guess is 100 times stricter than its tolerance (KINSOL's); here
+      // the tolerance itself is checked below, with the mesh's own error added.
+      halvings = kGuessHalvings;
+      o.function_tolerance = std::min(100.0 * options.function_tolerance, SolverOptions::kMaxFunctionTolerance);
+    }
     set_mesh(o, halvings);
     Solution first_answer = tdcr::solve(model, workspace, input, o, warm_start);
+    o.function_tolerance = options.function_tolerance;
     last_options = o;
     add_work(spent, first_answer.summary);
     if (check_guess && first_answer.converged() && first_answer.summary.iterations == 0 &&
         first_answer.summary.integrator == "rk4" &&
         accept_by_coarser_shot(model, shoot, o, halvings, first_answer)) {
       test = wants_stability(options.stability, input, reached_by_path(first_answer), false);
+      first_answer.summary.function_tolerance = options.function_tolerance;
       first_answer.summary.solve_time_s =
           std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       return first_answer;
+    }
+    if (check_guess && !first_answer.converged()) {  // the refinement's own start instead
+      const SolverSummary checked = first_answer.summary;
+      halvings = 0;
+      set_mesh(o, halvings);
+      first_answer = tdcr::solve(model, workspace, input, o, nullptr);
+      add_work(checked, first_answer.summary);
     }
     if (path && !first_answer.converged()) {
       // As the fixed mesh's cold rule does: the whole path again on the fine mesh.
