@@ -144,6 +144,8 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   /// The disk frames of the x_j and the chords between them (no residual).
   bool tendon_pulls(const Eigen::VectorXd& y, Eigen::VectorXd& d) final;
   /// Eigenvalues of the Jacobian of the constitutive residuals in the x_j (lumped_stability.cpp).
+  /// With contact candidates (contact_stability()): rigid contacts that carry force constrain
+  /// the test to the tangent space of their gaps; compliant ones add their penalty's stiffness.
   Stability stability(const Eigen::VectorXd& y, double load_factor) final;
   /// The test of a direct answer under loads: first a sufficient test (the structured Jacobian,
   /// a block Cholesky factorisation of its balanced symmetric part, O(J)), stability() where it
@@ -424,6 +426,9 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   // direct_stability()'s sufficient test: true and the margin (the smallest eigenvalue of the
   // balanced symmetric part) if it proves the answer stable; at x_ in the stability chart.
   bool proven_stable(double& margin, std::string& how);
+  // stability() of an answer with contact candidates (lumped_stability.cpp): y the contact
+  // system's unknowns (the x_j, then the candidates' scaled forces).
+  Stability contact_stability(const Eigen::VectorXd& y);
   std::vector<Mat3> jac_G_;
 };
 
