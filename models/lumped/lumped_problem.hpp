@@ -245,6 +245,14 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   virtual void leave_stability_chart() {}
   /// Scale of x_j (per_subsegment values; default ones).
   virtual void x_scale(double* s) const;
+  /// The unknown of subsegment j (index within x_j, in the stability chart) whose law is not a
+  /// positive multiple of the potential's gradient at x_j, so that a mode of the stability test
+  /// made of it decides nothing; -1: none (PRB: the bending-plane angle of a subsegment with an
+  /// inflection inside, lumped_stability.cpp).
+  virtual int ill_posed_unknown(const double* xj) const {
+    (void)xj;
+    return -1;
+  }
 
   /// The equations changed (gauge references, damping, loads other than by set_parameter): the
   /// last residual() is no longer final_residual()'s.

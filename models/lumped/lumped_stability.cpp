@@ -140,7 +140,8 @@ constexpr double kProjectionRcond = 1e-10;
 // Z^T A Z, whose smallest eigenvalue is at least A's (Cauchy interlacing). Returns false with
 // `why` where the ranks of G and C differ or Y^T Z is (nearly) singular.
 bool constrained_margin(const Eigen::MatrixXd& A, Eigen::MatrixXd G, Eigen::MatrixXd C, double& margin,
-                        std::string& mode, std::string& why) {
+                        std::string& mode, std::string& why, Eigen::MatrixXd* reduced = nullptr,
+                        Eigen::MatrixXd* basis = nullptr) {
   const Eigen::Index n = A.rows();
   for (Eigen::Index i = 0; i < G.rows(); ++i) {
     const double g = G.row(i).norm(), c = C.col(i).norm();
@@ -178,7 +179,52 @@ bool constrained_margin(const Eigen::MatrixXd& A, Eigen::MatrixXd G, Eigen::Matr
     return false;
   }
   margin = least_stable_mode(eig.eigenvalues(), mode);
+  if (reduced) *reduced = R;
+  if (basis) *basis = Z;
   return true;
+}
+
+// An unstable verdict whose modes may lie in unknowns whose laws decide nothing there
+// (LumpedProblem::ill_posed_unknown: `ill`, indices into the scaled x): the eigenvalues of K
+// (the reduced matrix, its modes mapped to x by `basis`, or K itself with no basis) below
+// -kUndecided whose mode (the eigenvector's largest entries) is not mostly in `ill` decide:
+// unstable, margin the least of them; if every one is, undetermined.
+void recheck_ill_posed(const Eigen::MatrixXd& K, const Eigen::MatrixXd* basis, const std::vector<int>& ill,
+                       Stability& out) {
+  const Eigen::EigenSolver<Eigen::MatrixXd> eig(K, true);
+  if (eig.info() != Eigen::Success) return;
+  double worst = INFINITY;
+  int dominated = 0;
+  for (Eigen::Index k = 0; k < K.rows(); ++k) {
+    const double re = eig.eigenvalues()[k].real();
+    if (!(re < -kUndecided)) continue;
+    Eigen::VectorXd v = eig.eigenvectors().col(k).cwiseAbs();
+    if (basis) v = (*basis * eig.eigenvectors().col(k)).cwiseAbs();
+    double in = 0.0;
+    for (int i : ill) in = std::max(in, v[i]);
+    if (in >= 0.5 * v.maxCoeff()) {
+      ++dominated;
+      continue;
+    }
+    worst = std::min(worst, re);
+  }
+  if (dominated == 0) return;
+  char buf[200];
+  if (std::isfinite(worst)) {
+    out.margin = worst;
+    std::snprintf(buf, sizeof buf,
+                  "; %d unstable modes in an ill-posed law (a PRB subsegment's bending plane at an inflection) set "
+                  "aside: the least of the others %.6g",
+                  dominated, worst);
+  } else {
+    out.status = StabilityStatus::Undetermined;
+    out.margin = NAN;
+    std::snprintf(buf, sizeof buf,
+                  "; undetermined: every unstable mode (%d) lies in an ill-posed law (a PRB subsegment's bending "
+                  "plane at an inflection)",
+                  dominated);
+  }
+  out.method += buf;
 }
 
 // The rows of G (columns of C) of the candidates in `set`.
@@ -254,6 +300,11 @@ Stability LumpedProblem::contact_stability(const Eigen::VectorXd& y) {
   }
   // The candidates as the answer has them (their points, normals and forces).
   recursive_residual(z.data(), r0.data());
+  std::vector<int> ill;  // unknowns whose laws decide nothing here (ill_posed_unknown)
+  for (int j = 0; j < active(); ++j) {
+    const int m = body_.per_subsegment, i = ill_posed_unknown(x_.data() + m * j);
+    if (i >= 0) ill.push_back(m * j + i);
+  }
   std::string mode;
   char buf[240];
   // The same Jacobian without the contact constraints (forces held): what the contacts change.
@@ -291,7 +342,9 @@ Stability LumpedProblem::contact_stability(const Eigen::VectorXd& y) {
       return out;
     }
     decide(least_stable_mode(eig.eigenvalues(), mode));
-    out.method += mode + free_note;
+    out.method += mode;
+    if (out.status == StabilityStatus::Unstable && !ill.empty()) recheck_ill_posed(K, nullptr, ill, out);
+    out.method += free_note;
     return out;
   }
   // Rigid: active (force), weakly active (touching, no force), the others open.
@@ -311,7 +364,7 @@ Stability LumpedProblem::contact_stability(const Eigen::VectorXd& y) {
                 "(the finite eigenvalues of the contact Jacobian's pencil), smallest real part",
                 static_cast<int>(strong.size()));
   out.method = buf;
-  Eigen::MatrixXd Gs, Cs;
+  Eigen::MatrixXd Gs, Cs, R, Z;
   double margin = NAN;
   std::string why;
   if (strong.empty()) {
@@ -319,7 +372,7 @@ Stability LumpedProblem::contact_stability(const Eigen::VectorXd& y) {
     mode = free_mode;
   } else {
     select(G, C, strong, Gs, Cs);
-    if (!constrained_margin(A, Gs, Cs, margin, mode, why)) {
+    if (!constrained_margin(A, Gs, Cs, margin, mode, why, &R, &Z)) {
       out.method += why;
       return out;
     }
@@ -332,6 +385,8 @@ Stability LumpedProblem::contact_stability(const Eigen::VectorXd& y) {
   }
   if (margin > kUndecided || weak == 0) {
     decide(margin);
+    if (out.status == StabilityStatus::Unstable && !ill.empty())
+      recheck_ill_posed(strong.empty() ? A : R, strong.empty() ? nullptr : &Z, ill, out);
     out.method += free_note;
     return out;
   }
