@@ -106,12 +106,16 @@ int main(int argc, char** argv) {
         Scene tested = s;
         tested.solver.stability = StabilityCheck::Always;
         const bench::Timing ts = bench::time_solves(*m, tested, reps);
-        ok = ok && ts.last.converged();
+        Scene free_tested = free;
+        free_tested.solver.stability = StabilityCheck::Always;
+        const bench::Timing tfs = bench::time_solves(*m, free_tested, reps);
+        ok = ok && ts.last.converged() && tfs.last.converged();
         std::printf("  with the stability test: %.1f us (+%.1f us, %.0f %% of the contact solve): %s, margin %.6g\n"
-                    "  method: %s\n",
+                    "  method: %s\n  free space with the test: %.1f us (+%.1f us): %s, margin %.6g\n",
                     ts.median_us, ts.median_us - tc.median_us, 100.0 * (ts.median_us - tc.median_us) / tc.median_us,
                     to_string(ts.last.stability.status).c_str(), ts.last.stability.margin,
-                    ts.last.stability.method.c_str());
+                    ts.last.stability.method.c_str(), tfs.median_us, tfs.median_us - tf.median_us,
+                    to_string(tfs.last.stability.status).c_str(), tfs.last.stability.margin);
       }
       if (profile) {
         const SolverSummary& w = tc.last.summary;

@@ -21,6 +21,11 @@
 // conservative in 3-D; the real parts then are the quasi-static divergence criterion (flutter,
 // complex eigenvalues crossing the imaginary axis, is not a static question).
 //
+// With contact candidates (contact_stability, docs/contact.md "Stability with contact"): the same
+// Jacobian with the contact forces held, restricted to the tangent space of the rigid contacts
+// that carry force (the finite eigenvalues of the contact Jacobian's pencil), or with the
+// compliant contacts' penalty stiffness added.
+//
 // direct_stability: a sufficient test first, the eigen test where it does not prove stability.
 // The scaled Jacobian A from the structured factors (diagonal blocks G_j, E_j W_k above, D_j Om_k
 // below: lumped_structured.cpp), balanced by a diagonal similarity T (Osborne sweeps on its
