@@ -120,8 +120,8 @@ Stability LumpedProblem::stability(const Eigen::VectorXd& y, double load_factor)
 namespace {
 
 // A candidate whose scaled force b = f / F_s exceeds this is an active contact: a constraint of
-// the test. The contact solves meet their tolerance far below it (a candidate the answer does
-// not touch has b about 1e-12); 1e-6 F_s is 4e-7 N on the paper robot.
+// the test (1e-6 F_s is 4e-7 N on the paper robot). One at or below it is not; it is weakly
+// active if it touches (kTouching).
 constexpr double kActiveForce = 1e-6;
 // A candidate below kActiveForce whose scaled gap g / r_o is below this touches without force:
 // weakly active.
