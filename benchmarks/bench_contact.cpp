@@ -13,7 +13,11 @@
 // --profile: also the work of each contact solve (Newton iterations, residual evaluations,
 // Jacobian evaluations, continuation steps) and the solver's message (fallbacks).
 //
-// Usage: bench_contact [--quick] [--profile] [--reps N] [--steps N] [--n N] [--models a,b,...]
+// --stability: also each contact solve with its stability test forced on (solver.stability
+// true; without it a direct contact answer is not tested, docs/contact.md "Stability"), its
+// median time, the test's share and the verdict.
+//
+// Usage: bench_contact [--quick] [--profile] [--stability] [--reps N] [--steps N] [--n N] [--models a,b,...]
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -58,12 +62,13 @@ Scene point_scene(const std::string& model, int n) {
 
 int main(int argc, char** argv) {
   int reps = 50, steps = 1000, n = 10;
-  bool profile = false;
+  bool profile = false, stability = false;
   std::vector<std::string> models = {"ccsub", "prb", "vc", "vcref"};
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--quick") reps = 3, steps = 20;
     else if (a == "--profile") profile = true;
+    else if (a == "--stability") stability = true;
     else if (a == "--reps" && i + 1 < argc) reps = std::atoi(argv[++i]);
     else if (a == "--steps" && i + 1 < argc) steps = std::atoi(argv[++i]);
     else if (a == "--n" && i + 1 < argc) n = std::atoi(argv[++i]);
@@ -76,7 +81,8 @@ int main(int argc, char** argv) {
         at = comma + 1;
       }
     } else {
-      std::fprintf(stderr, "usage: bench_contact [--quick] [--profile] [--reps N] [--steps N] [--n N] [--models a,b,...]\n");
+      std::fprintf(stderr, "usage: bench_contact [--quick] [--profile] [--stability] [--reps N] [--steps N] [--n N] "
+                           "[--models a,b,...]\n");
       return 2;
     }
   }
@@ -96,6 +102,21 @@ int main(int argc, char** argv) {
       std::printf("%-6s %-6s %9zu %12.1f %12.1f %8.2f %9d %10d\n", model.c_str(), name.c_str(), tc.last.contacts.size(),
                   tf.median_us, tc.median_us, tc.median_us / tf.median_us, tf.last.summary.iterations,
                   tc.last.summary.iterations);
+      if (stability) {
+        Scene tested = s;
+        tested.solver.stability = StabilityCheck::Always;
+        const bench::Timing ts = bench::time_solves(*m, tested, reps);
+        Scene free_tested = free;
+        free_tested.solver.stability = StabilityCheck::Always;
+        const bench::Timing tfs = bench::time_solves(*m, free_tested, reps);
+        ok = ok && ts.last.converged() && tfs.last.converged();
+        std::printf("  with the stability test: %.1f us (+%.1f us, %.0f %% of the contact solve): %s, margin %.6g\n"
+                    "  method: %s\n  free space with the test: %.1f us (+%.1f us): %s, margin %.6g\n",
+                    ts.median_us, ts.median_us - tc.median_us, 100.0 * (ts.median_us - tc.median_us) / tc.median_us,
+                    to_string(ts.last.stability.status).c_str(), ts.last.stability.margin,
+                    ts.last.stability.method.c_str(), tfs.median_us, tfs.median_us - tf.median_us,
+                    to_string(tfs.last.stability.status).c_str(), tfs.last.stability.margin);
+      }
       if (profile) {
         const SolverSummary& w = tc.last.summary;
         std::printf("  work: %d iterations, %d residuals, %d Jacobians, %d continuation steps; free: %d residuals, "

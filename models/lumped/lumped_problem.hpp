@@ -144,6 +144,8 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   /// The disk frames of the x_j and the chords between them (no residual).
   bool tendon_pulls(const Eigen::VectorXd& y, Eigen::VectorXd& d) final;
   /// Eigenvalues of the Jacobian of the constitutive residuals in the x_j (lumped_stability.cpp).
+  /// With contact candidates (contact_stability()): rigid contacts that carry force constrain
+  /// the test to the tangent space of their gaps; compliant ones add their penalty's stiffness.
   Stability stability(const Eigen::VectorXd& y, double load_factor) final;
   /// The test of a direct answer under loads: first a sufficient test (the structured Jacobian,
   /// a block Cholesky factorisation of its balanced symmetric part, O(J)), stability() where it
@@ -243,6 +245,14 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   virtual void leave_stability_chart() {}
   /// Scale of x_j (per_subsegment values; default ones).
   virtual void x_scale(double* s) const;
+  /// The unknown of subsegment j (index within x_j, in the stability chart) whose law is not a
+  /// positive multiple of the potential's gradient at x_j, so that a mode of the stability test
+  /// made of it decides nothing; -1: none (PRB: the bending-plane angle of a subsegment with an
+  /// inflection inside, lumped_stability.cpp).
+  virtual int ill_posed_unknown(const double* xj) const {
+    (void)xj;
+    return -1;
+  }
 
   /// The equations changed (gauge references, damping, loads other than by set_parameter): the
   /// last residual() is no longer final_residual()'s.
@@ -424,6 +434,9 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   // direct_stability()'s sufficient test: true and the margin (the smallest eigenvalue of the
   // balanced symmetric part) if it proves the answer stable; at x_ in the stability chart.
   bool proven_stable(double& margin, std::string& how);
+  // stability() of an answer with contact candidates (lumped_stability.cpp): y the contact
+  // system's unknowns (the x_j, then the candidates' scaled forces).
+  Stability contact_stability(const Eigen::VectorXd& y);
   std::vector<Mat3> jac_G_;
 };
 

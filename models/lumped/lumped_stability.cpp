@@ -21,6 +21,11 @@
 // conservative in 3-D; the real parts then are the quasi-static divergence criterion (flutter,
 // complex eigenvalues crossing the imaginary axis, is not a static question).
 //
+// With contact candidates (contact_stability, docs/contact.md "Stability with contact"): the same
+// Jacobian with the contact forces held, restricted to the tangent space of the rigid contacts
+// that carry force (the finite eigenvalues of the contact Jacobian's pencil), or with the
+// compliant contacts' penalty stiffness added.
+//
 // direct_stability: a sufficient test first, the eigen test where it does not prove stability.
 // The scaled Jacobian A from the structured factors (diagonal blocks G_j, E_j W_k above, D_j Om_k
 // below: lumped_structured.cpp), balanced by a diagonal similarity T (Osborne sweeps on its
@@ -34,9 +39,13 @@
 // bench_loaded (docs/models.md, "Stability").
 #include <cmath>
 #include <limits>
+#include <string>
+#include <vector>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <Eigen/LU>
+#include <Eigen/QR>
 
 #include "physics/least_stable_mode.hpp"
 #include "lumped/lumped_problem.hpp"
@@ -55,13 +64,10 @@ constexpr int kBalanceSweeps = 3;
 }  // namespace
 
 Stability LumpedProblem::stability(const Eigen::VectorXd& y, double load_factor) {
-  Stability out;
-  if (!contacts_.empty()) {  // the test knows no contact constraints (docs/contact.md)
-    out.method = "not determined with contact";
-    return out;
-  }
-  out.method = "eigenvalues of d(constitutive residuals)/d(scaled x_j), smallest real part";
   if (loads_.loads.load_factor() != load_factor) set_parameter(load_factor);
+  if (!contacts_.empty()) return contact_stability(y);
+  Stability out;
+  out.method = "eigenvalues of d(constitutive residuals)/d(scaled x_j), smallest real part";
   gather_x(y, x_);
   enter_stability_chart(x_);
   // Every return below leaves the chart (the path goes on from a tested landing).
@@ -108,6 +114,304 @@ Stability LumpedProblem::stability(const Eigen::VectorXd& y, double load_factor)
     out.status = StabilityStatus::Stable;
   else if (out.margin < -kUndecided)
     out.status = StabilityStatus::Unstable;
+  return out;
+}
+
+namespace {
+
+// A candidate whose scaled force b = f / F_s exceeds this is an active contact: a constraint of
+// the test (1e-6 F_s is 4e-7 N on the paper robot). One at or below it is not; it is weakly
+// active if it touches (kTouching).
+constexpr double kActiveForce = 1e-6;
+// A candidate below kActiveForce whose scaled gap g / r_o is below this touches without force:
+// weakly active.
+constexpr double kTouching = 1e-6;
+// Rank of the constraint rows and force columns: pivots below this fraction of the largest (of
+// unit rows and columns: their forward differences are good to about 1e-8).
+constexpr double kRankTolerance = 1e-6;
+// The oblique projection Y^T Z of contact_stability's reduction: below this reciprocal
+// condition number the reduction is not trusted.
+constexpr double kProjectionRcond = 1e-10;
+
+// The least stable finite eigenvalue sigma of the constrained pencil
+//   A v + C mu = sigma v,  G v = 0,
+// A (n x n) the Jacobian of the constitutive residuals in the scaled x at fixed contact forces,
+// G (k x n) the active gaps' gradients, C (n x k) the residuals' response to the active forces.
+// With v = Z w (Z a basis of null(G)) and Y a basis of null(C^T) (which removes the unknown
+// forces mu): Y^T A Z w = sigma Y^T Z w. Where A = B H (B the laws' regular matrix, H the
+// potential's Hessian) and C = -B G^T (the contact forces do the gaps' virtual work), these are
+// the eigenvalues of the pencil (Z^T H Z, Z^T B^-1 Z): the Hessian on the tangent space in the
+// metric B^-1, whose inertia is that of Z^T H Z; for symmetric A (B = I) Y = Z and the matrix is
+// Z^T A Z, whose smallest eigenvalue is at least A's (Cauchy interlacing). Returns false with
+// `why` where the ranks of G and C differ or Y^T Z is (nearly) singular.
+bool constrained_margin(const Eigen::MatrixXd& A, Eigen::MatrixXd G, Eigen::MatrixXd C, double& margin,
+                        std::string& mode, std::string& why, Eigen::MatrixXd* reduced = nullptr,
+                        Eigen::MatrixXd* basis = nullptr) {
+  const Eigen::Index n = A.rows();
+  for (Eigen::Index i = 0; i < G.rows(); ++i) {
+    const double g = G.row(i).norm(), c = C.col(i).norm();
+    if (!(g > 0.0) || !(c > 0.0)) {
+      why = "; a contact's gap gradient or force column is zero";
+      return false;
+    }
+    G.row(i) /= g;
+    C.col(i) /= c;
+  }
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qg(G.transpose()), qc(C);
+  qg.setThreshold(kRankTolerance);
+  qc.setThreshold(kRankTolerance);
+  const Eigen::Index rank = qg.rank();
+  if (qc.rank() != rank) {
+    why = "; the active gaps' gradients (rank " + std::to_string(rank) + ") and the forces' columns (rank " +
+          std::to_string(qc.rank()) + ") disagree";
+    return false;
+  }
+  if (rank == n) {
+    why = "; the active contacts fix every unknown";
+    return false;
+  }
+  const Eigen::MatrixXd Qg = qg.householderQ(), Qc = qc.householderQ();
+  const Eigen::MatrixXd Z = Qg.rightCols(n - rank), Y = Qc.rightCols(n - rank);
+  const Eigen::PartialPivLU<Eigen::MatrixXd> lu(Y.transpose() * Z);
+  if (!(lu.rcond() > kProjectionRcond)) {
+    why = "; the tangent space and the forces' complement are (nearly) singular to each other";
+    return false;
+  }
+  const Eigen::MatrixXd R = lu.solve(Y.transpose() * A * Z);
+  const Eigen::EigenSolver<Eigen::MatrixXd> eig(R, false);
+  if (eig.info() != Eigen::Success || !R.allFinite()) {
+    why = "; the eigenvalue solver failed";
+    return false;
+  }
+  margin = least_stable_mode(eig.eigenvalues(), mode);
+  if (reduced) *reduced = R;
+  if (basis) *basis = Z;
+  return true;
+}
+
+// An unstable verdict whose modes may lie in unknowns whose laws decide nothing there
+// (LumpedProblem::ill_posed_unknown: `ill`, indices into the scaled x): the eigenvalues of K
+// (the reduced matrix, its modes mapped to x by `basis`, or K itself with no basis) below
+// -kUndecided whose mode (the eigenvector's largest entries) is not mostly in `ill` decide:
+// unstable, margin the least of them; if every one is, undetermined.
+void recheck_ill_posed(const Eigen::MatrixXd& K, const Eigen::MatrixXd* basis, const std::vector<int>& ill,
+                       Stability& out) {
+  const Eigen::EigenSolver<Eigen::MatrixXd> eig(K, true);
+  if (eig.info() != Eigen::Success) return;
+  double worst = INFINITY;
+  int dominated = 0;
+  for (Eigen::Index k = 0; k < K.rows(); ++k) {
+    const double re = eig.eigenvalues()[k].real();
+    if (!(re < -kUndecided)) continue;
+    Eigen::VectorXd v = eig.eigenvectors().col(k).cwiseAbs();
+    if (basis) v = (*basis * eig.eigenvectors().col(k)).cwiseAbs();
+    double in = 0.0;
+    for (int i : ill) in = std::max(in, v[i]);
+    if (in >= 0.5 * v.maxCoeff()) {
+      ++dominated;
+      continue;
+    }
+    worst = std::min(worst, re);
+  }
+  if (dominated == 0) return;
+  char buf[200];
+  if (std::isfinite(worst)) {
+    out.margin = worst;
+    std::snprintf(buf, sizeof buf,
+                  "; %d unstable modes in an ill-posed law (a PRB subsegment's bending plane at an inflection) set "
+                  "aside: the least of the others %.6g",
+                  dominated, worst);
+  } else {
+    out.status = StabilityStatus::Undetermined;
+    out.margin = NAN;
+    std::snprintf(buf, sizeof buf,
+                  "; undetermined: every unstable mode (%d) lies in an ill-posed law (a PRB subsegment's bending "
+                  "plane at an inflection)",
+                  dominated);
+  }
+  out.method += buf;
+}
+
+// The rows of G (columns of C) of the candidates in `set`.
+void select(const Eigen::MatrixXd& G, const Eigen::MatrixXd& C, const std::vector<int>& set, Eigen::MatrixXd& Gs,
+            Eigen::MatrixXd& Cs) {
+  Gs.resize(static_cast<Eigen::Index>(set.size()), G.cols());
+  Cs.resize(C.rows(), static_cast<Eigen::Index>(set.size()));
+  for (std::size_t k = 0; k < set.size(); ++k) {
+    Gs.row(static_cast<Eigen::Index>(k)) = G.row(set[k]);
+    Cs.col(static_cast<Eigen::Index>(k)) = C.col(set[k]);
+  }
+}
+
+}  // namespace
+
+// The stability of an equilibrium with contact (docs/contact.md, "Stability"). The matrices of
+// the free-space test at the answer, by the same forward differences of the recursive residual
+// in the same scaled x (the contact forces held: their points and normals move with the disks,
+// so A carries the obstacles' curvature and the rims' turning), plus the active gaps' gradients
+// (the same evaluations' gaps, scaled by r_o) and the residuals' response to the scaled forces:
+//  - rigid contact: a contact with force is an active unilateral constraint, and the equilibrium
+//    is stable if the stiffness is positive definite on the tangent space of the active gaps
+//    (constrained_margin()). Contacts touching with no force (weakly active) are taken as
+//    inactive first: a sufficient test (perturbations that would open them are allowed too). If
+//    that does not find the answer stable, the test with them as equalities (a necessary one)
+//    decides unstable; between the two the verdict is undetermined (the cone test they need is
+//    not done).
+//  - compliant contact: no constraint; a penetrated pair's force k max(0, -g) follows x, so its
+//    stiffness adds C dB/dx = -C (k r_o / F_s) G to A (the contact Jacobian with the forces
+//    eliminated), whose eigenvalues are then taken as in free space. As k grows the eigenvalues
+//    of the constrained directions grow with it and the others tend to the rigid test's.
+Stability LumpedProblem::contact_stability(const Eigen::VectorXd& y) {
+  Stability out;
+  const int nc = static_cast<int>(contacts_.size());
+  gather_x(y, x_);
+  enter_stability_chart(x_);
+  struct Leave {
+    LumpedProblem& p;
+    ~Leave() { p.leave_stability_chart(); }
+  } leave{*this};
+  const int n = static_cast<int>(x_.size());
+  // The contact system's unknowns in the chart: the x_j, then the candidates' scaled forces.
+  Eigen::VectorXd z(n + nc);
+  z.head(n) = x_;
+  z.tail(nc) = y.tail(nc);
+  Eigen::VectorXd s(n), r0(n + nc), r1(n + nc), g0(nc);
+  for (int j = 0; j < active(); ++j) x_scale(s.data() + body_.per_subsegment * j);
+  const std::string failed = "eigenvalues with contact; the residual could not be evaluated";
+  if (!recursive_residual(z.data(), r0.data()) || !r0.allFinite()) {
+    out.method = failed;
+    return out;
+  }
+  for (int i = 0; i < nc; ++i) g0[i] = contacts_[static_cast<std::size_t>(i)].at.gap;
+  Eigen::MatrixXd A(n, n), G(nc, n), C(n, nc);
+  const double rel = std::sqrt(std::numeric_limits<double>::epsilon());
+  Eigen::VectorXd zp = z;
+  for (int c = 0; c < n + nc; ++c) {
+    const double h = c < n ? rel * std::max(std::abs(z[c]), 1.0 / s[c]) : rel * std::max(std::abs(z[c]), 1.0);
+    zp[c] = z[c] + h;
+    if (!recursive_residual(zp.data(), r1.data()) || !r1.allFinite()) {
+      out.method = failed;
+      recursive_residual(z.data(), r0.data());
+      return out;
+    }
+    if (c < n) {  // columns in the scaled unknown s_c x_c; gaps scaled by r_o
+      A.col(c) = (r1.head(n) - r0.head(n)) / (h * s[c]);
+      for (int i = 0; i < nc; ++i)
+        G(i, c) = (contacts_[static_cast<std::size_t>(i)].at.gap - g0[i]) / (h * s[c] * contact_length_scale_);
+    } else {
+      C.col(c - n) = (r1.head(n) - r0.head(n)) / h;
+    }
+    zp[c] = z[c];
+  }
+  // The candidates as the answer has them (their points, normals and forces).
+  recursive_residual(z.data(), r0.data());
+  std::vector<int> ill;  // unknowns whose laws decide nothing here (ill_posed_unknown)
+  for (int j = 0; j < active(); ++j) {
+    const int m = body_.per_subsegment, i = ill_posed_unknown(x_.data() + m * j);
+    if (i >= 0) ill.push_back(m * j + i);
+  }
+  std::string mode;
+  char buf[240];
+  // The same Jacobian without the contact constraints (forces held): what the contacts change.
+  const Eigen::EigenSolver<Eigen::MatrixXd> free_eig(A, false);
+  std::string free_mode;
+  const double free_margin =
+      free_eig.info() == Eigen::Success ? least_stable_mode(free_eig.eigenvalues(), free_mode) : NAN;
+  std::snprintf(buf, sizeof buf, "; without the contacts' constraints (forces held) %.9g", free_margin);
+  const std::string free_note = buf;
+  const auto decide = [&](double margin) {
+    out.margin = margin;
+    if (margin > kUndecided)
+      out.status = StabilityStatus::Stable;
+    else if (margin < -kUndecided)
+      out.status = StabilityStatus::Unstable;
+  };
+  if (contact_stiffness_ > 0.0) {
+    // Compliant: the penetrated pairs' penalty stiffness.
+    int penetrated = 0;
+    Eigen::MatrixXd K = A;
+    const double k = contact_stiffness_ * contact_length_scale_ / contact_force_scale_;
+    for (int i = 0; i < nc; ++i) {
+      if (!(g0[i] < 0.0)) continue;
+      ++penetrated;
+      K.noalias() -= k * C.col(i) * G.row(i);
+    }
+    const Eigen::EigenSolver<Eigen::MatrixXd> eig(K, false);
+    std::snprintf(buf, sizeof buf,
+                  "eigenvalues of d(constitutive residuals)/d(scaled x_j) with the stiffness of %d compliant "
+                  "contacts, smallest real part",
+                  penetrated);
+    out.method = buf;
+    if (eig.info() != Eigen::Success || !K.allFinite()) {
+      out.method += "; the eigenvalue solver failed";
+      return out;
+    }
+    decide(least_stable_mode(eig.eigenvalues(), mode));
+    out.method += mode;
+    if (out.status == StabilityStatus::Unstable && !ill.empty()) recheck_ill_posed(K, nullptr, ill, out);
+    out.method += free_note;
+    return out;
+  }
+  // Rigid: active (force), weakly active (touching, no force), the others open.
+  std::vector<int> strong, both;
+  for (int i = 0; i < nc; ++i) {
+    const double b = z[n + i];
+    if (b > kActiveForce) {
+      strong.push_back(i);
+      both.push_back(i);
+    } else if (g0[i] / contact_length_scale_ < kTouching) {
+      both.push_back(i);
+    }
+  }
+  const int weak = static_cast<int>(both.size() - strong.size());
+  std::snprintf(buf, sizeof buf,
+                "eigenvalues of d(constitutive residuals)/d(scaled x_j) on the tangent space of %d active contacts "
+                "(the finite eigenvalues of the contact Jacobian's pencil), smallest real part",
+                static_cast<int>(strong.size()));
+  out.method = buf;
+  Eigen::MatrixXd Gs, Cs, R, Z;
+  double margin = NAN;
+  std::string why;
+  if (strong.empty()) {
+    margin = free_margin;
+    mode = free_mode;
+  } else {
+    select(G, C, strong, Gs, Cs);
+    if (!constrained_margin(A, Gs, Cs, margin, mode, why, &R, &Z)) {
+      out.method += why;
+      return out;
+    }
+  }
+  out.method += mode;
+  if (weak > 0) {
+    std::snprintf(buf, sizeof buf, "; %d weakly active (touching, force < %.0e F_s) taken as open: a sufficient test",
+                  weak, kActiveForce);
+    out.method += buf;
+  }
+  if (margin > kUndecided || weak == 0) {
+    decide(margin);
+    if (out.status == StabilityStatus::Unstable && !ill.empty())
+      recheck_ill_posed(strong.empty() ? A : R, strong.empty() ? nullptr : &Z, ill, out);
+    out.method += free_note;
+    return out;
+  }
+  // Not proven stable with the weakly active contacts open: with them closed (a necessary test).
+  double closed = NAN;
+  std::string closed_mode;
+  select(G, C, both, Gs, Cs);
+  if (!constrained_margin(A, Gs, Cs, closed, closed_mode, why)) {
+    out.method += "; with them closed" + why;
+    return out;
+  }
+  std::snprintf(buf, sizeof buf, "; with them closed %.6g", closed);
+  out.method += buf;
+  if (closed < -kUndecided) {
+    out.status = StabilityStatus::Unstable;
+    out.margin = closed;
+  } else {
+    out.method += ": undetermined between the two (the cone of the weakly active contacts is not tested)";
+  }
+  out.method += free_note;
   return out;
 }
 

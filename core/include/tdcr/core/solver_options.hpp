@@ -138,7 +138,9 @@ struct SolverOptions {
   /// Which converged answers get their stability decided (Solution::stability): VC by the
   /// conjugate-point test of the fixed-free rod, CCsub and PRB by the eigenvalues of the reduced
   /// stiffness, VCref by its reduced stiffness in the disk poses; CC reports "undetermined"
-  /// (docs/models.md, "Stability"). Automatic by default (StabilityCheck::Automatic): answers
+  /// (docs/models.md, "Stability"). With contacts: CCsub and PRB on the tangent space of the
+  /// active rigid contacts, or with the compliant contacts' stiffness (docs/contact.md,
+  /// "Stability with contact"); VC and VCref report "undetermined". Automatic by default (StabilityCheck::Automatic): answers
   /// reached by a loading path are tested, and under external loads VCref's cold direct answers
   /// (+17 % on its median loaded solve, `bench_loaded`, 2026-11-27); warm steps that follow no
   /// path (a trajectory: the test would add 92 % to VCref's loaded step) and other direct solves
