@@ -21,7 +21,6 @@
 #include <utility>
 #include <vector>
 
-#include <Eigen/LU>
 
 #include "lumped/lumped_problem.hpp"
 
@@ -149,13 +148,32 @@ bool LumpedProblem::qs_factor() {
       NW.noalias() = N * W;
       Delta.noalias() -= jac_D_.template middleRows<Rows>(m * j, m) * NW;
     }
-    const Eigen::PartialPivLU<MatM> lu(Delta);
-    // A zero pivot: singular; the KLU system pivots across blocks.
-    const auto& U = lu.matrixLU();
-    for (int i = 0; i < m; ++i)
-      if (!(std::abs(U(i, i)) > 0.0)) return false;
+    // Delta_j^{-1} by Gauss-Jordan elimination with partial pivoting (m <= 8: Eigen's LU and its
+    // inverse go through its general triangular solves, several times slower at this size). A
+    // zero pivot: singular; the KLU system pivots across blocks.
+    MatM inv_j = MatM::Identity(m, m);
+    for (int c = 0; c < m; ++c) {
+      int p = c;
+      for (int r = c + 1; r < m; ++r)
+        if (std::abs(Delta(r, c)) > std::abs(Delta(p, c))) p = r;
+      if (!(std::abs(Delta(p, c)) > 0.0)) return false;
+      if (p != c) {
+        Delta.row(p).swap(Delta.row(c));
+        inv_j.row(p).swap(inv_j.row(c));
+      }
+      const double d = 1.0 / Delta(c, c);
+      Delta.row(c) *= d;
+      inv_j.row(c) *= d;
+      for (int r = 0; r < m; ++r) {
+        if (r == c) continue;
+        const double e = Delta(r, c);
+        if (e == 0.0) continue;
+        Delta.row(r) -= e * Delta.row(c);
+        inv_j.row(r) -= e * inv_j.row(c);
+      }
+    }
     auto inv = qs_inv_.template middleCols<Rows>(m * j, m);
-    inv = lu.inverse();
+    inv = inv_j;
     if (!ext) continue;
     auto P = qs_P_.template middleRows<Rows>(m * j, m);
     P = jac_E_.template middleRows<Rows>(m * j, m);
