@@ -50,6 +50,9 @@ struct ArcRates {
 // 23.8 us, n = 10 71 -> 53 us against the dense LU, n = 20 124 -> 76 us against the block-banded
 // system on KLU (which took over from J = 30 before).
 constexpr int kBandedFrom = 1;
+// The contact solve's structured steps (KLU on the contact system) from this many subsegments on:
+// the crossover measured with the free-space solve's former KLU steps (lumped_contact.cpp).
+constexpr int kContactStructuredFrom = 30;
 // Cold direct solves: exact Newton down to this scaled residual, then modified Newton
 // (bvp::NewtonOptions::freeze_jacobian_below). On the 60 loaded cases of bench_loaded one
 // Jacobian instead of 3-4 (the recursive form's Jacobian costs about n/2 residuals), the same
@@ -65,6 +68,7 @@ class CcsubBody final : public detail::LumpedBody {
  public:
   CcsubBody(const Robot& robot, const TendonRouting& routing, const Effects& effects, LumpedFormulation formulation)
       : LumpedBody(robot, routing, effects, 3, formulation, kBandedFrom) {
+    contact_structured_from = kContactStructuredFrom;
     // With shear and extension, the tendons' compression shortens each subsegment as CC's arc
     // (N / EA with N the tensions through it): the co-tension of an antagonistic pair then moves
     // the tendons' pulls, so displacement input decides it as in VC.

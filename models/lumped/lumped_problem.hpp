@@ -98,6 +98,9 @@ class LumpedBody {
   int N = 0;                  ///< Subsegments.
   LumpedFormulation formulation = LumpedFormulation::Automatic;
   int banded_from = 0;  ///< Automatic: banded from this many loaded subsegments on.
+  /// Automatic: the contact solve's structured Newton steps (KLU on the contact system,
+  /// lumped_contact_jacobian.cpp) from this many subsegments on; dense LU below.
+  int contact_structured_from = 0;
   double backbone_radius = 0.0;     ///< Outer radius of the backbone (m): its contact surface.
   std::vector<double> disk_radius;  ///< Radius of disk j (index 0..N; m): its contact surface.
 };

@@ -30,6 +30,9 @@ constexpr double kMaxNewtonStep = 1.0;
 // the trajectory at J = 20 already took them). Before, with the block-banded system on KLU, the
 // crossover was J = 16.
 constexpr int kBandedFrom = 1;
+// The contact solve's structured steps (KLU on the contact system) from this many subsegments on:
+// the crossover measured with the free-space solve's former KLU steps (lumped_contact.cpp).
+constexpr int kContactStructuredFrom = 16;
 // Fixed-point passes of the cold guess (PrbProblem::guess_x).
 constexpr int kColdGuessPasses = 3;
 // Cold direct solves: exact Newton down to this scaled residual, then modified Newton (as CCsub).
@@ -43,6 +46,7 @@ class PrbBody final : public detail::LumpedBody {
  public:
   PrbBody(const Robot& robot, const TendonRouting& routing, const Effects& effects, LumpedFormulation formulation)
       : LumpedBody(robot, routing, effects, kU, formulation, kBandedFrom) {
+    contact_structured_from = kContactStructuredFrom;
     gamma_sum = 0.0;
     for (int i = 0; i < 4; ++i) {
       gamma[i] = effects.prb.gamma[i];
