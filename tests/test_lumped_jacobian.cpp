@@ -154,8 +154,7 @@ TEST(LumpedJacobian, BandedColouringIsValidAndAsSmallAsGreedy) {
 }
 
 namespace {
-// PRB or CCsub in the automatic formulation (structured Newton steps from 16 / 30 loaded
-// subsegments on).
+// PRB or CCsub in the automatic formulation (structured Newton steps at every J).
 std::unique_ptr<StaticModel> automatic_lumped(bool prb, const Scene& s) {
   if (prb) return std::make_unique<PrbModel>(s.robot, s.effects, LumpedFormulation::Automatic);
   return std::make_unique<CcsubModel>(s.robot, s.effects, LumpedFormulation::Automatic);
@@ -163,13 +162,16 @@ std::unique_ptr<StaticModel> automatic_lumped(bool prb, const Scene& s) {
 }  // namespace
 
 // The structured Newton step (lumped_structured.cpp) solves J d = b with the factors of the
-// recursive Jacobian: the same step as the dense Jacobian's LU. Once its buffers and pattern are
-// sized (first call per J), a Jacobian, a step setup and a step solve allocate nothing.
+// recursive Jacobian: the same step as the dense Jacobian's LU, at few subsegments (J = 4) as at
+// many (J = 40). Once its buffers are sized (first call per J), a Jacobian, a step setup and a
+// step solve allocate nothing.
 TEST(LumpedJacobian, StructuredStepSolvesTheDenseSystemAndAllocatesNothingOnceWarm) {
+  for (int disks : {2, 20})
   for (bool prb : {false, true})
     for (bool tip : {false, true}) {
-      SCOPED_TRACE(std::string(prb ? "prb" : "ccsub") + (tip ? ", tip wrench and gravity" : ", tendons"));
-      Scene s = paper::scene(20, 5, "ccsub");  // J = 40: structured steps in the automatic form
+      SCOPED_TRACE(std::string(prb ? "prb" : "ccsub") + (tip ? ", tip wrench and gravity" : ", tendons") +
+                   ", n = " + std::to_string(disks));
+      Scene s = paper::scene(disks, 5, "ccsub");
       if (tip) {
         s.loads.tip_force = Vec3(0.2, -0.1, 0.05);
         s.loads.gravity = Vec3(0.0, -9.81, 0.0);

@@ -44,13 +44,15 @@ struct ArcRates {
   }
 };
 
-// Automatic formulation: structured Newton steps (the recursive Jacobian's factors as a
-// block-banded system, KLU) from this many loaded subsegments on. Crossover with the dense LU of
-// the same Jacobian, paper robot configuration 5 (bench_lumped --sweep-only --quick,
-// docs/design-notes/lumped.md): at J = 40 the structured steps take 0.48x (tendons) and 0.70x
-// (tip force) of the dense ones in repeated solves; at J = 20 0.75x under tendons alone but
-// 1.16x with a tip force, and a fresh workspace costs up to 2.5x.
-constexpr int kBandedFrom = 30;
+// Automatic formulation: structured Newton steps (the recursive Jacobian's quasiseparable block
+// LU, lumped_structured.cpp, O(J)) from this many loaded subsegments on, i.e. always: on the cold
+// loaded cases of bench_loaded (CPU time, medians per n) n = 3 14.5 -> 13.6 us, n = 5 28.5 ->
+// 23.8 us, n = 10 71 -> 53 us against the dense LU, n = 20 124 -> 76 us against the block-banded
+// system on KLU (which took over from J = 30 before).
+constexpr int kBandedFrom = 1;
+// The contact solve's structured steps (KLU on the contact system) from this many subsegments on:
+// the crossover measured with the free-space solve's former KLU steps (lumped_contact.cpp).
+constexpr int kContactStructuredFrom = 30;
 // Cold direct solves: exact Newton down to this scaled residual, then modified Newton
 // (bvp::NewtonOptions::freeze_jacobian_below). On the 60 loaded cases of bench_loaded one
 // Jacobian instead of 3-4 (the recursive form's Jacobian costs about n/2 residuals), the same
@@ -66,6 +68,7 @@ class CcsubBody final : public detail::LumpedBody {
  public:
   CcsubBody(const Robot& robot, const TendonRouting& routing, const Effects& effects, LumpedFormulation formulation)
       : LumpedBody(robot, routing, effects, 3, formulation, kBandedFrom) {
+    contact_structured_from = kContactStructuredFrom;
     // With shear and extension, the tendons' compression shortens each subsegment as CC's arc
     // (N / EA with N the tensions through it): the co-tension of an antagonistic pair then moves
     // the tendons' pulls, so displacement input decides it as in VC.

@@ -52,11 +52,12 @@ void LumpedProblem::enter_contact_mode() {
   banded_ = false;
   reduced_ = false;
   // Structured Newton steps (lumped_contact_jacobian.cpp, KLU on (m + 12) N + candidates
-  // unknowns) where the free-space solve takes them too (LumpedBody::reduced: PRB from 16
-  // subsegments, CCsub from 30), else dense LU on the m N + candidates unknowns. bench_contact
+  // unknowns) from LumpedBody::contact_structured_from subsegments on (PRB 16, CCsub 30: where
+  // the free-space solve took the KLU system before its steps became the block LU of
+  // lumped_structured.cpp), else dense LU on the m N + candidates unknowns. bench_contact
   // (n = 10, N = 20) cold: PRB 1090 / 450 us structured, 1400 / 690 us dense (wall / point);
   // CCsub 520 / 310 us either way.
-  contact_step_ = body_.reduced(body_.N);
+  contact_step_ = body_.reduced(body_.N) && body_.N >= body_.contact_structured_from;
   damping_ = 0.0;
 }
 

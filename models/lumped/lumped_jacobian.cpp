@@ -143,6 +143,7 @@ bool LumpedProblem::structured_jacobian(const Eigen::Ref<const Eigen::VectorXd>&
   // Jacobian (jacobian()) and for the structured Newton step (lumped_structured.cpp).
   const int m = body_.per_subsegment, n = size(), J = active();
   const bool bb = backbone_weight_on();
+  ++jac_serial_;
   jac_x_ = x;
   jac_f_.resize(m);
   jac_uscale_.resize(n);

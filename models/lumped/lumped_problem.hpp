@@ -12,8 +12,9 @@
 //    law, pose continuity with disk j-1 and the balance of disk j (tendon forces of disks j-1,
 //    j, j+1): a block-banded Jacobian (declared pattern, grouped finite differences, KLU: ~J);
 //  - reduced (Automatic from LumpedBody::banded_from on): the recursive unknowns and residual,
-//    each Newton step solved with the structured recursive Jacobian as a block-banded system
-//    (lumped_structured.cpp, KLU: ~J).
+//    each Newton step solved with the structured recursive Jacobian's block LU in its
+//    quasiseparable generators, or as a block-banded system on KLU where that loses accuracy
+//    (lumped_structured.cpp: ~J).
 // Both give the same solution; Solution::unknowns always holds the x_j of all N subsegments.
 #pragma once
 
@@ -97,6 +98,9 @@ class LumpedBody {
   int N = 0;                  ///< Subsegments.
   LumpedFormulation formulation = LumpedFormulation::Automatic;
   int banded_from = 0;  ///< Automatic: banded from this many loaded subsegments on.
+  /// Automatic: the contact solve's structured Newton steps (KLU on the contact system,
+  /// lumped_contact_jacobian.cpp) from this many subsegments on; dense LU below.
+  int contact_structured_from = 0;
   double backbone_radius = 0.0;     ///< Outer radius of the backbone (m): its contact surface.
   std::vector<double> disk_radius;  ///< Radius of disk j (index 0..N; m): its contact surface.
 };
@@ -385,6 +389,25 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   // residual, so a refactorisation that may lose up to three digits is kept (KINSOL's own systems
   // keep two); a fresh pivoting factorisation costs about 3 refactorisations.
   void build_structured_pattern();
+  bool klu_setup_newton_step();
+  bool klu_solve_newton_step(Eigen::Ref<Eigen::VectorXd> b);
+  // The same Jacobian's block LU without pivoting between blocks, in its quasiseparable
+  // generators (lumped_structured.cpp): O(J) small fixed-size products, no sparse matrix. The
+  // diagonal blocks Delta_j (their inverses kept), P_j (m x 6) and Q_j (3 x m) of the factors;
+  // every solve is checked by its residual and the KLU system above takes over where the
+  // factors lost accuracy (a Delta_j singular or with growth).
+  template <int Rows>
+  bool qs_factor();
+  template <int Rows>
+  void qs_solve(double* b) const;
+  template <int Rows>
+  void qs_multiply(const double* x, double* y) const;
+  Eigen::MatrixXd qs_G_, qs_inv_, qs_P_, qs_Q_;
+  Eigen::VectorXd qs_b_, qs_r_;
+  bool qs_factored_ = false;
+  bool klu_factored_ = false;
+  long jac_serial_ = 0;  // structured_jacobian() calls: the factors' values are still jac_*'s
+  long qs_serial_ = -1;
   bvp::SparsityPattern struct_pattern_;
   std::vector<int> struct_pos_;
   std::vector<double> struct_values_;

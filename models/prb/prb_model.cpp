@@ -24,13 +24,16 @@ constexpr double kPhiScale = 1e-4;
 // local minimum of |F| (configurations 14 and 15 of the case study at n = 1 end there with
 // KINSOL's automatic bound).
 constexpr double kMaxNewtonStep = 1.0;
-// Automatic formulation: structured Newton steps (the recursive Jacobian's factors as a
-// block-banded system, KLU) from this many loaded subsegments on. Crossover with the dense LU of
-// the same Jacobian, paper robot configuration 5 (bench_lumped --sweep-only --quick,
-// docs/design-notes/lumped.md): at J = 20 the structured steps take 0.40x (tendons) and 0.60x
-// (tip force) of the dense ones in repeated solves and about the same in a fresh workspace; at
-// J = 10 0.65x / 0.91x repeated, but a fresh workspace costs 1.2x / 2.6x.
-constexpr int kBandedFrom = 16;
+// Automatic formulation: structured Newton steps (the recursive Jacobian's quasiseparable block
+// LU, lumped_structured.cpp, O(J)) from this many loaded subsegments on, i.e. always: they cost
+// less than the dense LU of the same Jacobian at every J measured (cold loaded solves of
+// bench_loaded's cases, CPU time: n = 3 26 -> 22 us, n = 5 57 -> 40 us, n = 10 about the same;
+// the trajectory at J = 20 already took them). Before, with the block-banded system on KLU, the
+// crossover was J = 16.
+constexpr int kBandedFrom = 1;
+// The contact solve's structured steps (KLU on the contact system) from this many subsegments on:
+// the crossover measured with the free-space solve's former KLU steps (lumped_contact.cpp).
+constexpr int kContactStructuredFrom = 16;
 // Fixed-point passes of the cold guess (PrbProblem::guess_x).
 constexpr int kColdGuessPasses = 3;
 // Cold direct solves: exact Newton down to this scaled residual, then modified Newton (as CCsub).
@@ -44,6 +47,7 @@ class PrbBody final : public detail::LumpedBody {
  public:
   PrbBody(const Robot& robot, const TendonRouting& routing, const Effects& effects, LumpedFormulation formulation)
       : LumpedBody(robot, routing, effects, kU, formulation, kBandedFrom) {
+    contact_structured_from = kContactStructuredFrom;
     gamma_sum = 0.0;
     for (int i = 0; i < 4; ++i) {
       gamma[i] = effects.prb.gamma[i];

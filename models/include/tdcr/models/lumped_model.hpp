@@ -17,12 +17,12 @@
 /// subsegment unknowns only; dense Jacobian by structured forward differences, dense LU, cost
 /// ~J^3 in the LU, fastest for few subsegments) and banded (disk poses and internal wrenches are
 /// unknowns too; block-banded Jacobian, KLU, cost ~J per iteration, but more iterations: its
-/// steps leave the pose constraints). Automatic: recursive below 30 (CCsub) or 16 (PRB) loaded
-/// subsegments; from there on the recursive unknowns with structured Newton steps: the recursive
-/// Jacobian is a block diagonal plus two low-rank block-triangular parts (a change of one
-/// subsegment moves everything distal of it rigidly), so each step is a block-banded system in
-/// the step and two partial sums, factored by KLU (the iterations of the recursive form at a
-/// cost ~J each; docs/design-notes/lumped.md).
+/// steps leave the pose constraints). Automatic: the recursive unknowns with structured Newton
+/// steps: the recursive Jacobian is a block diagonal plus two low-rank block-triangular parts (a
+/// change of one subsegment moves everything distal of it rigidly), so each step is solved by
+/// its block LU in those factors, a few small products per subsegment (the iterations of the
+/// recursive form at a cost ~J each), or, where that loses accuracy, as a block-banded system in
+/// the step and two partial sums, factored by KLU (docs/design-notes/lumped.md).
 #pragma once
 
 #include <memory>
