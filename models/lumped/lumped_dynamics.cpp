@@ -1,6 +1,7 @@
 // The equations of motion of CCsub and PRB (lumped_dynamics.hpp, docs/dynamics.md), integrated
-// by CVODE (BDF; Newton matrices M, K, D from the model's structured Jacobian, solved as one
-// n x n system).
+// by CVODE (BDF; Newton matrices M, K, D from the model's structured Jacobian, solved in O(N) by
+// the articulated-body algorithm with K's diagonal blocks, or, under displacement input, as one
+// dense n x n system).
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -316,6 +317,10 @@ LumpedDynamics::LumpedDynamics(const LumpedModel& model, const LumpedBody& body,
   aba5_.size(N_);
   for (int i = 0; i < n_; ++i) damp_const_[i] = settings_.bending_damping_time * spring(i, q_.data());
   schur_b_.setZero(n_);
+  Kd_.setZero(m_, n_);
+  chain_b_.setZero(n_);
+  chain3_.size(N_);
+  chain5_.size(N_);
   schur_lu_ = Eigen::PartialPivLU<Eigen::MatrixXd>(n_);
   IC_.assign(N_ + 2, Mat6::Zero());
   Io_.assign(N_ + 1, Mat6::Zero());
@@ -398,8 +403,43 @@ int LumpedDynamics::jac_fn(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix J, 
   // same (t, y) (its prediction), otherwise it is evaluated again here.
   Eigen::Map<const Eigen::VectorXd> yy(q, 2 * n);
   if (!(s.last_valid_ && t == s.last_t_ && yy == s.last_y_) && rhs_fn(t, y, tmp1, user) != 0) return 1;
-  s.mass_matrix();  // the right-hand side forms no M
   Eigen::Map<const Eigen::VectorXd> x(q, n);
+  NewtonMatrix& nm = *static_cast<NewtonMatrix*>(J->content);
+  if (s.chain_) {
+    // K's diagonal blocks only (the rows as below, block by block), and what chain_factor()
+    // needs at q: the right-hand side's twists, inertias and links. No M: the factorisation
+    // holds it implicitly. Leaving out K's blocks off the diagonal (a subsegment's law against
+    // the distal shape: the tendon forces' moment arms, a few % of the springs on the paper
+    // robot) left CVODE's Newton iterations and failures as they were with the dense K
+    // (bench_dynamics, PRB: 410 iterations, 27 failures, 267 steps against 405, 27, 264).
+    if (!s.problem_->diagonal_jacobian(x, s.r_, s.Kd_)) return 1;
+    for (int j = 1; j <= s.N_; ++j) {
+      const double c = s.body_.EI / s.length_[j];
+      const int r0 = s.m_ * (j - 1);
+      if (s.m_ == 3) {
+        const Mat3 B = s.S_[j] * s.Kd_.middleCols<3>(r0);
+        s.Kd_.middleCols<3>(r0) = B;
+      } else {
+        auto B = s.Kd_.middleCols<5>(r0);
+        B *= c;
+        B.row(3) *= s.S_[j](0, 0);
+        const double* v = q + n;
+        const double a = s.S_[j](0, 0);
+        const double kd = s.settings_.bending_damping_time * s.model_.effects().prb.k_theta[1] * c * 2.0 * a * v[r0 + 3];
+        for (int i = 0; i < 3; ++i) B(3, i) += c * s.r_[r0 + 3] + kd;
+      }
+    }
+    nm.T = s.T_;
+    nm.Io = s.Io_;
+    nm.link_c = s.link_c_;
+    nm.link_J = s.link_J_;
+    nm.Kd = s.Kd_;
+    nm.D = s.damp_;
+    nm.gamma = 0.0;
+    nm.scaled = false;
+    return nm.Kd.allFinite() ? 0 : 1;
+  }
+  s.mass_matrix();  // the right-hand side forms no M
   if (!s.problem_->jacobian(x, s.r_, s.Jr_)) return 1;
   // dQ/dq ~ -S dr/dq (S's own derivative meets r, zero at every equilibrium); d(b)/d(q, q') and
   // dM/dq are left out: the Newton matrix of a modified Newton iteration.
@@ -420,7 +460,6 @@ int LumpedDynamics::jac_fn(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix J, 
     }
   }
   if (s.displacement_ && !s.tendon_stiffness(q)) return 1;
-  NewtonMatrix& nm = *static_cast<NewtonMatrix*>(J->content);
   nm.M = s.M_;
   nm.K = s.K_;
   nm.D = s.damp_;
@@ -433,17 +472,27 @@ int LumpedDynamics::jac_fn(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix J, 
 // J = [0 I; -M^-1 K, -M^-1 D]: a NewtonMatrix keeps M, K and D (n x n, n x n, n) instead of the
 // dense 2n x 2n J, and CVODE's A = I - gamma J as gamma alone (CVODE copies and scales it between
 // steps: on the dense 2n x 2n matrix those copies took 14 % of a run, perf, bench_dynamics).
-SUNMatrix LumpedDynamics::make_newton_matrix(SUNContext ctx, int n) {
+SUNMatrix LumpedDynamics::make_newton_matrix(SUNContext ctx, const LumpedDynamics* owner) {
   SUNMatrix A = SUNMatNewEmpty(ctx);
   if (!A) return nullptr;
   auto* c = new NewtonMatrix;
-  c->M.setZero(n, n);
-  c->K.setZero(n, n);
+  const int n = owner->n_;
+  c->owner = owner;
   c->D.setZero(n);
+  if (owner->chain_) {
+    c->T.setZero(6, n);
+    c->Kd.setZero(owner->m_, n);
+    c->Io.assign(owner->Io_.size(), Mat6::Zero());
+    c->link_c.assign(owner->link_c_.size(), Vec3::Zero());
+    c->link_J.assign(owner->link_J_.size(), Eigen::Matrix<double, 3, 5>::Zero());
+  } else {
+    c->M.setZero(n, n);
+    c->K.setZero(n, n);
+  }
   A->content = c;
   A->ops->getid = [](SUNMatrix) { return SUNMATRIX_CUSTOM; };
   A->ops->clone = [](SUNMatrix A) -> SUNMatrix {
-    return make_newton_matrix(A->sunctx, static_cast<int>(static_cast<NewtonMatrix*>(A->content)->D.size()));
+    return make_newton_matrix(A->sunctx, static_cast<NewtonMatrix*>(A->content)->owner);
   };
   A->ops->destroy = [](SUNMatrix A) {
     delete static_cast<NewtonMatrix*>(A->content);
@@ -455,6 +504,11 @@ SUNMatrix LumpedDynamics::make_newton_matrix(SUNContext ctx, int n) {
     c.M.setZero();
     c.K.setZero();
     c.D.setZero();
+    c.T.setZero();
+    c.Kd.setZero();
+    std::fill(c.Io.begin(), c.Io.end(), Mat6::Zero());
+    std::fill(c.link_c.begin(), c.link_c.end(), Vec3::Zero());
+    std::fill(c.link_J.begin(), c.link_J.end(), Eigen::Matrix<double, 3, 5>::Zero());
     c.gamma = 0.0;
     c.scaled = false;
     return 0;
@@ -478,7 +532,10 @@ SUNMatrix LumpedDynamics::make_newton_matrix(SUNContext ctx, int n) {
 // row gives x1 = b1 + gamma x2, and the second, times M, (M + gamma D + gamma^2 K) x2 =
 // M b2 - gamma K b1: one n x n LU (Eigen's, blocked) of M, D, K as the model has them, no
 // inverse of M and no 2n x 2n matrix (SUNDIALS' unblocked 2n x 2n LU took 57 % of a CCsub run,
-// perf, bench_dynamics).
+// perf, bench_dynamics). The chain form (chain_, tension and load input) factors
+// M + gamma D + gamma^2 blockdiag(K) by the articulated-body algorithm instead, O(N): on PRB's
+// n = 100 the dense LU and the copies of M and K were a quarter of a run (callgrind,
+// bench_dynamics --models prb --no-reference: 361 M instructions, 223 M with the chain form).
 SUNLinearSolver LumpedDynamics::make_schur_solver() {
   SUNLinearSolver S = SUNLinSolNewEmpty(ctx_);
   if (!S) throw std::runtime_error("lumped dynamics: SUNLinSolNewEmpty failed");
@@ -490,6 +547,10 @@ SUNLinearSolver LumpedDynamics::make_schur_solver() {
     const NewtonMatrix& m = *static_cast<const NewtonMatrix*>(A->content);
     const double g = m.scaled ? m.gamma : 0.0;
     d.schur_gamma_ = g;
+    if (d.chain_) {
+      d.chain_nm_ = &m;
+      return (d.m_ == 3 ? d.chain_factor<3>(m, g) : d.chain_factor<5>(m, g)) ? 0 : 1;
+    }
     d.schur_A21_ = m.K;  // K and M of this Newton matrix, for solve()
     d.schur_M_ = m.M;
     d.schur_ = m.M + (g * g) * m.K;
@@ -505,6 +566,18 @@ SUNLinearSolver LumpedDynamics::make_schur_solver() {
     const int n = d.n_;
     Eigen::Map<const Eigen::VectorXd> bb(N_VGetArrayPointer(b), 2 * n);
     Eigen::Map<Eigen::VectorXd> xx(N_VGetArrayPointer(x), 2 * n);
+    if (d.chain_) {
+      // x2 = b2 + z with (M + gamma D + gamma^2 K) z = -gamma (D b2 + K (b1 + gamma b2)): no
+      // product with M (the chain factors hold it only implicitly).
+      const double g = d.schur_gamma_;
+      if (d.m_ == 3)
+        d.chain_solve<3>(bb.data(), g);
+      else
+        d.chain_solve<5>(bb.data(), g);
+      xx.tail(n) = bb.tail(n) - g * d.chain_b_;
+      xx.head(n) = bb.head(n) + g * xx.tail(n);
+      return xx.allFinite() ? 0 : 1;
+    }
     d.schur_b_.noalias() = d.schur_M_ * bb.tail(n);
     d.schur_b_.noalias() -= d.schur_gamma_ * (d.schur_A21_ * bb.head(n));
     xx.tail(n) = d.schur_lu_.solve(d.schur_b_);
@@ -562,7 +635,8 @@ void LumpedDynamics::initialize(const Solution& at_rest, const ModelInput& input
   // Per output step: a step that needs more has met a singularity (e.g. a CCsub subsegment bent
   // to 90 deg, where its twist law degenerates), not a hard stretch of motion.
   check(CVodeSetMaxNumSteps(cvode_, kMaxStepsPerOutput), "CVodeSetMaxNumSteps");
-  A_mat_ = make_newton_matrix(ctx_, n_);
+  chain_ = !displacement_;
+  A_mat_ = make_newton_matrix(ctx_, this);
   ls_ = make_schur_solver();
   if (!A_mat_ || !ls_) throw std::runtime_error("lumped dynamics: dense matrix or solver creation failed");
   check(CVodeSetLinearSolver(cvode_, ls_, A_mat_), "CVodeSetLinearSolver");

@@ -229,13 +229,59 @@ class LumpedDynamics final : public DynamicsIntegrator {
   Eigen::VectorXd last_y_;
   // CVODE's Newton matrix (lumped_dynamics.cpp, make_newton_matrix): J's blocks M, K, D and
   // CVODE's gamma, not the dense 2n x 2n matrix.
+  // Dense (displacement input): M, K, D. Chain (chain_): what the articulated-body
+  // factorisation of M + gamma D + gamma^2 K needs at the Jacobian's q: the twists, the disks'
+  // spatial inertias, the links, D and K's diagonal blocks Kd (m x n), no n x n matrix.
   struct NewtonMatrix {
+    const LumpedDynamics* owner = nullptr;
     Eigen::MatrixXd M, K;
     Eigen::VectorXd D;
+    Twists T;
+    Eigen::MatrixXd Kd;
+    std::vector<Mat6> Io;
+    std::vector<Vec3> link_c;
+    std::vector<Eigen::Matrix<double, 3, 5>> link_J;
     double gamma = 0.0;
     bool scaled = false;
   };
-  static SUNMatrix make_newton_matrix(SUNContext ctx, int n);
+  static SUNMatrix make_newton_matrix(SUNContext ctx, const LumpedDynamics* owner);
+  // The chain Newton solver (tension and load input, both models): CVODE's systems with M exact
+  // and K by its diagonal blocks (the springs and the subsegments' own load terms; the coupling
+  // of a subsegment's law to the distal shape left out), solved by the articulated-body
+  // algorithm in O(N) (lumped_dynamics.cpp, make_schur_solver). Displacement input keeps the
+  // dense n x n LU: its tendons' stiffness couples every subsegment and dominates the bending.
+  bool chain_ = false;
+  Eigen::MatrixXd Kd_;           // m x n: K's diagonal blocks (jac_fn)
+  Eigen::VectorXd chain_b_;      // n
+  const NewtonMatrix* chain_nm_ = nullptr;  // the matrix of the last setup
+  template <int m>
+  struct ChainFactors {
+    std::vector<Eigen::Matrix<double, 6, m>> UL, UR;  // IA T_k, IA^T T_k (IA not symmetric: K's blocks)
+    std::vector<Eigen::Matrix<double, m, m>> Dinv;
+    std::vector<Eigen::Matrix<double, m, 1>> u;
+    void size(int N) {
+      UL.assign(N + 1, Eigen::Matrix<double, 6, m>::Zero());
+      UR = UL;
+      Dinv.assign(N + 1, Eigen::Matrix<double, m, m>::Zero());
+      u.assign(N + 1, Eigen::Matrix<double, m, 1>::Zero());
+    }
+  };
+  ChainFactors<3> chain3_;
+  ChainFactors<5> chain5_;
+  template <int m>
+  ChainFactors<m>& chain_store() {
+    if constexpr (m == 3)
+      return chain3_;
+    else
+      return chain5_;
+  }
+  // Factor M + gamma D + gamma^2 blockdiag(Kd) of `nm` (false: singular or not finite).
+  template <int m>
+  bool chain_factor(const NewtonMatrix& nm, double gamma);
+  // chain_b_ <- z with (M + gamma D + gamma^2 blockdiag(Kd)) z = D b2 + Kd (b1 + gamma b2), b =
+  // (b1, b2) CVODE's right-hand side (2n), with the last chain_factor().
+  template <int m>
+  void chain_solve(const double* b, double gamma);
   std::vector<Mat6> IC_, Io_;
   std::vector<Vec6> V_, A_;
   Eigen::VectorXd qs_;

@@ -286,6 +286,102 @@ void LumpedDynamics::articulated_m(Eigen::Map<Eigen::VectorXd>& qdd) {
   }
 }
 
+template <int m>
+bool LumpedDynamics::chain_factor(const NewtonMatrix& nm, double gamma) {
+  // articulated_m()'s inward pass at the Jacobian's q (nm) without velocities: the articulated
+  // inertias of M, with gamma D + gamma^2 Kd_k added to joint k's m x m block as a joint's own
+  // inertia is. Kd_k is not symmetric (PRB's phi row, the load terms), so neither are the
+  // articulated inertias below joint k: IA_{k-1} = ... - (IA T) D^-1 (T^T IA), kept as two
+  // factors.
+  using Um = Eigen::Matrix<double, 6, m>;
+  using Mm = Eigen::Matrix<double, m, m>;
+  ChainFactors<m>& F = chain_store<m>();
+  const double g2 = gamma * gamma;
+  Mat6 IA = nm.Io[N_];
+  for (int k = N_; k >= 1; --k) {
+    const auto Tk = nm.T.template middleCols<m>(m * (k - 1));
+    Um UL = IA * Tk;
+    Um UR = IA.transpose() * Tk;
+    Mm D = Tk.transpose() * UL;
+    Mat6 IAsum = IA;
+    if constexpr (m == 5) {
+      if (links_) {
+        double msum = 0.0, m2 = 0.0;
+        Vec3 mc = Vec3::Zero();
+        Mat3 mcc = Mat3::Zero();
+        for (int i = 0; i < kLinks; ++i) {
+          const int l = kLinks * k + i;
+          const double ml = link_mass_[l];
+          const Vec3& cl = nm.link_c[l];
+          const Eigen::Matrix<double, 3, 5>& J = nm.link_J[l];
+          for (int col = 0; col < 5; ++col) {
+            const Vec3 mJ = ml * J.col(col);
+            const Vec3 cm = cl.cross(mJ);
+            UL.col(col).template head<3>() += cm;
+            UL.col(col).template tail<3>() += mJ;
+            UR.col(col).template head<3>() += cm;
+            UR.col(col).template tail<3>() += mJ;
+          }
+          const Eigen::Matrix<double, 3, 5> mJ = ml * J;
+          D.noalias() += J.transpose() * mJ;
+          msum += ml;
+          m2 += ml * cl.squaredNorm();
+          mc += ml * cl;
+          mcc.noalias() += ml * cl * cl.transpose();
+        }
+        const Mat3 C = lie::hat(mc);
+        IAsum.template topLeftCorner<3, 3>() += m2 * Mat3::Identity() - mcc;
+        IAsum.template topRightCorner<3, 3>() += C;
+        IAsum.template bottomLeftCorner<3, 3>() += C.transpose();
+        IAsum.template bottomRightCorner<3, 3>().diagonal().array() += msum;
+        D(3, 3) += kPhiInertia * phi_mass(k) * length_[k] * length_[k];
+      }
+    }
+    D.noalias() += g2 * nm.Kd.template middleCols<m>(m * (k - 1));
+    D.diagonal() += gamma * nm.D.template segment<m>(m * (k - 1));
+    const Eigen::PartialPivLU<Mm> lu(D);
+    if (!(lu.matrixLU().diagonal().cwiseAbs().minCoeff() > 0.0)) return false;
+    const Mm Dinv = lu.inverse();
+    if (!Dinv.allFinite()) return false;
+    F.UL[k] = UL;
+    F.UR[k] = UR;
+    F.Dinv[k] = Dinv;
+    if (k > 1) IA = nm.Io[k - 1] + IAsum - (UL * Dinv) * UR.transpose();
+  }
+  return IA.allFinite();
+}
+
+template <int m>
+void LumpedDynamics::chain_solve(const double* b, double gamma) {
+  // articulated_m()'s two passes with the factors of chain_factor() and no velocity terms.
+  using Vm = Eigen::Matrix<double, m, 1>;
+  ChainFactors<m>& F = chain_store<m>();
+  const NewtonMatrix& nm = *chain_nm_;
+  const Twists& T = nm.T;
+  double* z = chain_b_.data();
+  Vec6 p = Vec6::Zero();
+  for (int k = N_; k >= 1; --k) {
+    const int r0 = m * (k - 1);
+    const Vm b1 = Eigen::Map<const Vm>(b + r0), b2 = Eigen::Map<const Vm>(b + n_ + r0);
+    Vm tau = nm.D.template segment<m>(r0).cwiseProduct(b2);
+    tau.noalias() += nm.Kd.template middleCols<m>(r0) * (b1 + gamma * b2);
+    const Vm u = tau - T.template middleCols<m>(r0).transpose() * p;
+    F.u[k] = u;
+    if (k > 1) p.noalias() += F.UL[k] * (F.Dinv[k] * u);
+  }
+  Vec6 a = Vec6::Zero();
+  for (int k = 1; k <= N_; ++k) {
+    const Vm x = F.Dinv[k] * (F.u[k] - F.UR[k].transpose() * a);
+    Eigen::Map<Vm>(z + m * (k - 1)) = x;
+    a.noalias() += T.template middleCols<m>(m * (k - 1)) * x;
+  }
+}
+
+template bool LumpedDynamics::chain_factor<3>(const NewtonMatrix&, double);
+template bool LumpedDynamics::chain_factor<5>(const NewtonMatrix&, double);
+template void LumpedDynamics::chain_solve<3>(const double*, double);
+template void LumpedDynamics::chain_solve<5>(const double*, double);
+
 void LumpedDynamics::articulated(Eigen::Map<Eigen::VectorXd>& qdd) {
   if (m_ == 3)
     articulated_m<3>(qdd);

@@ -193,6 +193,11 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   bool jacobian_is_forward_difference() const final { return true; }
   bool jacobian(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& f,
                 Eigen::Ref<Eigen::MatrixXd> J) final;
+  /// The diagonal blocks of jacobian() only (m x m J, block j in columns m (j - 1)...), from the
+  /// same structured differences: the dynamics' chain Newton matrix (lumped_dynamics.cpp). False
+  /// with contact candidates (their columns are not in these blocks) or where not finite.
+  bool diagonal_jacobian(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& f,
+                         Eigen::Ref<Eigen::MatrixXd> blocks);
   bool setup_newton_step(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& f) final;
   bool solve_newton_step(Eigen::Ref<Eigen::VectorXd> b) final;
   /// The banded system's pattern and the column colouring of its grouped differences, for the
