@@ -33,6 +33,127 @@ constexpr double kTensionFixedPointGiveUp = 1e-9;
 // of pull: EA / L_free * 1e-12 L of tension (1e-9 N for EA = 400 N on the paper robot).
 constexpr double kEventBandOverLength = 1e-12;
 
+// CVODE's vector kernels on (q, q'): SUNDIALS' serial N_Vector operations, the same arithmetic
+// case by case (so the same results to the bit), in this optimised build. The system's SUNDIALS
+// (Debian's 6.4.1) has them compiled without optimisation (every operand through the stack,
+// objdump of N_VWSqrSumLocal_Serial): they were 17 % of a PRB run (callgrind, bench_dynamics
+// --models prb --no-reference). Only the operations CVODE calls on a serial vector without
+// fused operations are replaced; clones (CVODE's own vectors) inherit them.
+namespace fast_serial {
+inline sunindextype len(N_Vector v) { return NV_LENGTH_S(v); }
+inline sunrealtype* data(N_Vector v) { return NV_DATA_S(v); }
+
+void linear_sum(sunrealtype a, N_Vector X, sunrealtype b, N_Vector Y, N_Vector Z) {
+  const sunindextype n = len(X);
+  const sunrealtype *x = data(X), *y = data(Y);
+  sunrealtype* z = data(Z);
+  // N_VLinearSum_Serial's cases, in its order.
+  if (b == 1.0 && Z == Y) {  // y <- a x + y
+    if (a == 1.0)
+      for (sunindextype i = 0; i < n; ++i) z[i] += x[i];
+    else if (a == -1.0)
+      for (sunindextype i = 0; i < n; ++i) z[i] -= x[i];
+    else
+      for (sunindextype i = 0; i < n; ++i) z[i] += a * x[i];
+    return;
+  }
+  if (a == 1.0 && Z == X) {  // x <- b y + x
+    if (b == 1.0)
+      for (sunindextype i = 0; i < n; ++i) z[i] += y[i];
+    else if (b == -1.0)
+      for (sunindextype i = 0; i < n; ++i) z[i] -= y[i];
+    else
+      for (sunindextype i = 0; i < n; ++i) z[i] += b * y[i];
+    return;
+  }
+  if (a == 1.0 && b == 1.0) {
+    for (sunindextype i = 0; i < n; ++i) z[i] = x[i] + y[i];
+    return;
+  }
+  bool test;
+  if ((test = (a == 1.0 && b == -1.0)) || (a == -1.0 && b == 1.0)) {
+    const sunrealtype *v1 = test ? y : x, *v2 = test ? x : y;
+    for (sunindextype i = 0; i < n; ++i) z[i] = v2[i] - v1[i];
+    return;
+  }
+  if ((test = (a == 1.0)) || b == 1.0) {
+    const sunrealtype c = test ? b : a;
+    const sunrealtype *v1 = test ? y : x, *v2 = test ? x : y;
+    for (sunindextype i = 0; i < n; ++i) z[i] = (c * v1[i]) + v2[i];
+    return;
+  }
+  if ((test = (a == -1.0)) || b == -1.0) {
+    const sunrealtype c = test ? b : a;
+    const sunrealtype *v1 = test ? y : x, *v2 = test ? x : y;
+    for (sunindextype i = 0; i < n; ++i) z[i] = (c * v1[i]) - v2[i];
+    return;
+  }
+  if (a == b) {
+    for (sunindextype i = 0; i < n; ++i) z[i] = a * (x[i] + y[i]);
+    return;
+  }
+  if (a == -b) {
+    for (sunindextype i = 0; i < n; ++i) z[i] = a * (x[i] - y[i]);
+    return;
+  }
+  for (sunindextype i = 0; i < n; ++i) z[i] = (a * x[i]) + (b * y[i]);
+}
+
+void constant(sunrealtype c, N_Vector Z) {
+  sunrealtype* z = data(Z);
+  for (sunindextype i = 0, n = len(Z); i < n; ++i) z[i] = c;
+}
+
+void scale(sunrealtype c, N_Vector X, N_Vector Z) {
+  const sunindextype n = len(X);
+  const sunrealtype* x = data(X);
+  sunrealtype* z = data(Z);
+  if (Z == X) {
+    for (sunindextype i = 0; i < n; ++i) z[i] *= c;
+  } else if (c == 1.0) {
+    for (sunindextype i = 0; i < n; ++i) z[i] = x[i];
+  } else if (c == -1.0) {
+    for (sunindextype i = 0; i < n; ++i) z[i] = -x[i];
+  } else {
+    for (sunindextype i = 0; i < n; ++i) z[i] = c * x[i];
+  }
+}
+
+void absolute(N_Vector X, N_Vector Z) {
+  const sunrealtype* x = data(X);
+  sunrealtype* z = data(Z);
+  for (sunindextype i = 0, n = len(X); i < n; ++i) z[i] = std::abs(x[i]);
+}
+
+void inverse(N_Vector X, N_Vector Z) {
+  const sunrealtype* x = data(X);
+  sunrealtype* z = data(Z);
+  for (sunindextype i = 0, n = len(X); i < n; ++i) z[i] = 1.0 / x[i];
+}
+
+sunrealtype wsqrsum_local(N_Vector X, N_Vector W) {
+  const sunrealtype *x = data(X), *w = data(W);
+  sunrealtype sum = 0.0;
+  for (sunindextype i = 0, n = len(X); i < n; ++i) {
+    const sunrealtype p = x[i] * w[i];
+    sum += p * p;
+  }
+  return sum;
+}
+
+sunrealtype wrms_norm(N_Vector X, N_Vector W) { return std::sqrt(wsqrsum_local(X, W) / len(X)); }
+
+void install(N_Vector v) {
+  v->ops->nvlinearsum = linear_sum;
+  v->ops->nvconst = constant;
+  v->ops->nvscale = scale;
+  v->ops->nvabs = absolute;
+  v->ops->nvinv = inverse;
+  v->ops->nvwsqrsumlocal = wsqrsum_local;
+  v->ops->nvwrmsnorm = wrms_norm;
+}
+}  // namespace fast_serial
+
 // Throws InputError naming `robot.segments[i].tendons[k].stiffness` for a tendon that `a` drives
 // by displacement and that has no stiffness (inextensible).
 void require_elastic_driven(const Robot& robot, const Actuation& a) {
@@ -623,6 +744,7 @@ void LumpedDynamics::initialize(const Solution& at_rest, const ModelInput& input
   ele_ = N_VNew_Serial(2 * n_, ctx_);
   ewt_ = N_VNew_Serial(2 * n_, ctx_);
   if (!y_ || !abstol_ || !ele_ || !ewt_) throw std::runtime_error("lumped dynamics: N_VNew_Serial failed");
+  for (N_Vector v : {y_, abstol_, ele_, ewt_}) fast_serial::install(v);
   std::copy(y0.data(), y0.data() + 2 * n_, N_VGetArrayPointer(y_));
   double* at = N_VGetArrayPointer(abstol_);
   for (int i = 0; i < n_; ++i) at[i] = atol_q_, at[n_ + i] = atol_v_;
