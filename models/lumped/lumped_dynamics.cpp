@@ -533,23 +533,32 @@ int LumpedDynamics::jac_fn(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix J, 
     // the distal shape: the tendon forces' moment arms, a few % of the springs on the paper
     // robot) left CVODE's Newton iterations and failures as they were with the dense K
     // (bench_dynamics, PRB: 410 iterations, 27 failures, 267 steps against 405, 27, 264).
-    if (!s.problem_->diagonal_jacobian(x, s.r_, s.Kd_)) return 1;
-    for (int j = 1; j <= s.N_; ++j) {
-      const double c = s.body_.EI / s.length_[j];
-      const int r0 = s.m_ * (j - 1);
-      if (s.m_ == 3) {
-        const Mat3 B = s.S_[j] * s.Kd_.middleCols<3>(r0);
-        s.Kd_.middleCols<3>(r0) = B;
-      } else {
-        auto B = s.Kd_.middleCols<5>(r0);
-        B *= c;
-        B.row(3) *= s.S_[j](0, 0);
-        const double* v = q + n;
-        const double a = s.S_[j](0, 0);
-        const double kd = s.settings_.bending_damping_time * s.model_.effects().prb.k_theta[1] * c * 2.0 * a * v[r0 + 3];
-        for (int i = 0; i < 3; ++i) B(3, i) += c * s.r_[r0 + 3] + kd;
+    // Every step's Newton matrix (PRB, initialize()): K's blocks from the statics' differences
+    // every kChainStiffnessEvery Jacobians and after a convergence failure, M at every one.
+    long fails = 0;
+    CVodeGetNumNonlinSolvConvFails(s.cvode_, &fails);
+    if (s.kd_age_ < 0 || s.kd_age_ >= kChainStiffnessEvery || fails != s.kd_fails_) {
+      s.kd_age_ = 0;
+      if (!s.problem_->diagonal_jacobian(x, s.r_, s.Kd_)) return 1;
+      for (int j = 1; j <= s.N_; ++j) {
+        const double c = s.body_.EI / s.length_[j];
+        const int r0 = s.m_ * (j - 1);
+        if (s.m_ == 3) {
+          const Mat3 B = s.S_[j] * s.Kd_.middleCols<3>(r0);
+          s.Kd_.middleCols<3>(r0) = B;
+        } else {
+          auto B = s.Kd_.middleCols<5>(r0);
+          B *= c;
+          B.row(3) *= s.S_[j](0, 0);
+          const double* v = q + n;
+          const double a = s.S_[j](0, 0);
+          const double kd = s.settings_.bending_damping_time * s.model_.effects().prb.k_theta[1] * c * 2.0 * a * v[r0 + 3];
+          for (int i = 0; i < 3; ++i) B(3, i) += c * s.r_[r0 + 3] + kd;
+        }
       }
     }
+    s.kd_fails_ = fails;
+    ++s.kd_age_;
     nm.T = s.T_;
     nm.Io = s.Io_;
     nm.link_c = s.link_c_;
@@ -763,6 +772,18 @@ void LumpedDynamics::initialize(const Solution& at_rest, const ModelInput& input
   if (!A_mat_ || !ls_) throw std::runtime_error("lumped dynamics: dense matrix or solver creation failed");
   check(CVodeSetLinearSolver(cvode_, ls_, A_mat_), "CVodeSetLinearSolver");
   if (problem_->has_jacobian()) check(CVodeSetJacFn(cvode_, &jac_fn), "CVodeSetJacFn");
+  kd_age_ = -1;
+  if (chain_ && m_ == 5) {
+    // PRB: a Newton matrix at every step (the chain form's setup is O(N)). Its bending-plane
+    // rows' inertia and stiffness grow with the bend squared, so near straight they change
+    // within a few steps: with CVODE's reuse (setup every 20 steps or on a gamma change, a
+    // Jacobian every 51 or after a failure) 27 convergence failures, 267 steps, 413 right-hand
+    // sides on the paper robot's tension step (bench_dynamics); with a fresh M at every step
+    // and K's blocks every kChainStiffnessEvery steps none, 205 steps, 263 right-hand sides.
+    // CCsub converges with the reuse (1.05 Newton iterations per step) and keeps it.
+    check(CVodeSetLSetupFrequency(cvode_, 1), "CVodeSetLSetupFrequency");
+    check(CVodeSetJacEvalFrequency(cvode_, 1), "CVodeSetJacEvalFrequency");
+  }
   // Slack events: CVODE's root finding on g_k = delta_k(t) - d_k(q) stops the integration at the
   // kink of T_k (advance() restarts it there), so that no step straddles a tendon going slack or taut.
   if (displacement_) {

@@ -39,6 +39,12 @@ constexpr double kPhiInertia = 1e-2;
 // The dynamics' tip tolerance over the robot's length where the scene gives no
 // solver.tip_tolerance (lumped_dynamics.cpp, docs/dynamics.md "Accuracy").
 constexpr double kDynamicsTipToleranceOverLength = 1e-4;
+// PRB's chain Newton matrix at every step (lumped_dynamics.cpp, initialize()): K's diagonal
+// blocks (the statics' structured differences, dearer than M's factors) are computed anew at
+// every this many Jacobians (and after a Newton convergence failure). The paper robot's tension
+// step (bench_dynamics): 1: 204 steps, 294 right-hand sides, 1 failure; 5: 205, 263, none; 10:
+// 218, 304, 1; 20: 224, 330, 2.
+constexpr long kChainStiffnessEvery = 5;
 // CVODE steps allowed per output step.
 constexpr long kMaxStepsPerOutput = 20000;
 
@@ -252,6 +258,7 @@ class LumpedDynamics final : public DynamicsIntegrator {
   // dense n x n LU: its tendons' stiffness couples every subsegment and dominates the bending.
   bool chain_ = false;
   Eigen::MatrixXd Kd_;           // m x n: K's diagonal blocks (jac_fn)
+  long kd_age_ = -1, kd_fails_ = 0;  // Jacobians since Kd_ was computed; CVODE's failures then
   Eigen::VectorXd chain_b_;      // n
   const NewtonMatrix* chain_nm_ = nullptr;  // the matrix of the last setup
   template <int m>

@@ -187,6 +187,38 @@ bool spd_inverse(const Eigen::Matrix<double, m, m>& A, Eigen::Matrix<double, m, 
   return true;
 }
 
+// The inverse of a general m x m matrix by Gauss-Jordan elimination with partial pivoting, in
+// plain loops (Eigen's fixed-size PartialPivLU inverse goes through its general triangular
+// solver: at m = 5 it was half of chain_factor()). False where a pivot is zero or not finite.
+template <int m>
+bool general_inverse(const Eigen::Matrix<double, m, m>& A, Eigen::Matrix<double, m, m>& inv) {
+  double a[m][2 * m];
+  for (int i = 0; i < m; ++i)
+    for (int j = 0; j < m; ++j) {
+      a[i][j] = A(i, j);
+      a[i][m + j] = i == j ? 1.0 : 0.0;
+    }
+  for (int c = 0; c < m; ++c) {
+    int p = c;
+    for (int i = c + 1; i < m; ++i)
+      if (std::abs(a[i][c]) > std::abs(a[p][c])) p = i;
+    if (!(std::abs(a[p][c]) > 0.0) || !std::isfinite(a[p][c])) return false;
+    if (p != c)
+      for (int j = 0; j < 2 * m; ++j) std::swap(a[p][j], a[c][j]);
+    const double d = 1.0 / a[c][c];
+    for (int j = 0; j < 2 * m; ++j) a[c][j] *= d;
+    for (int i = 0; i < m; ++i) {
+      if (i == c) continue;
+      const double f = a[i][c];
+      if (f == 0.0) continue;
+      for (int j = 0; j < 2 * m; ++j) a[i][j] -= f * a[c][j];
+    }
+  }
+  for (int i = 0; i < m; ++i)
+    for (int j = 0; j < m; ++j) inv(i, j) = a[i][m + j];
+  return true;
+}
+
 }  // namespace
 
 template <int m>
@@ -339,10 +371,8 @@ bool LumpedDynamics::chain_factor(const NewtonMatrix& nm, double gamma) {
     }
     D.noalias() += g2 * nm.Kd.template middleCols<m>(m * (k - 1));
     D.diagonal() += gamma * nm.D.template segment<m>(m * (k - 1));
-    const Eigen::PartialPivLU<Mm> lu(D);
-    if (!(lu.matrixLU().diagonal().cwiseAbs().minCoeff() > 0.0)) return false;
-    const Mm Dinv = lu.inverse();
-    if (!Dinv.allFinite()) return false;
+    Mm Dinv;
+    if (!general_inverse<m>(D, Dinv) || !Dinv.allFinite()) return false;
     F.UL[k] = UL;
     F.UR[k] = UR;
     F.Dinv[k] = Dinv;
