@@ -372,6 +372,9 @@ LumpedDynamics::LumpedDynamics(const LumpedModel& model, const LumpedBody& body,
   for (auto& st : link_stencil_) st.assign(kLinks * (N_ + 1), Vec3::Zero());
   link_J_.assign(kLinks * (N_ + 1), Eigen::Matrix<double, 3, 5>::Zero());
   link_J_step_ = link_J_;
+  link_U_.assign(links_ ? N_ + 1 : 0, Eigen::Matrix<double, 6, 5>::Zero());
+  link_D_.assign(links_ ? N_ + 1 : 0, Eigen::Matrix<double, 5, 5>::Zero());
+  link_I_.assign(links_ ? N_ + 1 : 0, Mat6::Zero());
   const PrbParameters& prb = model.effects().prb;
   const double gsum = prb.gamma[0] + prb.gamma[1] + prb.gamma[2] + prb.gamma[3];
   for (int j = 1; j <= N_; ++j) {
@@ -561,8 +564,9 @@ int LumpedDynamics::jac_fn(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix J, 
     ++s.kd_age_;
     nm.T = s.T_;
     nm.Io = s.Io_;
-    nm.link_c = s.link_c_;
-    nm.link_J = s.link_J_;
+    nm.link_U = s.link_U_;
+    nm.link_D = s.link_D_;
+    nm.link_I = s.link_I_;
     nm.Kd = s.Kd_;
     nm.D = s.damp_;
     nm.gamma = 0.0;
@@ -613,8 +617,9 @@ SUNMatrix LumpedDynamics::make_newton_matrix(SUNContext ctx, const LumpedDynamic
     c->T.setZero(6, n);
     c->Kd.setZero(owner->m_, n);
     c->Io.assign(owner->Io_.size(), Mat6::Zero());
-    c->link_c.assign(owner->link_c_.size(), Vec3::Zero());
-    c->link_J.assign(owner->link_J_.size(), Eigen::Matrix<double, 3, 5>::Zero());
+    c->link_U = owner->link_U_;
+    c->link_D = owner->link_D_;
+    c->link_I = owner->link_I_;
   } else {
     c->M.setZero(n, n);
     c->K.setZero(n, n);
@@ -637,8 +642,9 @@ SUNMatrix LumpedDynamics::make_newton_matrix(SUNContext ctx, const LumpedDynamic
     c.T.setZero();
     c.Kd.setZero();
     std::fill(c.Io.begin(), c.Io.end(), Mat6::Zero());
-    std::fill(c.link_c.begin(), c.link_c.end(), Vec3::Zero());
-    std::fill(c.link_J.begin(), c.link_J.end(), Eigen::Matrix<double, 3, 5>::Zero());
+    std::fill(c.link_U.begin(), c.link_U.end(), Eigen::Matrix<double, 6, 5>::Zero());
+    std::fill(c.link_D.begin(), c.link_D.end(), Eigen::Matrix<double, 5, 5>::Zero());
+    std::fill(c.link_I.begin(), c.link_I.end(), Mat6::Zero());
     c.gamma = 0.0;
     c.scaled = false;
     return 0;

@@ -207,6 +207,12 @@ class LumpedDynamics final : public DynamicsIntegrator {
   std::vector<double> link_mass_;
   std::vector<Vec3> link_c_, link_stencil_[4];
   std::vector<Eigen::Matrix<double, 3, 5>> link_J_, link_J_step_;  // at q, at bias()'s q + h q'
+  // PRB: the four links' part of joint k's factors in articulated_m() (added to IA T_k, to
+  // T_k^T IA T_k with the phi inertia, and to the articulated inertia passed on), at the q of the
+  // last right-hand side: chain_factor() takes them from there.
+  std::vector<Eigen::Matrix<double, 6, 5>> link_U_;
+  std::vector<Eigen::Matrix<double, 5, 5>> link_D_;
+  std::vector<Mat6> link_I_;
 
   // State and buffers, sized once.
   double t_ = 0.0;
@@ -237,7 +243,8 @@ class LumpedDynamics final : public DynamicsIntegrator {
   // CVODE's gamma, not the dense 2n x 2n matrix.
   // Dense (displacement input): M, K, D. Chain (chain_): what the articulated-body
   // factorisation of M + gamma D + gamma^2 K needs at the Jacobian's q: the twists, the disks'
-  // spatial inertias, the links, D and K's diagonal blocks Kd (m x n), no n x n matrix.
+  // spatial inertias, the links' parts of the factorisation (link_U_...), D and K's diagonal
+  // blocks Kd (m x n), no n x n matrix.
   struct NewtonMatrix {
     const LumpedDynamics* owner = nullptr;
     Eigen::MatrixXd M, K;
@@ -245,8 +252,9 @@ class LumpedDynamics final : public DynamicsIntegrator {
     Twists T;
     Eigen::MatrixXd Kd;
     std::vector<Mat6> Io;
-    std::vector<Vec3> link_c;
-    std::vector<Eigen::Matrix<double, 3, 5>> link_J;
+    std::vector<Eigen::Matrix<double, 6, 5>> link_U;
+    std::vector<Eigen::Matrix<double, 5, 5>> link_D;
+    std::vector<Mat6> link_I;
     double gamma = 0.0;
     bool scaled = false;
   };

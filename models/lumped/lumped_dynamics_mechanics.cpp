@@ -259,6 +259,8 @@ void LumpedDynamics::articulated_m(Eigen::Map<Eigen::VectorXd>& qdd) {
         double msum = 0.0, m2 = 0.0;
         Vec3 mc = Vec3::Zero();
         Mat3 mcc = Mat3::Zero();
+        const Um U0 = U;
+        Mm LD = Mm::Zero();
         for (int i = 0; i < kLinks; ++i) {
           const int l = kLinks * k + i;
           const double ml = link_mass_[l];
@@ -272,7 +274,7 @@ void LumpedDynamics::articulated_m(Eigen::Map<Eigen::VectorXd>& qdd) {
           }
           {
             const Eigen::Matrix<double, 3, 5> mJ = ml * J;
-            D.noalias() += J.transpose() * mJ;
+            LD.noalias() += J.transpose() * mJ;
           }
           Vec3 f = bias_h_ > 0.0 ? link_force(l) : Vec3::Zero();
           f -= ml * (Ap.tail<3>() + Ap.head<3>().cross(cl));
@@ -286,11 +288,16 @@ void LumpedDynamics::articulated_m(Eigen::Map<Eigen::VectorXd>& qdd) {
         }
         // sum of spatial_inertia(m, c, 0): (m [c]^T [c], m [c]; m [c]^T, m I).
         const Mat3 C = lie::hat(mc);
-        IAsum.template topLeftCorner<3, 3>() += m2 * Mat3::Identity() - mcc;
-        IAsum.template topRightCorner<3, 3>() += C;
-        IAsum.template bottomLeftCorner<3, 3>() += C.transpose();
-        IAsum.template bottomRightCorner<3, 3>().diagonal().array() += msum;
-        D(3, 3) += kPhiInertia * phi_mass(k) * length_[k] * length_[k];
+        Mat6& LI = link_I_[k];
+        LI.template topLeftCorner<3, 3>() = m2 * Mat3::Identity() - mcc;
+        LI.template topRightCorner<3, 3>() = C;
+        LI.template bottomLeftCorner<3, 3>() = C.transpose();
+        LI.template bottomRightCorner<3, 3>() = msum * Mat3::Identity();
+        IAsum += LI;
+        LD(3, 3) += kPhiInertia * phi_mass(k) * length_[k] * length_[k];
+        D += LD;
+        link_U_[k] = U - U0;
+        link_D_[k] = LD;
       }
     }
     // D = S^T IA S is symmetric positive definite (an articulated inertia; PRB's phi has its
@@ -338,35 +345,10 @@ bool LumpedDynamics::chain_factor(const NewtonMatrix& nm, double gamma) {
     Mat6 IAsum = IA;
     if constexpr (m == 5) {
       if (links_) {
-        double msum = 0.0, m2 = 0.0;
-        Vec3 mc = Vec3::Zero();
-        Mat3 mcc = Mat3::Zero();
-        for (int i = 0; i < kLinks; ++i) {
-          const int l = kLinks * k + i;
-          const double ml = link_mass_[l];
-          const Vec3& cl = nm.link_c[l];
-          const Eigen::Matrix<double, 3, 5>& J = nm.link_J[l];
-          for (int col = 0; col < 5; ++col) {
-            const Vec3 mJ = ml * J.col(col);
-            const Vec3 cm = cl.cross(mJ);
-            UL.col(col).template head<3>() += cm;
-            UL.col(col).template tail<3>() += mJ;
-            UR.col(col).template head<3>() += cm;
-            UR.col(col).template tail<3>() += mJ;
-          }
-          const Eigen::Matrix<double, 3, 5> mJ = ml * J;
-          D.noalias() += J.transpose() * mJ;
-          msum += ml;
-          m2 += ml * cl.squaredNorm();
-          mc += ml * cl;
-          mcc.noalias() += ml * cl * cl.transpose();
-        }
-        const Mat3 C = lie::hat(mc);
-        IAsum.template topLeftCorner<3, 3>() += m2 * Mat3::Identity() - mcc;
-        IAsum.template topRightCorner<3, 3>() += C;
-        IAsum.template bottomLeftCorner<3, 3>() += C.transpose();
-        IAsum.template bottomRightCorner<3, 3>().diagonal().array() += msum;
-        D(3, 3) += kPhiInertia * phi_mass(k) * length_[k] * length_[k];
+        UL += nm.link_U[k];
+        UR += nm.link_U[k];
+        D += nm.link_D[k];
+        IAsum += nm.link_I[k];
       }
     }
     D.noalias() += g2 * nm.Kd.template middleCols<m>(m * (k - 1));
