@@ -372,6 +372,8 @@ LumpedDynamics::LumpedDynamics(const LumpedModel& model, const LumpedBody& body,
   for (auto& st : link_stencil_) st.assign(kLinks * (N_ + 1), Vec3::Zero());
   link_J_.assign(kLinks * (N_ + 1), Eigen::Matrix<double, 3, 5>::Zero());
   link_J_step_ = link_J_;
+  tv_step_.assign(N_ + 1, Vec6::Zero());
+  ljv_step_.assign(kLinks * (N_ + 1), Vec3::Zero());
   link_U_.assign(links_ ? N_ + 1 : 0, Eigen::Matrix<double, 6, 5>::Zero());
   link_D_.assign(links_ ? N_ + 1 : 0, Eigen::Matrix<double, 5, 5>::Zero());
   link_I_.assign(links_ ? N_ + 1 : 0, Mat6::Zero());

@@ -103,6 +103,12 @@ class LumpedDynamics final : public DynamicsIntegrator {
   // Frames and the twist columns (omega; v_o) of every unknown at q into `T`.
   // With `points`, the link midpoints go there and the link Jacobians to link_J_step_.
   void twists(const double* q, Twists& T, std::vector<Vec3>* points = nullptr);
+  // bias()'s twists at q (= its q + h v): the frames, the poses, the links' points (into
+  // link_stencil_[3]) and, per subsegment j, only the products T_j v_j (tv_step_) and J_l v_j
+  // (ljv_step_), which is all the velocity terms' forward difference takes.
+  void twists_along(const double* q, const double* v);
+  std::vector<Vec6> tv_step_;
+  std::vector<Vec3> ljv_step_;
   // Q = -S r at q (frames_ and T_ must be those of q); S's diagonal blocks kept in S_.
   bool generalized_force(const double* q);
   // M at q from T_ (frames_ of q); the composite inertias kept in IC_.

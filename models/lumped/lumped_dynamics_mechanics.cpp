@@ -87,6 +87,50 @@ void LumpedDynamics::twists(const double* q, Twists& T, std::vector<Vec3>* point
   }
 }
 
+void LumpedDynamics::twists_along(const double* q, const double* v) {
+  const double* stretch = problem_->stretch();
+  if (!rates_) {
+    // Differenced twists: all columns, then their products with v.
+    twists(q, Tp_, &link_stencil_[3]);
+    for (int j = 1; j <= N_; ++j) {
+      tv_step_[j].noalias() = Tp_.middleCols(m_ * (j - 1), m_) * Eigen::Map<const Eigen::VectorXd>(v + m_ * (j - 1), m_);
+      if (links_)
+        for (int l = 0; l < kLinks; ++l)
+          ljv_step_[kLinks * j + l].noalias() =
+              link_J_step_[kLinks * j + l] * Eigen::Map<const Eigen::Matrix<double, 5, 1>>(v + m_ * (j - 1));
+    }
+    return;
+  }
+  // twists()' closed-form pass with each subsegment's columns summed along v in its own frame
+  // first: one rotation to the base per twist and per link instead of one per column.
+  SubsegmentRates d;
+  frames_b_[0] = Frame{};
+  for (int j = 1; j <= N_; ++j) {
+    SubsegmentPose& g = poses_[j];
+    body_.pose_rates(j, q + m_ * (j - 1), stretch ? stretch[j] : 1.0, g, d);
+    const Frame& prev = frames_b_[j - 1];
+    Frame& f = frames_b_[j];
+    f.R = prev.R * g.R;
+    f.p = prev.p + prev.R * g.p;
+    const Mat3& R0 = prev.R;
+    const double* vj = v + m_ * (j - 1);
+    Vec3 wl = Vec3::Zero(), dl = Vec3::Zero();
+    for (int i = 0; i < m_; ++i) {
+      wl += vj[i] * d.w[i];
+      dl += vj[i] * d.dp[i];
+    }
+    const Vec3 w = R0 * wl;
+    tv_step_[j] << w, R0 * dl - w.cross(f.p);
+    if (links_)
+      for (int l = 0; l < kLinks; ++l) {
+        link_stencil_[3][kLinks * j + l] = prev.p + R0 * g.aux[3 + l];
+        Vec3 s = Vec3::Zero();
+        for (int i = 0; i < m_; ++i) s += vj[i] * d.dmid[l][i];
+        ljv_step_[kLinks * j + l] = R0 * s;
+      }
+  }
+}
+
 bool LumpedDynamics::generalized_force(const double* q) {
   Eigen::Map<const Eigen::VectorXd> x(q, n_);
   if (!problem_->residual(x, r_)) return false;
@@ -457,7 +501,7 @@ void LumpedDynamics::bias(const double* q, const double* v) {
     std::copy(frames_b_.begin(), frames_b_.end(), frames_q_.begin());
     std::copy(poses_.begin(), poses_.end(), poses_q_.begin());
     qs_ = qv + h * vv;
-    twists(qs_.data(), Tp_, &link_stencil_[3]);
+    twists_along(qs_.data(), v);
     if (links_) {
       // PRB: the links' accelerations at q'' = 0, d/dt of their velocities
       // V_{j-1}.v + V_{j-1}.w x c + J_l v_j, by the same forward difference (into link_stencil_[2]).
@@ -469,23 +513,23 @@ void LumpedDynamics::bias(const double* q, const double* v) {
           const Vec3& c0 = link_c_[l];
           const Vec3& c1 = link_stencil_[3][l];
           const Vec3 u0 = V0.tail<3>() + V0.head<3>().cross(c0) + link_J_[l] * vj;
-          const Vec3 u1 = V1.tail<3>() + V1.head<3>().cross(c1) + link_J_step_[l] * vj;
+          const Vec3 u1 = V1.tail<3>() + V1.head<3>().cross(c1) + ljv_step_[l];
           link_stencil_[2][l] = (u1 - u0) / h;
         }
         V0.noalias() += T_.middleCols<5>(5 * (j - 1)) * vj;
-        V1.noalias() += Tp_.middleCols<5>(5 * (j - 1)) * vj;
+        V1 += tv_step_[j];
       }
     }
-    Tp_ -= T_;
-    Tp_ /= h;
     frames_b_.swap(frames_q_);  // back to q
     poses_.swap(poses_q_);
   }
   // Spatial velocities and bias accelerations of the disks, from the base.
   Vec6 V = Vec6::Zero(), A = Vec6::Zero();
   for (int k = 1; k <= N_; ++k) {
-    V.noalias() += T_.middleCols(m_ * (k - 1), m_) * vv.segment(m_ * (k - 1), m_);
-    if (moving) A.noalias() += Tp_.middleCols(m_ * (k - 1), m_) * vv.segment(m_ * (k - 1), m_);
+    Vec6 tv;
+    tv.noalias() = T_.middleCols(m_ * (k - 1), m_) * vv.segment(m_ * (k - 1), m_);
+    V += tv;
+    if (moving) A += (tv_step_[k] - tv) / h;
     V_[k] = V;
     A_[k] = A;
   }
