@@ -133,7 +133,8 @@ void LumpedDynamics::twists_along(const double* q, const double* v) {
 
 bool LumpedDynamics::generalized_force(const double* q) {
   Eigen::Map<const Eigen::VectorXd> x(q, n_);
-  if (!problem_->residual(x, r_)) return false;
+  // The frames and poses of twists() at q: the residual does not compute them again.
+  if (!problem_->residual_with_frames(x, frames_b_.data(), poses_.data(), r_)) return false;
   const double EI = body_.EI;
   for (int j = 1; j <= N_; ++j) {
     const double* rj = r_.data() + m_ * (j - 1);
