@@ -1,6 +1,7 @@
 // The equations of motion of CCsub and PRB (lumped_dynamics.hpp, docs/dynamics.md), integrated
-// by CVODE (BDF; Newton matrices M, K, D from the model's structured Jacobian, solved as one
-// n x n system).
+// by CVODE (BDF; Newton matrices M, K, D from the model's structured Jacobian, solved in O(N) by
+// the articulated-body algorithm with K's diagonal blocks, or, under displacement input, as one
+// dense n x n system).
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -31,6 +32,127 @@ constexpr double kTensionFixedPointGiveUp = 1e-9;
 // function is gap + band (taut) or gap - band (slack). The kink is straddled by at most 1e-12 L
 // of pull: EA / L_free * 1e-12 L of tension (1e-9 N for EA = 400 N on the paper robot).
 constexpr double kEventBandOverLength = 1e-12;
+
+// CVODE's vector kernels on (q, q'): SUNDIALS' serial N_Vector operations, the same arithmetic
+// case by case (so the same results to the bit), in this optimised build. The system's SUNDIALS
+// (Debian's 6.4.1) has them compiled without optimisation (every operand through the stack,
+// objdump of N_VWSqrSumLocal_Serial): they were 17 % of a PRB run (callgrind, bench_dynamics
+// --models prb --no-reference). Only the operations CVODE calls on a serial vector without
+// fused operations are replaced; clones (CVODE's own vectors) inherit them.
+namespace fast_serial {
+inline sunindextype len(N_Vector v) { return NV_LENGTH_S(v); }
+inline sunrealtype* data(N_Vector v) { return NV_DATA_S(v); }
+
+void linear_sum(sunrealtype a, N_Vector X, sunrealtype b, N_Vector Y, N_Vector Z) {
+  const sunindextype n = len(X);
+  const sunrealtype *x = data(X), *y = data(Y);
+  sunrealtype* z = data(Z);
+  // N_VLinearSum_Serial's cases, in its order.
+  if (b == 1.0 && Z == Y) {  // y <- a x + y
+    if (a == 1.0)
+      for (sunindextype i = 0; i < n; ++i) z[i] += x[i];
+    else if (a == -1.0)
+      for (sunindextype i = 0; i < n; ++i) z[i] -= x[i];
+    else
+      for (sunindextype i = 0; i < n; ++i) z[i] += a * x[i];
+    return;
+  }
+  if (a == 1.0 && Z == X) {  // x <- b y + x
+    if (b == 1.0)
+      for (sunindextype i = 0; i < n; ++i) z[i] += y[i];
+    else if (b == -1.0)
+      for (sunindextype i = 0; i < n; ++i) z[i] -= y[i];
+    else
+      for (sunindextype i = 0; i < n; ++i) z[i] += b * y[i];
+    return;
+  }
+  if (a == 1.0 && b == 1.0) {
+    for (sunindextype i = 0; i < n; ++i) z[i] = x[i] + y[i];
+    return;
+  }
+  bool test;
+  if ((test = (a == 1.0 && b == -1.0)) || (a == -1.0 && b == 1.0)) {
+    const sunrealtype *v1 = test ? y : x, *v2 = test ? x : y;
+    for (sunindextype i = 0; i < n; ++i) z[i] = v2[i] - v1[i];
+    return;
+  }
+  if ((test = (a == 1.0)) || b == 1.0) {
+    const sunrealtype c = test ? b : a;
+    const sunrealtype *v1 = test ? y : x, *v2 = test ? x : y;
+    for (sunindextype i = 0; i < n; ++i) z[i] = (c * v1[i]) + v2[i];
+    return;
+  }
+  if ((test = (a == -1.0)) || b == -1.0) {
+    const sunrealtype c = test ? b : a;
+    const sunrealtype *v1 = test ? y : x, *v2 = test ? x : y;
+    for (sunindextype i = 0; i < n; ++i) z[i] = (c * v1[i]) - v2[i];
+    return;
+  }
+  if (a == b) {
+    for (sunindextype i = 0; i < n; ++i) z[i] = a * (x[i] + y[i]);
+    return;
+  }
+  if (a == -b) {
+    for (sunindextype i = 0; i < n; ++i) z[i] = a * (x[i] - y[i]);
+    return;
+  }
+  for (sunindextype i = 0; i < n; ++i) z[i] = (a * x[i]) + (b * y[i]);
+}
+
+void constant(sunrealtype c, N_Vector Z) {
+  sunrealtype* z = data(Z);
+  for (sunindextype i = 0, n = len(Z); i < n; ++i) z[i] = c;
+}
+
+void scale(sunrealtype c, N_Vector X, N_Vector Z) {
+  const sunindextype n = len(X);
+  const sunrealtype* x = data(X);
+  sunrealtype* z = data(Z);
+  if (Z == X) {
+    for (sunindextype i = 0; i < n; ++i) z[i] *= c;
+  } else if (c == 1.0) {
+    for (sunindextype i = 0; i < n; ++i) z[i] = x[i];
+  } else if (c == -1.0) {
+    for (sunindextype i = 0; i < n; ++i) z[i] = -x[i];
+  } else {
+    for (sunindextype i = 0; i < n; ++i) z[i] = c * x[i];
+  }
+}
+
+void absolute(N_Vector X, N_Vector Z) {
+  const sunrealtype* x = data(X);
+  sunrealtype* z = data(Z);
+  for (sunindextype i = 0, n = len(X); i < n; ++i) z[i] = std::abs(x[i]);
+}
+
+void inverse(N_Vector X, N_Vector Z) {
+  const sunrealtype* x = data(X);
+  sunrealtype* z = data(Z);
+  for (sunindextype i = 0, n = len(X); i < n; ++i) z[i] = 1.0 / x[i];
+}
+
+sunrealtype wsqrsum_local(N_Vector X, N_Vector W) {
+  const sunrealtype *x = data(X), *w = data(W);
+  sunrealtype sum = 0.0;
+  for (sunindextype i = 0, n = len(X); i < n; ++i) {
+    const sunrealtype p = x[i] * w[i];
+    sum += p * p;
+  }
+  return sum;
+}
+
+sunrealtype wrms_norm(N_Vector X, N_Vector W) { return std::sqrt(wsqrsum_local(X, W) / len(X)); }
+
+void install(N_Vector v) {
+  v->ops->nvlinearsum = linear_sum;
+  v->ops->nvconst = constant;
+  v->ops->nvscale = scale;
+  v->ops->nvabs = absolute;
+  v->ops->nvinv = inverse;
+  v->ops->nvwsqrsumlocal = wsqrsum_local;
+  v->ops->nvwrmsnorm = wrms_norm;
+}
+}  // namespace fast_serial
 
 // Throws InputError naming `robot.segments[i].tendons[k].stiffness` for a tendon that `a` drives
 // by displacement and that has no stiffness (inextensible).
@@ -250,6 +372,11 @@ LumpedDynamics::LumpedDynamics(const LumpedModel& model, const LumpedBody& body,
   for (auto& st : link_stencil_) st.assign(kLinks * (N_ + 1), Vec3::Zero());
   link_J_.assign(kLinks * (N_ + 1), Eigen::Matrix<double, 3, 5>::Zero());
   link_J_step_ = link_J_;
+  tv_step_.assign(N_ + 1, Vec6::Zero());
+  ljv_step_.assign(kLinks * (N_ + 1), Vec3::Zero());
+  link_U_.assign(links_ ? N_ + 1 : 0, Eigen::Matrix<double, 6, 5>::Zero());
+  link_D_.assign(links_ ? N_ + 1 : 0, Eigen::Matrix<double, 5, 5>::Zero());
+  link_I_.assign(links_ ? N_ + 1 : 0, Mat6::Zero());
   const PrbParameters& prb = model.effects().prb;
   const double gsum = prb.gamma[0] + prb.gamma[1] + prb.gamma[2] + prb.gamma[3];
   for (int j = 1; j <= N_; ++j) {
@@ -316,6 +443,10 @@ LumpedDynamics::LumpedDynamics(const LumpedModel& model, const LumpedBody& body,
   aba5_.size(N_);
   for (int i = 0; i < n_; ++i) damp_const_[i] = settings_.bending_damping_time * spring(i, q_.data());
   schur_b_.setZero(n_);
+  Kd_.setZero(m_, n_);
+  chain_b_.setZero(n_);
+  chain3_.size(N_);
+  chain5_.size(N_);
   schur_lu_ = Eigen::PartialPivLU<Eigen::MatrixXd>(n_);
   IC_.assign(N_ + 2, Mat6::Zero());
   Io_.assign(N_ + 1, Mat6::Zero());
@@ -398,8 +529,53 @@ int LumpedDynamics::jac_fn(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix J, 
   // same (t, y) (its prediction), otherwise it is evaluated again here.
   Eigen::Map<const Eigen::VectorXd> yy(q, 2 * n);
   if (!(s.last_valid_ && t == s.last_t_ && yy == s.last_y_) && rhs_fn(t, y, tmp1, user) != 0) return 1;
-  s.mass_matrix();  // the right-hand side forms no M
   Eigen::Map<const Eigen::VectorXd> x(q, n);
+  NewtonMatrix& nm = *static_cast<NewtonMatrix*>(J->content);
+  if (s.chain_) {
+    // K's diagonal blocks only (the rows as below, block by block), and what chain_factor()
+    // needs at q: the right-hand side's twists, inertias and links. No M: the factorisation
+    // holds it implicitly. Leaving out K's blocks off the diagonal (a subsegment's law against
+    // the distal shape: the tendon forces' moment arms, a few % of the springs on the paper
+    // robot) left CVODE's Newton iterations and failures as they were with the dense K
+    // (bench_dynamics, PRB: 410 iterations, 27 failures, 267 steps against 405, 27, 264).
+    // Every step's Newton matrix (PRB, initialize()): K's blocks from the statics' differences
+    // every kChainStiffnessEvery Jacobians and after a convergence failure, M at every one.
+    long fails = 0;
+    CVodeGetNumNonlinSolvConvFails(s.cvode_, &fails);
+    if (s.kd_age_ < 0 || s.kd_age_ >= kChainStiffnessEvery || fails != s.kd_fails_) {
+      s.kd_age_ = 0;
+      if (!s.problem_->diagonal_jacobian(x, s.r_, s.Kd_)) return 1;
+      for (int j = 1; j <= s.N_; ++j) {
+        const double c = s.body_.EI / s.length_[j];
+        const int r0 = s.m_ * (j - 1);
+        if (s.m_ == 3) {
+          const Mat3 B = s.S_[j] * s.Kd_.middleCols<3>(r0);
+          s.Kd_.middleCols<3>(r0) = B;
+        } else {
+          auto B = s.Kd_.middleCols<5>(r0);
+          B *= c;
+          B.row(3) *= s.S_[j](0, 0);
+          const double* v = q + n;
+          const double a = s.S_[j](0, 0);
+          const double kd = s.settings_.bending_damping_time * s.model_.effects().prb.k_theta[1] * c * 2.0 * a * v[r0 + 3];
+          for (int i = 0; i < 3; ++i) B(3, i) += c * s.r_[r0 + 3] + kd;
+        }
+      }
+    }
+    s.kd_fails_ = fails;
+    ++s.kd_age_;
+    nm.T = s.T_;
+    nm.Io = s.Io_;
+    nm.link_U = s.link_U_;
+    nm.link_D = s.link_D_;
+    nm.link_I = s.link_I_;
+    nm.Kd = s.Kd_;
+    nm.D = s.damp_;
+    nm.gamma = 0.0;
+    nm.scaled = false;
+    return nm.Kd.allFinite() ? 0 : 1;
+  }
+  s.mass_matrix();  // the right-hand side forms no M
   if (!s.problem_->jacobian(x, s.r_, s.Jr_)) return 1;
   // dQ/dq ~ -S dr/dq (S's own derivative meets r, zero at every equilibrium); d(b)/d(q, q') and
   // dM/dq are left out: the Newton matrix of a modified Newton iteration.
@@ -420,7 +596,6 @@ int LumpedDynamics::jac_fn(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix J, 
     }
   }
   if (s.displacement_ && !s.tendon_stiffness(q)) return 1;
-  NewtonMatrix& nm = *static_cast<NewtonMatrix*>(J->content);
   nm.M = s.M_;
   nm.K = s.K_;
   nm.D = s.damp_;
@@ -433,17 +608,28 @@ int LumpedDynamics::jac_fn(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix J, 
 // J = [0 I; -M^-1 K, -M^-1 D]: a NewtonMatrix keeps M, K and D (n x n, n x n, n) instead of the
 // dense 2n x 2n J, and CVODE's A = I - gamma J as gamma alone (CVODE copies and scales it between
 // steps: on the dense 2n x 2n matrix those copies took 14 % of a run, perf, bench_dynamics).
-SUNMatrix LumpedDynamics::make_newton_matrix(SUNContext ctx, int n) {
+SUNMatrix LumpedDynamics::make_newton_matrix(SUNContext ctx, const LumpedDynamics* owner) {
   SUNMatrix A = SUNMatNewEmpty(ctx);
   if (!A) return nullptr;
   auto* c = new NewtonMatrix;
-  c->M.setZero(n, n);
-  c->K.setZero(n, n);
+  const int n = owner->n_;
+  c->owner = owner;
   c->D.setZero(n);
+  if (owner->chain_) {
+    c->T.setZero(6, n);
+    c->Kd.setZero(owner->m_, n);
+    c->Io.assign(owner->Io_.size(), Mat6::Zero());
+    c->link_U = owner->link_U_;
+    c->link_D = owner->link_D_;
+    c->link_I = owner->link_I_;
+  } else {
+    c->M.setZero(n, n);
+    c->K.setZero(n, n);
+  }
   A->content = c;
   A->ops->getid = [](SUNMatrix) { return SUNMATRIX_CUSTOM; };
   A->ops->clone = [](SUNMatrix A) -> SUNMatrix {
-    return make_newton_matrix(A->sunctx, static_cast<int>(static_cast<NewtonMatrix*>(A->content)->D.size()));
+    return make_newton_matrix(A->sunctx, static_cast<NewtonMatrix*>(A->content)->owner);
   };
   A->ops->destroy = [](SUNMatrix A) {
     delete static_cast<NewtonMatrix*>(A->content);
@@ -455,6 +641,12 @@ SUNMatrix LumpedDynamics::make_newton_matrix(SUNContext ctx, int n) {
     c.M.setZero();
     c.K.setZero();
     c.D.setZero();
+    c.T.setZero();
+    c.Kd.setZero();
+    std::fill(c.Io.begin(), c.Io.end(), Mat6::Zero());
+    std::fill(c.link_U.begin(), c.link_U.end(), Eigen::Matrix<double, 6, 5>::Zero());
+    std::fill(c.link_D.begin(), c.link_D.end(), Eigen::Matrix<double, 5, 5>::Zero());
+    std::fill(c.link_I.begin(), c.link_I.end(), Mat6::Zero());
     c.gamma = 0.0;
     c.scaled = false;
     return 0;
@@ -478,7 +670,10 @@ SUNMatrix LumpedDynamics::make_newton_matrix(SUNContext ctx, int n) {
 // row gives x1 = b1 + gamma x2, and the second, times M, (M + gamma D + gamma^2 K) x2 =
 // M b2 - gamma K b1: one n x n LU (Eigen's, blocked) of M, D, K as the model has them, no
 // inverse of M and no 2n x 2n matrix (SUNDIALS' unblocked 2n x 2n LU took 57 % of a CCsub run,
-// perf, bench_dynamics).
+// perf, bench_dynamics). The chain form (chain_, tension and load input) factors
+// M + gamma D + gamma^2 blockdiag(K) by the articulated-body algorithm instead, O(N): on PRB's
+// n = 100 the dense LU and the copies of M and K were a quarter of a run (callgrind,
+// bench_dynamics --models prb --no-reference: 361 M instructions, 223 M with the chain form).
 SUNLinearSolver LumpedDynamics::make_schur_solver() {
   SUNLinearSolver S = SUNLinSolNewEmpty(ctx_);
   if (!S) throw std::runtime_error("lumped dynamics: SUNLinSolNewEmpty failed");
@@ -490,6 +685,10 @@ SUNLinearSolver LumpedDynamics::make_schur_solver() {
     const NewtonMatrix& m = *static_cast<const NewtonMatrix*>(A->content);
     const double g = m.scaled ? m.gamma : 0.0;
     d.schur_gamma_ = g;
+    if (d.chain_) {
+      d.chain_nm_ = &m;
+      return (d.m_ == 3 ? d.chain_factor<3>(m, g) : d.chain_factor<5>(m, g)) ? 0 : 1;
+    }
     d.schur_A21_ = m.K;  // K and M of this Newton matrix, for solve()
     d.schur_M_ = m.M;
     d.schur_ = m.M + (g * g) * m.K;
@@ -505,6 +704,18 @@ SUNLinearSolver LumpedDynamics::make_schur_solver() {
     const int n = d.n_;
     Eigen::Map<const Eigen::VectorXd> bb(N_VGetArrayPointer(b), 2 * n);
     Eigen::Map<Eigen::VectorXd> xx(N_VGetArrayPointer(x), 2 * n);
+    if (d.chain_) {
+      // x2 = b2 + z with (M + gamma D + gamma^2 K) z = -gamma (D b2 + K (b1 + gamma b2)): no
+      // product with M (the chain factors hold it only implicitly).
+      const double g = d.schur_gamma_;
+      if (d.m_ == 3)
+        d.chain_solve<3>(bb.data(), g);
+      else
+        d.chain_solve<5>(bb.data(), g);
+      xx.tail(n) = bb.tail(n) - g * d.chain_b_;
+      xx.head(n) = bb.head(n) + g * xx.tail(n);
+      return xx.allFinite() ? 0 : 1;
+    }
     d.schur_b_.noalias() = d.schur_M_ * bb.tail(n);
     d.schur_b_.noalias() -= d.schur_gamma_ * (d.schur_A21_ * bb.head(n));
     xx.tail(n) = d.schur_lu_.solve(d.schur_b_);
@@ -550,6 +761,7 @@ void LumpedDynamics::initialize(const Solution& at_rest, const ModelInput& input
   ele_ = N_VNew_Serial(2 * n_, ctx_);
   ewt_ = N_VNew_Serial(2 * n_, ctx_);
   if (!y_ || !abstol_ || !ele_ || !ewt_) throw std::runtime_error("lumped dynamics: N_VNew_Serial failed");
+  for (N_Vector v : {y_, abstol_, ele_, ewt_}) fast_serial::install(v);
   std::copy(y0.data(), y0.data() + 2 * n_, N_VGetArrayPointer(y_));
   double* at = N_VGetArrayPointer(abstol_);
   for (int i = 0; i < n_; ++i) at[i] = atol_q_, at[n_ + i] = atol_v_;
@@ -562,11 +774,24 @@ void LumpedDynamics::initialize(const Solution& at_rest, const ModelInput& input
   // Per output step: a step that needs more has met a singularity (e.g. a CCsub subsegment bent
   // to 90 deg, where its twist law degenerates), not a hard stretch of motion.
   check(CVodeSetMaxNumSteps(cvode_, kMaxStepsPerOutput), "CVodeSetMaxNumSteps");
-  A_mat_ = make_newton_matrix(ctx_, n_);
+  chain_ = !displacement_;
+  A_mat_ = make_newton_matrix(ctx_, this);
   ls_ = make_schur_solver();
   if (!A_mat_ || !ls_) throw std::runtime_error("lumped dynamics: dense matrix or solver creation failed");
   check(CVodeSetLinearSolver(cvode_, ls_, A_mat_), "CVodeSetLinearSolver");
   if (problem_->has_jacobian()) check(CVodeSetJacFn(cvode_, &jac_fn), "CVodeSetJacFn");
+  kd_age_ = -1;
+  if (chain_ && m_ == 5) {
+    // PRB: a Newton matrix at every step (the chain form's setup is O(N)). Its bending-plane
+    // rows' inertia and stiffness grow with the bend squared, so near straight they change
+    // within a few steps: with CVODE's reuse (setup every 20 steps or on a gamma change, a
+    // Jacobian every 51 or after a failure) 27 convergence failures, 267 steps, 413 right-hand
+    // sides on the paper robot's tension step (bench_dynamics); with a fresh M at every step
+    // and K's blocks every kChainStiffnessEvery steps none, 205 steps, 263 right-hand sides.
+    // CCsub converges with the reuse (1.05 Newton iterations per step) and keeps it.
+    check(CVodeSetLSetupFrequency(cvode_, 1), "CVodeSetLSetupFrequency");
+    check(CVodeSetJacEvalFrequency(cvode_, 1), "CVodeSetJacEvalFrequency");
+  }
   // Slack events: CVODE's root finding on g_k = delta_k(t) - d_k(q) stops the integration at the
   // kink of T_k (advance() restarts it there), so that no step straddles a tendon going slack or taut.
   if (displacement_) {

@@ -10,7 +10,8 @@
 // exactly the gradient of the springs' energy (so Q = 0 is the model's statics, and without
 // loads Q is conservative); D = tau_bt K (the springs' stiffness); b the velocity-product
 // (Coriolis, centrifugal, gyroscopic) forces and the air drag. The right-hand side solves for
-// q'' by the articulated-body algorithm (O(N), no M); M is formed for CVODE's Newton matrix.
+// q'' by the articulated-body algorithm (O(N), no M); so do CVODE's Newton systems under tension
+// and load input (with K's diagonal blocks), while under displacement input M is formed for them.
 #pragma once
 
 #include <memory>

@@ -39,6 +39,12 @@ constexpr double kPhiInertia = 1e-2;
 // The dynamics' tip tolerance over the robot's length where the scene gives no
 // solver.tip_tolerance (lumped_dynamics.cpp, docs/dynamics.md "Accuracy").
 constexpr double kDynamicsTipToleranceOverLength = 1e-4;
+// PRB's chain Newton matrix at every step (lumped_dynamics.cpp, initialize()): K's diagonal
+// blocks (the statics' structured differences, dearer than M's factors) are computed anew at
+// every this many Jacobians (and after a Newton convergence failure). The paper robot's tension
+// step (bench_dynamics): 1: 204 steps, 294 right-hand sides, 1 failure; 5: 205, 263, none; 10:
+// 218, 304, 1; 20: 224, 330, 2.
+constexpr long kChainStiffnessEvery = 5;
 // CVODE steps allowed per output step.
 constexpr long kMaxStepsPerOutput = 20000;
 
@@ -97,6 +103,12 @@ class LumpedDynamics final : public DynamicsIntegrator {
   // Frames and the twist columns (omega; v_o) of every unknown at q into `T`.
   // With `points`, the link midpoints go there and the link Jacobians to link_J_step_.
   void twists(const double* q, Twists& T, std::vector<Vec3>* points = nullptr);
+  // bias()'s twists at q (= its q + h v): the frames, the poses, the links' points (into
+  // link_stencil_[3]) and, per subsegment j, only the products T_j v_j (tv_step_) and J_l v_j
+  // (ljv_step_), which is all the velocity terms' forward difference takes.
+  void twists_along(const double* q, const double* v);
+  std::vector<Vec6> tv_step_;
+  std::vector<Vec3> ljv_step_;
   // Q = -S r at q (frames_ and T_ must be those of q); S's diagonal blocks kept in S_.
   bool generalized_force(const double* q);
   // M at q from T_ (frames_ of q); the composite inertias kept in IC_.
@@ -201,6 +213,12 @@ class LumpedDynamics final : public DynamicsIntegrator {
   std::vector<double> link_mass_;
   std::vector<Vec3> link_c_, link_stencil_[4];
   std::vector<Eigen::Matrix<double, 3, 5>> link_J_, link_J_step_;  // at q, at bias()'s q + h q'
+  // PRB: the four links' part of joint k's factors in articulated_m() (added to IA T_k, to
+  // T_k^T IA T_k with the phi inertia, and to the articulated inertia passed on), at the q of the
+  // last right-hand side: chain_factor() takes them from there.
+  std::vector<Eigen::Matrix<double, 6, 5>> link_U_;
+  std::vector<Eigen::Matrix<double, 5, 5>> link_D_;
+  std::vector<Mat6> link_I_;
 
   // State and buffers, sized once.
   double t_ = 0.0;
@@ -229,13 +247,62 @@ class LumpedDynamics final : public DynamicsIntegrator {
   Eigen::VectorXd last_y_;
   // CVODE's Newton matrix (lumped_dynamics.cpp, make_newton_matrix): J's blocks M, K, D and
   // CVODE's gamma, not the dense 2n x 2n matrix.
+  // Dense (displacement input): M, K, D. Chain (chain_): what the articulated-body
+  // factorisation of M + gamma D + gamma^2 K needs at the Jacobian's q: the twists, the disks'
+  // spatial inertias, the links' parts of the factorisation (link_U_...), D and K's diagonal
+  // blocks Kd (m x n), no n x n matrix.
   struct NewtonMatrix {
+    const LumpedDynamics* owner = nullptr;
     Eigen::MatrixXd M, K;
     Eigen::VectorXd D;
+    Twists T;
+    Eigen::MatrixXd Kd;
+    std::vector<Mat6> Io;
+    std::vector<Eigen::Matrix<double, 6, 5>> link_U;
+    std::vector<Eigen::Matrix<double, 5, 5>> link_D;
+    std::vector<Mat6> link_I;
     double gamma = 0.0;
     bool scaled = false;
   };
-  static SUNMatrix make_newton_matrix(SUNContext ctx, int n);
+  static SUNMatrix make_newton_matrix(SUNContext ctx, const LumpedDynamics* owner);
+  // The chain Newton solver (tension and load input, both models): CVODE's systems with M exact
+  // and K by its diagonal blocks (the springs and the subsegments' own load terms; the coupling
+  // of a subsegment's law to the distal shape left out), solved by the articulated-body
+  // algorithm in O(N) (lumped_dynamics.cpp, make_schur_solver). Displacement input keeps the
+  // dense n x n LU: its tendons' stiffness couples every subsegment and dominates the bending.
+  bool chain_ = false;
+  Eigen::MatrixXd Kd_;           // m x n: K's diagonal blocks (jac_fn)
+  long kd_age_ = -1, kd_fails_ = 0;  // Jacobians since Kd_ was computed; CVODE's failures then
+  Eigen::VectorXd chain_b_;      // n
+  const NewtonMatrix* chain_nm_ = nullptr;  // the matrix of the last setup
+  template <int m>
+  struct ChainFactors {
+    std::vector<Eigen::Matrix<double, 6, m>> UL, UR;  // IA T_k, IA^T T_k (IA not symmetric: K's blocks)
+    std::vector<Eigen::Matrix<double, m, m>> Dinv;
+    std::vector<Eigen::Matrix<double, m, 1>> u;
+    void size(int N) {
+      UL.assign(N + 1, Eigen::Matrix<double, 6, m>::Zero());
+      UR = UL;
+      Dinv.assign(N + 1, Eigen::Matrix<double, m, m>::Zero());
+      u.assign(N + 1, Eigen::Matrix<double, m, 1>::Zero());
+    }
+  };
+  ChainFactors<3> chain3_;
+  ChainFactors<5> chain5_;
+  template <int m>
+  ChainFactors<m>& chain_store() {
+    if constexpr (m == 3)
+      return chain3_;
+    else
+      return chain5_;
+  }
+  // Factor M + gamma D + gamma^2 blockdiag(Kd) of `nm` (false: singular or not finite).
+  template <int m>
+  bool chain_factor(const NewtonMatrix& nm, double gamma);
+  // chain_b_ <- z with (M + gamma D + gamma^2 blockdiag(Kd)) z = D b2 + Kd (b1 + gamma b2), b =
+  // (b1, b2) CVODE's right-hand side (2n), with the last chain_factor().
+  template <int m>
+  void chain_solve(const double* b, double gamma);
   std::vector<Mat6> IC_, Io_;
   std::vector<Vec6> V_, A_;
   Eigen::VectorXd qs_;

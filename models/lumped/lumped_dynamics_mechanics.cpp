@@ -87,9 +87,54 @@ void LumpedDynamics::twists(const double* q, Twists& T, std::vector<Vec3>* point
   }
 }
 
+void LumpedDynamics::twists_along(const double* q, const double* v) {
+  const double* stretch = problem_->stretch();
+  if (!rates_) {
+    // Differenced twists: all columns, then their products with v.
+    twists(q, Tp_, &link_stencil_[3]);
+    for (int j = 1; j <= N_; ++j) {
+      tv_step_[j].noalias() = Tp_.middleCols(m_ * (j - 1), m_) * Eigen::Map<const Eigen::VectorXd>(v + m_ * (j - 1), m_);
+      if (links_)
+        for (int l = 0; l < kLinks; ++l)
+          ljv_step_[kLinks * j + l].noalias() =
+              link_J_step_[kLinks * j + l] * Eigen::Map<const Eigen::Matrix<double, 5, 1>>(v + m_ * (j - 1));
+    }
+    return;
+  }
+  // twists()' closed-form pass with each subsegment's columns summed along v in its own frame
+  // first: one rotation to the base per twist and per link instead of one per column.
+  SubsegmentRates d;
+  frames_b_[0] = Frame{};
+  for (int j = 1; j <= N_; ++j) {
+    SubsegmentPose& g = poses_[j];
+    body_.pose_rates(j, q + m_ * (j - 1), stretch ? stretch[j] : 1.0, g, d);
+    const Frame& prev = frames_b_[j - 1];
+    Frame& f = frames_b_[j];
+    f.R = prev.R * g.R;
+    f.p = prev.p + prev.R * g.p;
+    const Mat3& R0 = prev.R;
+    const double* vj = v + m_ * (j - 1);
+    Vec3 wl = Vec3::Zero(), dl = Vec3::Zero();
+    for (int i = 0; i < m_; ++i) {
+      wl += vj[i] * d.w[i];
+      dl += vj[i] * d.dp[i];
+    }
+    const Vec3 w = R0 * wl;
+    tv_step_[j] << w, R0 * dl - w.cross(f.p);
+    if (links_)
+      for (int l = 0; l < kLinks; ++l) {
+        link_stencil_[3][kLinks * j + l] = prev.p + R0 * g.aux[3 + l];
+        Vec3 s = Vec3::Zero();
+        for (int i = 0; i < m_; ++i) s += vj[i] * d.dmid[l][i];
+        ljv_step_[kLinks * j + l] = R0 * s;
+      }
+  }
+}
+
 bool LumpedDynamics::generalized_force(const double* q) {
   Eigen::Map<const Eigen::VectorXd> x(q, n_);
-  if (!problem_->residual(x, r_)) return false;
+  // The frames and poses of twists() at q: the residual does not compute them again.
+  if (!problem_->residual_with_frames(x, frames_b_.data(), poses_.data(), r_)) return false;
   const double EI = body_.EI;
   for (int j = 1; j <= N_; ++j) {
     const double* rj = r_.data() + m_ * (j - 1);
@@ -187,6 +232,38 @@ bool spd_inverse(const Eigen::Matrix<double, m, m>& A, Eigen::Matrix<double, m, 
   return true;
 }
 
+// The inverse of a general m x m matrix by Gauss-Jordan elimination with partial pivoting, in
+// plain loops (Eigen's fixed-size PartialPivLU inverse goes through its general triangular
+// solver: at m = 5 it was half of chain_factor()). False where a pivot is zero or not finite.
+template <int m>
+bool general_inverse(const Eigen::Matrix<double, m, m>& A, Eigen::Matrix<double, m, m>& inv) {
+  double a[m][2 * m];
+  for (int i = 0; i < m; ++i)
+    for (int j = 0; j < m; ++j) {
+      a[i][j] = A(i, j);
+      a[i][m + j] = i == j ? 1.0 : 0.0;
+    }
+  for (int c = 0; c < m; ++c) {
+    int p = c;
+    for (int i = c + 1; i < m; ++i)
+      if (std::abs(a[i][c]) > std::abs(a[p][c])) p = i;
+    if (!(std::abs(a[p][c]) > 0.0) || !std::isfinite(a[p][c])) return false;
+    if (p != c)
+      for (int j = 0; j < 2 * m; ++j) std::swap(a[p][j], a[c][j]);
+    const double d = 1.0 / a[c][c];
+    for (int j = 0; j < 2 * m; ++j) a[c][j] *= d;
+    for (int i = 0; i < m; ++i) {
+      if (i == c) continue;
+      const double f = a[i][c];
+      if (f == 0.0) continue;
+      for (int j = 0; j < 2 * m; ++j) a[i][j] -= f * a[c][j];
+    }
+  }
+  for (int i = 0; i < m; ++i)
+    for (int j = 0; j < m; ++j) inv(i, j) = a[i][m + j];
+  return true;
+}
+
 }  // namespace
 
 template <int m>
@@ -227,6 +304,8 @@ void LumpedDynamics::articulated_m(Eigen::Map<Eigen::VectorXd>& qdd) {
         double msum = 0.0, m2 = 0.0;
         Vec3 mc = Vec3::Zero();
         Mat3 mcc = Mat3::Zero();
+        const Um U0 = U;
+        Mm LD = Mm::Zero();
         for (int i = 0; i < kLinks; ++i) {
           const int l = kLinks * k + i;
           const double ml = link_mass_[l];
@@ -240,7 +319,7 @@ void LumpedDynamics::articulated_m(Eigen::Map<Eigen::VectorXd>& qdd) {
           }
           {
             const Eigen::Matrix<double, 3, 5> mJ = ml * J;
-            D.noalias() += J.transpose() * mJ;
+            LD.noalias() += J.transpose() * mJ;
           }
           Vec3 f = bias_h_ > 0.0 ? link_force(l) : Vec3::Zero();
           f -= ml * (Ap.tail<3>() + Ap.head<3>().cross(cl));
@@ -254,11 +333,16 @@ void LumpedDynamics::articulated_m(Eigen::Map<Eigen::VectorXd>& qdd) {
         }
         // sum of spatial_inertia(m, c, 0): (m [c]^T [c], m [c]; m [c]^T, m I).
         const Mat3 C = lie::hat(mc);
-        IAsum.template topLeftCorner<3, 3>() += m2 * Mat3::Identity() - mcc;
-        IAsum.template topRightCorner<3, 3>() += C;
-        IAsum.template bottomLeftCorner<3, 3>() += C.transpose();
-        IAsum.template bottomRightCorner<3, 3>().diagonal().array() += msum;
-        D(3, 3) += kPhiInertia * phi_mass(k) * length_[k] * length_[k];
+        Mat6& LI = link_I_[k];
+        LI.template topLeftCorner<3, 3>() = m2 * Mat3::Identity() - mcc;
+        LI.template topRightCorner<3, 3>() = C;
+        LI.template bottomLeftCorner<3, 3>() = C.transpose();
+        LI.template bottomRightCorner<3, 3>() = msum * Mat3::Identity();
+        IAsum += LI;
+        LD(3, 3) += kPhiInertia * phi_mass(k) * length_[k] * length_[k];
+        D += LD;
+        link_U_[k] = U - U0;
+        link_D_[k] = LD;
       }
     }
     // D = S^T IA S is symmetric positive definite (an articulated inertia; PRB's phi has its
@@ -285,6 +369,75 @@ void LumpedDynamics::articulated_m(Eigen::Map<Eigen::VectorXd>& qdd) {
     a.noalias() += T_.middleCols<m>(m * (k - 1)) * x;
   }
 }
+
+template <int m>
+bool LumpedDynamics::chain_factor(const NewtonMatrix& nm, double gamma) {
+  // articulated_m()'s inward pass at the Jacobian's q (nm) without velocities: the articulated
+  // inertias of M, with gamma D + gamma^2 Kd_k added to joint k's m x m block as a joint's own
+  // inertia is. Kd_k is not symmetric (PRB's phi row, the load terms), so neither are the
+  // articulated inertias below joint k: IA_{k-1} = ... - (IA T) D^-1 (T^T IA), kept as two
+  // factors.
+  using Um = Eigen::Matrix<double, 6, m>;
+  using Mm = Eigen::Matrix<double, m, m>;
+  ChainFactors<m>& F = chain_store<m>();
+  const double g2 = gamma * gamma;
+  Mat6 IA = nm.Io[N_];
+  for (int k = N_; k >= 1; --k) {
+    const auto Tk = nm.T.template middleCols<m>(m * (k - 1));
+    Um UL = IA * Tk;
+    Um UR = IA.transpose() * Tk;
+    Mm D = Tk.transpose() * UL;
+    Mat6 IAsum = IA;
+    if constexpr (m == 5) {
+      if (links_) {
+        UL += nm.link_U[k];
+        UR += nm.link_U[k];
+        D += nm.link_D[k];
+        IAsum += nm.link_I[k];
+      }
+    }
+    D.noalias() += g2 * nm.Kd.template middleCols<m>(m * (k - 1));
+    D.diagonal() += gamma * nm.D.template segment<m>(m * (k - 1));
+    Mm Dinv;
+    if (!general_inverse<m>(D, Dinv) || !Dinv.allFinite()) return false;
+    F.UL[k] = UL;
+    F.UR[k] = UR;
+    F.Dinv[k] = Dinv;
+    if (k > 1) IA = nm.Io[k - 1] + IAsum - (UL * Dinv) * UR.transpose();
+  }
+  return IA.allFinite();
+}
+
+template <int m>
+void LumpedDynamics::chain_solve(const double* b, double gamma) {
+  // articulated_m()'s two passes with the factors of chain_factor() and no velocity terms.
+  using Vm = Eigen::Matrix<double, m, 1>;
+  ChainFactors<m>& F = chain_store<m>();
+  const NewtonMatrix& nm = *chain_nm_;
+  const Twists& T = nm.T;
+  double* z = chain_b_.data();
+  Vec6 p = Vec6::Zero();
+  for (int k = N_; k >= 1; --k) {
+    const int r0 = m * (k - 1);
+    const Vm b1 = Eigen::Map<const Vm>(b + r0), b2 = Eigen::Map<const Vm>(b + n_ + r0);
+    Vm tau = nm.D.template segment<m>(r0).cwiseProduct(b2);
+    tau.noalias() += nm.Kd.template middleCols<m>(r0) * (b1 + gamma * b2);
+    const Vm u = tau - T.template middleCols<m>(r0).transpose() * p;
+    F.u[k] = u;
+    if (k > 1) p.noalias() += F.UL[k] * (F.Dinv[k] * u);
+  }
+  Vec6 a = Vec6::Zero();
+  for (int k = 1; k <= N_; ++k) {
+    const Vm x = F.Dinv[k] * (F.u[k] - F.UR[k].transpose() * a);
+    Eigen::Map<Vm>(z + m * (k - 1)) = x;
+    a.noalias() += T.template middleCols<m>(m * (k - 1)) * x;
+  }
+}
+
+template bool LumpedDynamics::chain_factor<3>(const NewtonMatrix&, double);
+template bool LumpedDynamics::chain_factor<5>(const NewtonMatrix&, double);
+template void LumpedDynamics::chain_solve<3>(const double*, double);
+template void LumpedDynamics::chain_solve<5>(const double*, double);
 
 void LumpedDynamics::articulated(Eigen::Map<Eigen::VectorXd>& qdd) {
   if (m_ == 3)
@@ -349,7 +502,7 @@ void LumpedDynamics::bias(const double* q, const double* v) {
     std::copy(frames_b_.begin(), frames_b_.end(), frames_q_.begin());
     std::copy(poses_.begin(), poses_.end(), poses_q_.begin());
     qs_ = qv + h * vv;
-    twists(qs_.data(), Tp_, &link_stencil_[3]);
+    twists_along(qs_.data(), v);
     if (links_) {
       // PRB: the links' accelerations at q'' = 0, d/dt of their velocities
       // V_{j-1}.v + V_{j-1}.w x c + J_l v_j, by the same forward difference (into link_stencil_[2]).
@@ -361,23 +514,23 @@ void LumpedDynamics::bias(const double* q, const double* v) {
           const Vec3& c0 = link_c_[l];
           const Vec3& c1 = link_stencil_[3][l];
           const Vec3 u0 = V0.tail<3>() + V0.head<3>().cross(c0) + link_J_[l] * vj;
-          const Vec3 u1 = V1.tail<3>() + V1.head<3>().cross(c1) + link_J_step_[l] * vj;
+          const Vec3 u1 = V1.tail<3>() + V1.head<3>().cross(c1) + ljv_step_[l];
           link_stencil_[2][l] = (u1 - u0) / h;
         }
         V0.noalias() += T_.middleCols<5>(5 * (j - 1)) * vj;
-        V1.noalias() += Tp_.middleCols<5>(5 * (j - 1)) * vj;
+        V1 += tv_step_[j];
       }
     }
-    Tp_ -= T_;
-    Tp_ /= h;
     frames_b_.swap(frames_q_);  // back to q
     poses_.swap(poses_q_);
   }
   // Spatial velocities and bias accelerations of the disks, from the base.
   Vec6 V = Vec6::Zero(), A = Vec6::Zero();
   for (int k = 1; k <= N_; ++k) {
-    V.noalias() += T_.middleCols(m_ * (k - 1), m_) * vv.segment(m_ * (k - 1), m_);
-    if (moving) A.noalias() += Tp_.middleCols(m_ * (k - 1), m_) * vv.segment(m_ * (k - 1), m_);
+    Vec6 tv;
+    tv.noalias() = T_.middleCols(m_ * (k - 1), m_) * vv.segment(m_ * (k - 1), m_);
+    V += tv;
+    if (moving) A += (tv_step_[k] - tv) / h;
     V_[k] = V;
     A_[k] = A;
   }

@@ -297,4 +297,14 @@ bool LumpedProblem::jacobian(const Eigen::Ref<const Eigen::VectorXd>& x, const E
   return Jm.allFinite();
 }
 
+bool LumpedProblem::diagonal_jacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
+                                      const Eigen::Ref<const Eigen::VectorXd>& f, Eigen::Ref<Eigen::MatrixXd> blocks) {
+  if (!contacts_.empty() || !undamped_structured_jacobian(x, f)) return false;
+  const int m = body_.per_subsegment;
+  blocks = jac_diag_;
+  if (damping_ > 0.0)
+    for (Eigen::Index c = 0; c < blocks.cols(); ++c) blocks(c % m, c) += damping_ * damping_scale_[c];
+  return blocks.allFinite();
+}
+
 }  // namespace tdcr::detail

@@ -245,6 +245,29 @@ bool LumpedProblem::residual(const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::
   return true;
 }
 
+bool LumpedProblem::residual_with_frames(const Eigen::Ref<const Eigen::VectorXd>& y, const Frame* frames,
+                                         const SubsegmentPose* poses, Eigen::Ref<Eigen::VectorXd> f) {
+  if (banded_ || !contacts_.empty() || body_.statics.friction() || active() != body_.N) return residual(y, f);
+  // evaluate() with the frames and poses given.
+  last_valid_ = false;
+  const bool bb = backbone_weight_on();
+  for (int j = 0; j <= body_.N; ++j) frames_[j] = frames[j];
+  for (int j = 1; j <= body_.N; ++j) {
+    poses_[j] = poses[j];
+    if (bb) centroids_[j] = frames[j - 1].p + frames[j - 1].R * poses[j].c;
+  }
+  body_.statics.distal_wrenches(loads_, frames_.data(), centroids_.data(), F_.data(), M_.data());
+  constitutive_all(y.data(), f.data());
+  // residual()'s end.
+  if (damping_ > 0.0) f += damping_ * damping_scale_.cwiseProduct(y - damping_ref_);
+  if (!f.allFinite()) return false;
+  last_y_ = y;
+  last_f_ = f;
+  last_lambda_ = loads_.loads.load_factor();
+  last_valid_ = true;
+  return true;
+}
+
 bool LumpedProblem::evaluated_at(const Eigen::Ref<const Eigen::VectorXd>& y) const {
   return last_valid_ && last_lambda_ == loads_.loads.load_factor() && y.size() == last_y_.size() && y == last_y_;
 }

@@ -166,6 +166,12 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   Completion complete(Eigen::VectorXd& y, const bvp::NewtonOptions& options, SolverSummary& summary) final;
   void set_parameter(double lambda) final { loads_.set_load_factor(lambda); }
   bool residual(const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> f) final;
+  /// residual() at y with the disk frames 0..N and the subsegments' poses 1..N of y given (the
+  /// dynamics' twists have just computed them from the same poses: compute_frames() would
+  /// repeat them to the bit). Only bound by bind_all() in the recursive form without contact
+  /// candidates or friction; otherwise residual().
+  bool residual_with_frames(const Eigen::Ref<const Eigen::VectorXd>& y, const Frame* frames,
+                            const SubsegmentPose* poses, Eigen::Ref<Eigen::VectorXd> f);
   /// The driver's final check right after Newton: where the last residual() call was at y at the
   /// same load factor and nothing has changed the equations or the evaluated state since (the
   /// usual end of a solve: KINSOL's last call is at the point it returns), that call's values.
@@ -199,6 +205,11 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   bool jacobian_is_forward_difference() const final { return true; }
   bool jacobian(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& f,
                 Eigen::Ref<Eigen::MatrixXd> J) final;
+  /// The diagonal blocks of jacobian() only (m x m J, block j in columns m (j - 1)...), from the
+  /// same structured differences: the dynamics' chain Newton matrix (lumped_dynamics.cpp). False
+  /// with contact candidates (their columns are not in these blocks) or where not finite.
+  bool diagonal_jacobian(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& f,
+                         Eigen::Ref<Eigen::MatrixXd> blocks);
   bool setup_newton_step(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& f) final;
   bool solve_newton_step(Eigen::Ref<Eigen::VectorXd> b) final;
   /// The banded system's pattern and the column colouring of its grouped differences, for the

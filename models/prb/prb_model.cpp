@@ -63,6 +63,14 @@ class PrbBody final : public detail::LumpedBody {
 
   // Eq. 11-12 with the twist: the rigid-link body of subsegment j in its base disk frame.
   void local(int j, const double* xj, detail::SubsegmentPose& g) const override {
+    double sa[3], ca[3];
+    local(j, xj, g, sa, ca);
+  }
+
+  // local(), with the sines and cosines of the partial angles a_q after joint q (local_rates()
+  // takes them from here rather than evaluating them again: sin and cos were a tenth of a PRB
+  // dynamics run).
+  void local(int j, const double* xj, detail::SubsegmentPose& g, double* sa_out, double* ca_out) const {
     const double l = statics.length(j);
     const double cp = std::cos(xj[3]), sp = std::sin(xj[3]);
     g.cphi = cp;
@@ -79,6 +87,8 @@ class PrbBody final : public detail::LumpedBody {
       const double L = gamma[q + 1] * l;
       sa = std::sin(a);
       ca = std::cos(a);
+      sa_out[q] = sa;
+      ca_out[q] = ca;
       mid[q + 1] = to3(x + 0.5 * L * sa, z + 0.5 * L * ca);
       x += L * sa;
       z += L * ca;
@@ -102,17 +112,12 @@ class PrbBody final : public detail::LumpedBody {
   // phi about e_z less the end's axis (R = Rz(phi) Ry(a) Rz(eps) Rz(-phi)); the in-plane points
   // move with the joints proximal of them and turn with phi.
   bool local_rates(int j, const double* xj, detail::SubsegmentPose& g, detail::SubsegmentRates& d) const override {
-    local(j, xj, g);
+    // Partial angles a_q after joint q: their sines and cosines from local(); the links' lengths.
+    double L[3], sa[3], ca[3];
+    local(j, xj, g, sa, ca);
     const double l = statics.length(j);
     const double cp = g.cphi, sp = g.sphi;
-    // Partial angles a_q after joint q, their sines and cosines, the links' lengths.
-    double L[3], sa[3], ca[3], a = 0.0;
-    for (int q = 0; q < 3; ++q) {
-      a += xj[q];
-      L[q] = gamma[q + 1] * l;
-      sa[q] = std::sin(a);
-      ca[q] = std::cos(a);
-    }
+    for (int q = 0; q < 3; ++q) L[q] = gamma[q + 1] * l;
     auto plane = [&](double dx, double dz) { return Vec3(dx * cp, dx * sp, dz); };
     auto turn = [&](const Vec3& v) { return Vec3(-v.y(), v.x(), 0.0); };  // d/dphi of a point
     const Vec3 axis(cp * sa[2], sp * sa[2], ca[2]);
