@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include "tdcr/core/contact_geometry.hpp"
 #include "tdcr/core/paper_robot.hpp"
@@ -40,6 +41,18 @@ inline Obstacle plane(const Vec3& p, const Vec3& n) {
   o.point = p;
   o.normal = n;
   return o;
+}
+
+// Obstacles robot_scene(model, 10) under tensions (0.5, 0, 0.3, 0) N and a 0.01 N tip force
+// along x never touches: a wall below it, a sphere beside it, a wide lumen around it.
+inline std::vector<Obstacle> untouched_obstacles() {
+  std::vector<Obstacle> obstacles = {plane(Vec3(0, -0.05, 0), Vec3(0, 1, 0)), sphere(Vec3(0.05, -0.03, 0.05), 0.01)};
+  Obstacle lumen;
+  lumen.type = Obstacle::Type::Lumen;
+  lumen.radius = 0.2;
+  lumen.centreline = {Vec3(0, 0, -0.1), Vec3(0, 0, 0.3)};
+  obstacles.push_back(lumen);
+  return obstacles;
 }
 
 // The smallest gap of any body part (backbone at every disk, disk rims) to any obstacle.

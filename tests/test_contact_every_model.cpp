@@ -26,12 +26,7 @@ TEST_P(ContactEveryModel, UntouchedObstaclesGiveTheFreeSpaceAnswer) {
   s.loads.tip_force = Vec3(0.01, 0.0, 0.0);
   const Solution free = run(s);
   ASSERT_TRUE(free.converged()) << free.summary.message;
-  s.environment.obstacles = {plane(Vec3(0, -0.05, 0), Vec3(0, 1, 0)), sphere(Vec3(0.05, -0.03, 0.05), 0.01)};
-  Obstacle lumen;
-  lumen.type = Obstacle::Type::Lumen;
-  lumen.radius = 0.2;
-  lumen.centreline = {Vec3(0, 0, -0.1), Vec3(0, 0, 0.3)};
-  s.environment.obstacles.push_back(lumen);
+  s.environment.obstacles = untouched_obstacles();
   const Solution touched = run(s);
   ASSERT_TRUE(touched.converged()) << touched.summary.message;
   EXPECT_TRUE(touched.contacts.empty());
