@@ -258,6 +258,18 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   /// references. Default: x unchanged (CCsub's curvature components have one chart).
   virtual void enter_stability_chart(Eigen::VectorXd& x) { (void)x; }
   virtual void leave_stability_chart() {}
+  /// One stability test's stay in that chart: entered at construction (x rewritten), left on
+  /// every return of the test.
+  class StabilityChartScope {
+   public:
+    StabilityChartScope(LumpedProblem& p, Eigen::VectorXd& x) : p_(p) { p_.enter_stability_chart(x); }
+    ~StabilityChartScope() { p_.leave_stability_chart(); }
+    StabilityChartScope(const StabilityChartScope&) = delete;
+    StabilityChartScope& operator=(const StabilityChartScope&) = delete;
+
+   private:
+    LumpedProblem& p_;
+  };
   /// Scale of x_j (per_subsegment values; default ones).
   virtual void x_scale(double* s) const;
   /// The unknown of subsegment j (index within x_j, in the stability chart) whose law is not a

@@ -69,12 +69,8 @@ Stability LumpedProblem::stability(const Eigen::VectorXd& y, double load_factor)
   Stability out;
   out.method = "eigenvalues of d(constitutive residuals)/d(scaled x_j), smallest real part";
   gather_x(y, x_);
-  enter_stability_chart(x_);
-  // Every return below leaves the chart (the path goes on from a tested landing).
-  struct Leave {
-    LumpedProblem& p;
-    ~Leave() { p.leave_stability_chart(); }
-  } leave{*this};
+  // Left on every return below: the path goes on from a tested landing.
+  const StabilityChartScope chart(*this, x_);
   const int n = static_cast<int>(x_.size());
   if (n == 0) {
     // Nothing loaded: the straight robot held by its elastic stiffness alone.
@@ -265,11 +261,7 @@ Stability LumpedProblem::contact_stability(const Eigen::VectorXd& y) {
   Stability out;
   const int nc = static_cast<int>(contacts_.size());
   gather_x(y, x_);
-  enter_stability_chart(x_);
-  struct Leave {
-    LumpedProblem& p;
-    ~Leave() { p.leave_stability_chart(); }
-  } leave{*this};
+  const StabilityChartScope chart(*this, x_);  // left on every return below
   const int n = static_cast<int>(x_.size());
   // The contact system's unknowns in the chart: the x_j, then the candidates' scaled forces.
   Eigen::VectorXd z(n + nc);
@@ -584,11 +576,7 @@ Stability LumpedProblem::direct_stability(const Eigen::VectorXd& y, double load_
   {
     gather_x(y, x_);
     if (x_.size() == 0) return stability(y, load_factor);
-    enter_stability_chart(x_);
-    struct Leave {
-      LumpedProblem& p;
-      ~Leave() { p.leave_stability_chart(); }
-    } leave{*this};
+    const StabilityChartScope chart(*this, x_);  // left on every return below
     proven = proven_stable(margin, how);
   }
   if (!proven) return stability(y, load_factor);
