@@ -77,6 +77,7 @@
 // to a planar deformation.
 #include "vc/vc_stability.hpp"
 
+#include "physics/small_dense.hpp"
 #include "physics/tendon_path.hpp"
 #include "tdcr/core/lie.hpp"
 
@@ -86,8 +87,6 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
-#include <Eigen/LU>
-#include <Eigen/SVD>
 
 namespace tdcr::vc {
 
@@ -211,9 +210,10 @@ Stability conjugate_point_test(VcWorkspace::Impl& W, const Vec6& base, double lo
   Eigen::Matrix<double, 12, 6> cut = Eigen::Matrix<double, 12, 6>::Zero();
   cut.bottomRows<6>().setIdentity();
   // The free end's Jacobi fields (delta w(L) = 0, tip pose variation e_i), carried to the base.
-  Eigen::Matrix<double, 12, 6> free_next = Eigen::Matrix<double, 12, 6>::Zero(), free_here, clamped;
+  Eigen::Matrix<double, 12, 6> free_next = Eigen::Matrix<double, 12, 6>::Zero(), free_here, clamped, carried;
   free_next.topRows<6>().setIdentity();
   Mat12 in, end;
+  Mat6 Rinv, Binv, Minv;
   double margin = std::numeric_limits<double>::infinity();
   int index = 0;  // conjugate points between the tip and the current disk, with multiplicity
   for (int k = intervals - 1; k >= 0; --k) {
@@ -287,18 +287,26 @@ Stability conjugate_point_test(VcWorkspace::Impl& W, const Vec6& base, double lo
     // The transfer matrix of the interval in the scaled coordinates is T = end in^-1; `in` is
     // block lower triangular (a wrench perturbation leaves the start pose as it is), [P 0; Q R].
     // The interval clamped at disk k, its end pose and wrench for a cut wrench at disk k:
-    // T [0; I] = end [0; R^-1].
-    clamped.noalias() = end.rightCols<6>() * in.bottomRightCorner<6, 6>().partialPivLu().inverse();
+    // T [0; I] = end [0; R^-1]. (Small systems by physics/small_dense.hpp and fixed-size products
+    // lazily: Eigen's general LU solves and product kernel cost more than the arithmetic here.)
+    if (!physics::invert_small<6>(in.bottomRightCorner<6, 6>(), Rinv)) {
+      out.method += "; the stiffness at a disk could not be formed";
+      return out;
+    }
+    clamped.noalias() = end.rightCols<6>().lazyProduct(Rinv);
     Mat6 B = clamped.topRows<6>();
     // A Kirchhoff rod's end pose does not see an axial force when straight (B singular): the
     // compliance of shear and extension is added as a penalty on those stiff directions.
     if (!W.section.shear_extension)
       B.topLeftCorner<3, 3>() += (h * Fs / L) * (frames[k].R * W.section.inv_kse.asDiagonal() * frames[k].R.transpose());
-    const Eigen::PartialPivLU<Mat6> B_lu(B), M_lu(free_next.topRows<6>());
     // The stiffness at disk k+1 of the rod [s_k, L] clamped at s_k: the interval's end wrench
     // minus the distal rod's start wrench per unit pose variation there (symmetric in the
     // pairing of pose and wrench). Its negative eigenvalues are the conjugate points in [s_k, s_k+1).
-    const Mat6 K = pairing * (clamped.bottomRows<6>() * B_lu.inverse() - free_next.bottomRows<6>() * M_lu.inverse());
+    if (!physics::invert_small<6>(B, Binv) || !physics::invert_small<6>(free_next.topRows<6>(), Minv)) {
+      out.method += "; the stiffness at a disk could not be formed";
+      return out;
+    }
+    const Mat6 K = pairing * (clamped.bottomRows<6>().lazyProduct(Binv) - free_next.bottomRows<6>().lazyProduct(Minv));
     const int negative = negative_eigenvalues(0.5 * (K + K.transpose()));
     if (negative < 0) {
       out.method += "; the stiffness at a disk could not be formed";
@@ -306,13 +314,18 @@ Stability conjugate_point_test(VcWorkspace::Impl& W, const Vec6& base, double lo
     }
     index += negative;
     // The free end's fields at disk k: T^-1 = in end^-1.
-    free_here.noalias() = in * end.partialPivLu().solve(free_next);
+    carried = free_next;
+    if (!physics::solve_small<12, 6>(end, carried)) {
+      out.method += "; a transfer matrix across a disk interval is singular";
+      return out;
+    }
+    free_here.noalias() = in.lazyProduct(carried);
     if (!free_here.allFinite()) {
       out.method += "; a transfer matrix across a disk interval is singular";
       return out;
     }
     // The smallest singular value of M(s_k), from the eigenvalues of M^T M (6 x 6, symmetric).
-    const Mat6 MtM = free_here.topRows<6>().transpose() * free_here.topRows<6>();
+    const Mat6 MtM = free_here.topRows<6>().transpose().lazyProduct(free_here.topRows<6>());
     const double smin = std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Mat6>(MtM, Eigen::EigenvaluesOnly).eigenvalues()[0]));
     margin = std::min(margin, index > 0 ? -smin : smin);
     free_next = free_here;
