@@ -51,6 +51,8 @@ struct VcWorkspace::Impl {
   std::vector<Frame> stability_frames;
   std::vector<BackboneSample> stability_samples;
   std::vector<Vec6> stability_wrench;
+  /// Per disk interval, the start and end coordinates per start perturbation (its transfer).
+  std::vector<Eigen::Matrix<double, 12, 12>> stability_in, stability_end;
   Eigen::VectorXd stability_y0, stability_y1, stability_y;
   std::unique_ptr<vc::TendonRod> shot_rod;            ///< Lengths only with CVODE.
   std::unique_ptr<vc::TendonRod> final_rod;           ///< With lengths; watches `degeneracy`.

@@ -240,11 +240,14 @@ class SingleShooting final : public detail::ModelProblem, public detail::Contact
   // automatic rule's budget, so direct answers under loads are not tested without asking.
   bool automatic_stability_under_loads() const override { return false; }
   Stability stability(const Eigen::VectorXd& x, double load_factor) override {
-    if (!W_.contacts.empty()) return Stability{StabilityStatus::Undetermined, NAN, "not determined with contact"};
     if (W_.friction)
       return Stability{StabilityStatus::Undetermined, NAN,
                        "tendon friction: the conjugate-point test assumes tensions independent of the shape"};
-    return conjugate_point_test(W_, Vec6(x), load_factor);
+    // The contact forces of x act at their disks in the test's shots (constraints or penalties
+    // there: vc_stability.cpp).
+    const int nc = static_cast<int>(W_.contacts.size());
+    for (int i = 0; i < nc; ++i) W_.contacts[static_cast<std::size_t>(i)].lambda = x[6 + i];
+    return conjugate_point_test(W_, Vec6(x.head<6>()), load_factor);
   }
   bool infeasibility(const Eigen::VectorXd&, double threshold, std::string& why) override {
     return tendon_limit(W_, threshold, why);
