@@ -1,6 +1,7 @@
 // The stability verdict of answers with contact (docs/contact.md, "Stability with contact"), for
-// CCsub and PRB: rigid contacts with force constrain the test to the tangent space of their gaps,
-// compliant ones add their penalty's stiffness. What the tests assert:
+// CCsub, PRB and VCref (ContactStability), VC (ContactStabilityVc; with the others where its test
+// behaves alike, ContactStabilityWithVc): rigid contacts with force constrain the test to the
+// tangent space of their gaps, compliant ones add their penalty's stiffness. What the tests assert:
 //  - a robot bent against a wall is stable, and the constrained margin is at least the same
 //    Jacobian's without the constraints (constraints can only stabilise);
 //  - a column compressed beyond its buckling load is unstable in free space and stable with its
@@ -187,8 +188,8 @@ TEST_P(ContactStabilityWithVc, ContactAnswerLoadedFromRestIsTestedByTheAutomatic
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Models, ContactStability, ::testing::Values("ccsub", "prb"));
-INSTANTIATE_TEST_SUITE_P(Models, ContactStabilityWithVc, ::testing::Values("ccsub", "prb", "vc"));
+INSTANTIATE_TEST_SUITE_P(Models, ContactStability, ::testing::Values("ccsub", "prb", "vcref"));
+INSTANTIATE_TEST_SUITE_P(Models, ContactStabilityWithVc, ::testing::Values("ccsub", "prb", "vc", "vcref"));
 
 // VC's conjugate-point test with contact (vc_stability.cpp): an active rigid contact constrains
 // the Jacobi fields at its disk to the tangent space of its gap, its force a field of its own.

@@ -314,13 +314,16 @@ class VcrefWorkspace final : public ModelWorkspace, public detail::ModelProblem,
   bool automatic_stability_under_loads() const override { return true; }
   // The reduced stiffness in the disk poses (vcref_stability.cpp).
   Stability stability(const Eigen::VectorXd& x, double load_factor) override {
-    if (!problem_.candidates().empty())
-      return Stability{StabilityStatus::Undetermined, NAN, "not determined with contact"};
     if (d_.friction)
       return Stability{StabilityStatus::Undetermined, NAN,
                        "tendon friction: the disk-pose stiffness test assumes tensions independent of the shape"};
     if (problem_.loads().load_factor() != load_factor) system_.set_parameter(load_factor);
-    if (!shooting_.evaluate(x)) return Stability{StabilityStatus::Undetermined, NAN, "the shots at the answer failed"};
+    // With contact the candidates' forces follow the shooting unknowns (constraints or penalties
+    // in the test: vcref_stability.cpp).
+    const int n = shooting_.size();
+    if (!problem_.candidates().empty()) problem_.set_contact_forces(x.data() + n);
+    if (!shooting_.evaluate(x.head(n)))
+      return Stability{StabilityStatus::Undetermined, NAN, "the shots at the answer failed"};
     // The rods' transfer matrices on the stability test's coarse RK4 mesh (the solve's CVODE).
     return disk_pose_stability(problem_, stability_integrator_ ? *stability_integrator_ : *integrator_,
                                shooting_.nodes());

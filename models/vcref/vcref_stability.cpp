@@ -40,15 +40,24 @@
 // x: no real eigenvalue <= 0), so "stable" stays sound, "unstable" is then the energy criterion.
 // On the paper's configurations with tip forces its smallest eigenvalue and the smallest real
 // part of K's eigenvalues agree within 1 % (docs/design-notes/vcref.md).
+// With contact (docs/contact.md, "Stability with contact"): a candidate's force at its disk, held
+// at its magnitude, moves and turns with the disk's pose (differentiated like the tendons'); a
+// compliant one's magnitude follows its gap (its penalty). A rigid contact with force constrains
+// its disk's scaled pose to the tangent space of its gap: in the basis [Z Y] of that pose (Y
+// along the gap's gradient) the Y rows and columns are pinned to a value above the eigenvalues of
+// interest, so the smallest eigenvalue is Z^T K Z's exactly (Cauchy interlacing: never below the
+// unconstrained one) and K stays block tridiagonal. Weakly active contacts: open, then closed.
 #include "vcref/vcref_stability.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <vector>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
+#include <Eigen/QR>
 
 #include "physics/least_stable_mode.hpp"
 #include "tdcr/core/lie.hpp"
@@ -63,6 +72,10 @@ using Vec6 = Eigen::Matrix<double, 6, 1>;
 using State = cosserat::State;
 
 constexpr double kUndecided = 1e-6;
+/// Contacts with a scaled force above this are active (constraints); below it, a touching
+/// contact (gap below kTouching r_o) is weakly active (as in the other models' tests).
+constexpr double kActiveForce = 1e-6;
+constexpr double kTouching = 1e-6;
 /// Largest disk count for a dense eigen-solve of a non-symmetric K (6 N unknowns; 240 at 40 disks).
 constexpr int kDenseDisks = 100;
 
@@ -356,6 +369,40 @@ Stability disk_pose_stability(const VcrefShooting& problem, bvp::Integrator& int
     }
   }
 
+  // Contact (docs/contact.md, "Stability with contact"): a candidate's force on its disk moves and
+  // turns with the disk's pose at fixed magnitude (the contact point, a curved obstacle's normal),
+  // differentiated like the tendons' (K_held); a compliant one's magnitude follows its gap too
+  // (its penalty: K_compliant). Rigid ones with force are constraints on their disk's pose (below).
+  const std::vector<contact::Candidate>& cands = problem.candidates();
+  const contact::Law& law = problem.law();
+  bool compliant = false;
+  BlockTridiagonal K_compliant(0);
+  if (!cands.empty()) {
+    compliant = law.stiffness > 0.0;
+    if (compliant) K_compliant = K;
+    const auto contact_wrench = [&](std::size_t i, const Frame& f, bool penalty) {
+      const ContactPoint at = problem.contact_at(i, f);
+      const double b = penalty ? law.stiffness * std::max(0.0, -at.gap) / law.force_scale : cands[i].lambda;
+      const Vec3 force = (b * law.force_scale) * at.normal;
+      Vec6 w;
+      w << force, (at.point - f.p).cross(force);
+      return w;
+    };
+    for (std::size_t i = 0; i < cands.size(); ++i) {
+      const int k = cands[i].disk;
+      if (k < 1 || k > N) continue;
+      for (const bool penalty : {false, true}) {
+        if (penalty && !compliant) continue;
+        BlockTridiagonal& target = penalty ? K_compliant : K;
+        const Vec6 w0 = contact_wrench(i, frames[k], penalty);
+        for (int c = 0; c < 6; ++c) {
+          const double step = rel * (c < 3 ? d.l_min : 1.0);
+          target.at(k - 1, k - 1).col(c) -= (contact_wrench(i, moved(frames[k], c, step), penalty) - w0) / step;
+        }
+      }
+    }
+  }
+
   // Body-frame moment rows, dimensionless, per backbone length of each disk (w_i: half its two
   // intervals), so that the margin does not shrink with the number of disks.
   std::vector<Mat6> S(N + 1, Mat6::Identity());
@@ -365,10 +412,13 @@ Stability disk_pose_stability(const VcrefShooting& problem, bvp::Integrator& int
     S[i] *= std::sqrt(L / w);
   }
   Mat6 Ri = Mat6::Identity();
-  for (int i = 1; i <= N; ++i) {
-    Ri.bottomRightCorner<3, 3>() = frames[i].R.transpose();
-    for (int k = std::max(1, i - 1); k <= std::min(N, i + 1); ++k)
-      block(i, k) = (L / EI) * S[i] * Ri * block(i, k) * S[k];
+  for (BlockTridiagonal* M : {&K, compliant ? &K_compliant : nullptr}) {
+    if (!M) continue;
+    for (int i = 1; i <= N; ++i) {
+      Ri.bottomRightCorner<3, 3>() = frames[i].R.transpose();
+      for (int k = std::max(1, i - 1); k <= std::min(N, i + 1); ++k)
+        M->at(i - 1, k - 1) = (L / EI) * S[i] * Ri * M->at(i - 1, k - 1) * S[k];
+    }
   }
 
   // Non-conservative loads (Eq. 58 with a tensioned tendon): a positive definite symmetric part
@@ -376,27 +426,135 @@ Stability disk_pose_stability(const VcrefShooting& problem, bvp::Integrator& int
   // quasi-static divergence criterion, as for CCsub and PRB), by a dense eigen-solve up to
   // kDenseDisks disks, else undetermined.
   const bool conservative = !(d.remove_normal && !active.tendons.empty());
-  const Eigen::MatrixXd full = conservative || N > kDenseDisks ? Eigen::MatrixXd() : K.dense();
-  // Symmetric up to the difference noise when the loads are conservative.
-  K.symmetrize();
-  out.margin = K.smallest_eigenvalue();
-  if (!conservative) {
-    out.method += " of the symmetric part (disk normal forces removed: not conservative, a sufficient test)";
-    if (!(out.margin > kUndecided)) {
-      if (full.size() == 0) {
-        out.method += "; indefinite, and the eigenvalues of K are not computed above " + std::to_string(kDenseDisks) +
-                      " disks: undetermined";
-        return out;
+  // The verdict of one reduced stiffness (taken by value: symmetrised there), into `st`.
+  const auto verdict = [&](BlockTridiagonal M, Stability& st) {
+    const Eigen::MatrixXd full = conservative || N > kDenseDisks ? Eigen::MatrixXd() : M.dense();
+    // Symmetric up to the difference noise when the loads are conservative.
+    M.symmetrize();
+    st.margin = M.smallest_eigenvalue();
+    if (!conservative) {
+      st.method += " of the symmetric part (disk normal forces removed: not conservative, a sufficient test)";
+      if (!(st.margin > kUndecided)) {
+        if (full.size() == 0) {
+          st.method += "; indefinite, and the eigenvalues of K are not computed above " + std::to_string(kDenseDisks) +
+                       " disks: undetermined";
+          return;
+        }
+        std::string mode;
+        st.margin = detail::least_stable_mode(Eigen::EigenSolver<Eigen::MatrixXd>(full, false).eigenvalues(), mode);
+        st.method += "; indefinite: smallest real part of the eigenvalues of K" + mode;
       }
-      std::string mode;
-      out.margin = detail::least_stable_mode(Eigen::EigenSolver<Eigen::MatrixXd>(full, false).eigenvalues(), mode);
-      out.method += "; indefinite: smallest real part of the eigenvalues of K" + mode;
     }
+    if (st.margin > kUndecided)
+      st.status = StabilityStatus::Stable;
+    else if (st.margin < -kUndecided)
+      st.status = StabilityStatus::Unstable;
+  };
+  // Rigid contacts with force (active) and touching ones without (weakly active): their gaps'
+  // gradients in the disk's scaled pose, n . dp + dtheta . R^T ((x_c - p) x n), times S.
+  std::vector<std::pair<int, Vec6>> strong, weak;
+  for (std::size_t i = 0; i < cands.size() && !compliant; ++i) {
+    const int k = cands[i].disk;
+    if (k < 1 || k > N) continue;
+    const ContactPoint at = problem.contact_at(i, frames[k]);
+    const bool is_strong = cands[i].lambda > kActiveForce;
+    if (!is_strong && !(at.gap / law.length_scale < kTouching)) continue;
+    Vec6 G;
+    G << at.normal, frames[k].R.transpose() * ((at.point - frames[k].p).cross(at.normal));
+    G = (S[k] * G).eval();  // G S (S diagonal)
+    (is_strong ? strong : weak).emplace_back(k, G / G.norm());
   }
-  if (out.margin > kUndecided)
-    out.status = StabilityStatus::Stable;
-  else if (out.margin < -kUndecided)
+  if (!compliant && strong.empty() && weak.empty()) {
+    verdict(K, out);
+    return out;
+  }
+  // With contacts: the same stiffness with the forces held and no constraints first, what the
+  // contacts change; then the compliant one, or the constrained ones.
+  Stability held;
+  verdict(K, held);
+  char buf[200];
+  std::snprintf(buf, sizeof buf, "; without the contacts' constraints (forces held) %.9g", held.margin);
+  const std::string free_note = buf;
+  if (compliant) {
+    int penetrated = 0;
+    for (std::size_t i = 0; i < cands.size(); ++i) {
+      const int k = cands[i].disk;
+      if (k >= 1 && k <= N && problem.contact_at(i, frames[k]).gap < 0.0) ++penetrated;
+    }
+    std::snprintf(buf, sizeof buf, " with the stiffness of %d compliant contacts", penetrated);
+    out.method += buf;
+    verdict(K_compliant, out);
+    out.method += free_note;
+    return out;
+  }
+  // A constrained reduced stiffness: per constrained disk the orthonormal basis [Z Y] of its
+  // scaled pose (Y spanning the gaps' gradients), and the Y coordinates pinned (their rows and
+  // columns replaced by `pinned` on the diagonal, above every eigenvalue of interest: the
+  // smallest eigenvalue is then Z^T K Z's, exactly, and the matrix stays block tridiagonal).
+  double pinned = 0.0;
+  for (int i = 0; i < N; ++i) pinned = std::max(pinned, K.at(i, i).diagonal().cwiseAbs().maxCoeff());
+  const auto constrained = [&](bool with_weak) {
+    BlockTridiagonal M = K;
+    for (int disk = 1; disk <= N; ++disk) {
+      Eigen::Matrix<double, 6, Eigen::Dynamic, 0, 6, 6> G(6, 0);
+      for (const auto* list : {&strong, with_weak ? &weak : nullptr}) {
+        if (!list) continue;
+        for (const auto& [k, g] : *list)
+          if (k == disk && G.cols() < 6) {
+            G.conservativeResize(6, G.cols() + 1);
+            G.col(G.cols() - 1) = g;
+          }
+      }
+      const int c = static_cast<int>(G.cols());
+      if (c == 0) continue;
+      const Mat6 Q = Eigen::HouseholderQR<Eigen::Matrix<double, 6, Eigen::Dynamic, 0, 6, 6>>(G).householderQ();
+      Mat6 P;  // [Z Y]
+      P << Q.rightCols(6 - c), Q.leftCols(c);
+      const int i = disk - 1;
+      M.at(i, i) = (P.transpose() * M.at(i, i) * P).eval();
+      for (int j : {i - 1, i + 1}) {
+        if (j < 0 || j >= N) continue;
+        M.at(i, j) = (P.transpose() * M.at(i, j)).eval();
+        M.at(j, i) = (M.at(j, i) * P).eval();
+      }
+      for (int r = 6 - c; r < 6; ++r) {
+        M.at(i, i).row(r).setZero();
+        M.at(i, i).col(r).setZero();
+        M.at(i, i)(r, r) = pinned;
+        for (int j : {i - 1, i + 1}) {
+          if (j < 0 || j >= N) continue;
+          M.at(i, j).row(r).setZero();
+          M.at(j, i).col(r).setZero();
+        }
+      }
+    }
+    return M;
+  };
+  std::snprintf(buf, sizeof buf, " on the tangent space of %d active contacts", static_cast<int>(strong.size()));
+  out.method += buf;
+  verdict(constrained(false), out);
+  if (!weak.empty()) {
+    std::snprintf(buf, sizeof buf, "; %d weakly active (touching, force < %.0e F_s) taken as open: a sufficient test",
+                  static_cast<int>(weak.size()), kActiveForce);
+    out.method += buf;
+  }
+  if (out.status == StabilityStatus::Stable || weak.empty()) {
+    out.method += free_note;
+    return out;
+  }
+  // Not proven stable with the weakly active contacts open: with them closed (a necessary test).
+  Stability closed;
+  verdict(constrained(true), closed);
+  std::snprintf(buf, sizeof buf, "; with them closed %.6g", closed.margin);
+  out.method += buf;
+  if (closed.status == StabilityStatus::Unstable) {
     out.status = StabilityStatus::Unstable;
+    out.margin = closed.margin;
+  } else {
+    out.status = StabilityStatus::Undetermined;
+    out.method += ": undetermined between the two (the cone of the weakly active contacts is not tested)";
+  }
+  out.method += free_note;
   return out;
 }
 
