@@ -18,6 +18,7 @@
 #include <string>
 
 #include "contact_scenes.hpp"
+#include "physics/contact_cone.hpp"
 #include "tdcr/core/contact_geometry.hpp"
 #include "tdcr/models/static_model.hpp"
 
@@ -244,4 +245,54 @@ TEST(ContactStabilityVc, ContactHoldsAColumnBeyondBuckling) {
     EXPECT_LT(unconstrained_margin(st), -1e-6) << st.method;
     EXPECT_NE(st.method.find(k > 0.0 ? "compliant contacts" : "active contacts"), std::string::npos) << st.method;
   }
+}
+
+// The cone test of weakly active contacts (physics/contact_cone.hpp): whether some nonzero
+// combination a of the negative directions keeps every weakly active gap from closing
+// (Gn a >= 0), against a brute-force search over directions (2 and 3 negative directions, rows
+// of unit size). One contact always leaves one (a or -a); opposing contacts on one direction
+// leave none; with more directions than contacts a kernel vector does.
+TEST(ContactCone, AdmissibleNegativeDirectionAgainstBruteForce) {
+  using physics::cone_has_ray;
+  Eigen::MatrixXd one(1, 1);
+  one << -1.0;
+  EXPECT_TRUE(cone_has_ray(one));
+  Eigen::MatrixXd opposing(2, 1);
+  opposing << 1.0, -1.0;
+  EXPECT_FALSE(cone_has_ray(opposing));
+  Eigen::MatrixXd walls(4, 2);  // +-x and +-y walls on two bending modes: only a = 0 is admissible
+  walls << 1, 0, -1, 0, 0, 1, 0, -1;
+  EXPECT_FALSE(cone_has_ray(walls));
+  EXPECT_TRUE(cone_has_ray(walls.topRows(3)));  // without the -y wall: a = (0, 1) is admissible
+  EXPECT_TRUE(physics::negative_direction_admissible(1, 1));
+  EXPECT_TRUE(physics::negative_direction_admissible(2, 3));
+  EXPECT_FALSE(physics::negative_direction_admissible(2, 2));
+  std::srand(7);
+  const auto brute = [](const Eigen::MatrixXd& G) {
+    const int d = static_cast<int>(G.cols());
+    for (int t = 0; t < 50000; ++t) {
+      Eigen::VectorXd a = Eigen::VectorXd::Random(d);
+      if (a.norm() < 1e-3) continue;
+      if (((G * a.normalized()).array() >= -1e-3).all()) return true;
+    }
+    return false;
+  };
+  int agree = 0, rays = 0;
+  for (int trial = 0; trial < 60; ++trial) {
+    const int d = 2 + trial % 2, c = 3 + trial % 6;
+    Eigen::MatrixXd G = Eigen::MatrixXd::Random(c, d);
+    for (int i = 0; i < c; ++i) G.row(i).normalize();
+    const bool exact = cone_has_ray(G);
+    rays += exact;
+    // The brute force's slack (1e-3) can only find more: agreement where it finds none, and
+    // every exact ray confirmed.
+    const bool found = brute(G);
+    if (exact) EXPECT_TRUE(found) << G;
+    if (!found) EXPECT_FALSE(exact) << G;
+    agree += exact == found;
+  }
+  std::printf("cone test against brute force: %d of 60 agree, %d with a ray\n", agree, rays);
+  EXPECT_GE(agree, 55);
+  EXPECT_GT(rays, 5);
+  EXPECT_LT(rays, 55);
 }

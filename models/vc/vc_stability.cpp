@@ -84,6 +84,7 @@
 // to a planar deformation.
 #include "vc/vc_stability.hpp"
 
+#include "physics/contact_cone.hpp"
 #include "physics/small_dense.hpp"
 #include "tdcr/core/contact_geometry.hpp"
 #include "physics/tendon_path.hpp"
@@ -390,7 +391,7 @@ enum class Constraints { None, Active, All };
 // The pass from the tip to the base (see the top of the file): the margin, or false and `why`.
 bool tip_to_base(const VcWorkspace::Impl& W, const Scales& sc, const std::vector<Mat12>& ins,
                  const std::vector<Mat12>& ends, const std::vector<Frame>& frames, const std::vector<HeldContact>& held,
-                 Constraints which, double& margin, const char*& why) {
+                 Constraints which, double& margin, const char*& why, int* morse_index = nullptr) {
   const TendonRouting& rt = W.model->routing();
   const int intervals = static_cast<int>(ins.size());
   const double Fs = sc.unit[0], Ms = sc.unit[3];
@@ -506,6 +507,7 @@ bool tip_to_base(const VcWorkspace::Impl& W, const Scales& sc, const std::vector
     margin = std::min(margin, index > 0 ? -smin : smin);
     free_next = free_here;
   }
+  if (morse_index) *morse_index = index;
   return true;
 }
 
@@ -587,7 +589,9 @@ Stability conjugate_point_test(VcWorkspace::Impl& W, const Vec6& base, double lo
   }
   std::snprintf(buf, sizeof buf, " on the tangent space of %d active contacts (their forces free)", strong);
   out.method += buf;
-  if (!tip_to_base(W, sc, W.stability_in, W.stability_end, frames, held, Constraints::Active, margin, why)) {
+  int negative = 0;  // conjugate points with the weakly active contacts open
+  if (!tip_to_base(W, sc, W.stability_in, W.stability_end, frames, held, Constraints::Active, margin, why,
+                   &negative)) {
     out.method += why;
     return out;
   }
@@ -599,6 +603,18 @@ Stability conjugate_point_test(VcWorkspace::Impl& W, const Vec6& base, double lo
   if (margin > undecided || weak == 0) {
     decide(margin);
     out.method += free_note;
+    return out;
+  }
+  // The cone test from the counts (physics/contact_cone.hpp): one weakly active contact, or more
+  // conjugate points (negative directions) than such contacts, leaves a negative direction
+  // admissible.
+  if (margin < -undecided && physics::negative_direction_admissible(weak, negative)) {
+    decide(margin);
+    std::snprintf(buf, sizeof buf,
+                  "; %d conjugate points, one direction of them admissible (no weakly active contact closes on it): "
+                  "unstable (the cone test)",
+                  negative);
+    out.method += buf + free_note;
     return out;
   }
   // Not proven stable with the weakly active contacts open: with them closed (a necessary test).

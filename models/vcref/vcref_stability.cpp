@@ -59,6 +59,7 @@
 #include <Eigen/LU>
 #include <Eigen/QR>
 
+#include "physics/contact_cone.hpp"
 #include "physics/least_stable_mode.hpp"
 #include "tdcr/core/lie.hpp"
 #include "tdcr/models/tendon_physics.hpp"
@@ -493,8 +494,10 @@ Stability disk_pose_stability(const VcrefShooting& problem, bvp::Integrator& int
   // smallest eigenvalue is then Z^T K Z's, exactly, and the matrix stays block tridiagonal).
   double pinned = 0.0;
   for (int i = 0; i < N; ++i) pinned = std::max(pinned, K.at(i, i).diagonal().cwiseAbs().maxCoeff());
+  std::vector<Mat6> basis(static_cast<std::size_t>(N), Mat6::Identity());  // [Z Y] per disk, last call's
   const auto constrained = [&](bool with_weak) {
     BlockTridiagonal M = K;
+    std::fill(basis.begin(), basis.end(), Mat6::Identity());
     for (int disk = 1; disk <= N; ++disk) {
       Eigen::Matrix<double, 6, Eigen::Dynamic, 0, 6, 6> G(6, 0);
       for (const auto* list : {&strong, with_weak ? &weak : nullptr}) {
@@ -511,6 +514,7 @@ Stability disk_pose_stability(const VcrefShooting& problem, bvp::Integrator& int
       Mat6 P;  // [Z Y]
       P << Q.rightCols(6 - c), Q.leftCols(c);
       const int i = disk - 1;
+      basis[static_cast<std::size_t>(i)] = P;
       M.at(i, i) = (P.transpose() * M.at(i, i) * P).eval();
       for (int j : {i - 1, i + 1}) {
         if (j < 0 || j >= N) continue;
@@ -532,7 +536,8 @@ Stability disk_pose_stability(const VcrefShooting& problem, bvp::Integrator& int
   };
   std::snprintf(buf, sizeof buf, " on the tangent space of %d active contacts", static_cast<int>(strong.size()));
   out.method += buf;
-  verdict(constrained(false), out);
+  BlockTridiagonal open = constrained(false);
+  verdict(open, out);
   if (!weak.empty()) {
     std::snprintf(buf, sizeof buf, "; %d weakly active (touching, force < %.0e F_s) taken as open: a sufficient test",
                   static_cast<int>(weak.size()), kActiveForce);
@@ -541,6 +546,32 @@ Stability disk_pose_stability(const VcrefShooting& problem, bvp::Integrator& int
   if (out.status == StabilityStatus::Stable || weak.empty()) {
     out.method += free_note;
     return out;
+  }
+  // The cone test (physics/contact_cone.hpp): the open form is negative on the span of its
+  // negative eigenvectors; a nonzero direction there that no weakly active contact closes proves
+  // instability. Conservative loads (a symmetric K) and up to kDenseDisks disks: a dense
+  // eigen-solve of the open form, only on this branch.
+  if (out.status == StabilityStatus::Unstable && conservative && N <= kDenseDisks) {
+    open.symmetrize();
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(open.dense());
+    if (eig.info() == Eigen::Success) {
+      int d = 0;
+      while (d < 6 * N && eig.eigenvalues()[d] < -kUndecided) ++d;
+      Eigen::MatrixXd Gn(static_cast<int>(weak.size()), d);
+      for (std::size_t w = 0; w < weak.size(); ++w) {
+        const int i = weak[w].first - 1;
+        const Vec6 g = basis[static_cast<std::size_t>(i)].transpose() * weak[w].second;
+        Gn.row(static_cast<int>(w)) = g.transpose() * eig.eigenvectors().block(6 * i, 0, 6, d);
+      }
+      if (physics::cone_has_ray(Gn)) {
+        std::snprintf(buf, sizeof buf,
+                      "; %d negative directions, one of them admissible (no weakly active contact closes on it): "
+                      "unstable (the cone test)",
+                      d);
+        out.method += buf + free_note;
+        return out;
+      }
+    }
   }
   // Not proven stable with the weakly active contacts open: with them closed (a necessary test).
   Stability closed;
