@@ -14,6 +14,8 @@ namespace {
 
 constexpr int kMaxContactRounds = 8;
 constexpr double kContactStepFactor = 100.0;
+/// Below this scaled force (of F_s) every candidate of a contact answer is taken as left.
+constexpr double kLeftForce = 1e-9;
 
 // The candidates' margin: pairs this close join the penetrated ones.
 double margin(const ContactHost& host) { return 0.1 * host.contact_length() / host.contact_disks(); }
@@ -216,7 +218,14 @@ ModelProblem::Completion complete_contacts(ContactHost& host, Eigen::VectorXd& y
                                        : " (compliant contact of rising stiffness failed at stage " +
                                              std::to_string(decade) + " of 7)";
     }
-    if (!step.converged()) {
+    // Newton from a penetrating answer may leave every contact: an equilibrium of the free robot
+    // that touches nothing is not the free answer (that one penetrates), so it lies on another
+    // branch, reached through the obstacles (a column beyond buckling pushed into a corner comes
+    // back bent the other way, an unstable answer). Loaded from rest with the contacts instead.
+    const bool left = step.converged() && !cands.empty() &&
+                      y.tail(static_cast<Eigen::Index>(cands.size())).maxCoeff() <= kLeftForce;
+    if (left) step.message += " (every contact left: another branch of the free robot)";
+    if (!step.converged() || left) {
       add_work(step, summary);
       SolverSummary path;
       if (load_with_contacts(host, y, nopt, frames, path)) {
