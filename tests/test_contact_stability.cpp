@@ -190,6 +190,32 @@ TEST_P(ContactStabilityWithVc, ContactAnswerLoadedFromRestIsTestedByTheAutomatic
 }
 
 INSTANTIATE_TEST_SUITE_P(Models, ContactStability, ::testing::Values("ccsub", "prb", "vcref"));
+// The unactuated robot in a curved lumen (an arc of radius 1 m, inner radius 3 mm, the scene of
+// tests/test_contact_shooting.cpp): the lumen's wall bends it at its tip, one active contact, and
+// the answer is stable in every model at n = 5, 10, 20 (the wall holds a straightened rod, no
+// load compresses it).
+TEST_P(ContactStabilityWithVc, RobotInACurvedLumenIsStable) {
+  for (int n : {5, 10, 20}) {
+    Scene s = robot_scene(GetParam(), n);
+    Obstacle lumen;
+    lumen.type = Obstacle::Type::Lumen;
+    lumen.radius = 0.003;
+    for (int i = 0; i <= 40; ++i) {
+      const double a = 0.2 * i / 40.0;
+      lumen.centreline.push_back(Vec3(1.0 - std::cos(a), 0, std::sin(a)));
+    }
+    s.environment.obstacles = {lumen};
+    s.solver.stability = StabilityCheck::Always;
+    const Solution sol = run(s);
+    ASSERT_TRUE(sol.converged()) << sol.summary.message;
+    ASSERT_EQ(sol.contacts.size(), 1u);
+    std::printf("%s in the lumen, n = %d: %s, margin %.6g\n", GetParam().c_str(), n,
+                to_string(sol.stability.status).c_str(), sol.stability.margin);
+    EXPECT_EQ(sol.stability.status, StabilityStatus::Stable) << sol.stability.method;
+    EXPECT_NE(sol.stability.method.find("1 active contacts"), std::string::npos) << sol.stability.method;
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(Models, ContactStabilityWithVc, ::testing::Values("ccsub", "prb", "vc", "vcref"));
 
 // VC's conjugate-point test with contact (vc_stability.cpp): an active rigid contact constrains

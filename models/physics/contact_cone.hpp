@@ -12,12 +12,38 @@
 #pragma once
 
 #include <algorithm>
+#include <cstdio>
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
 #include <Eigen/LU>
 
 namespace tdcr::physics {
+
+/// Contacts with a scaled force (of F_s) above this are active: constraints of the stability
+/// tests. Below it, a touching contact (gap below kTouching r_o) is weakly active.
+constexpr double kActiveForce = 1e-6;
+constexpr double kTouching = 1e-6;
+
+/// The method's note on `weak` weakly active contacts taken as open (the sufficient test).
+inline std::string weakly_active_note(int weak) {
+  char buf[120];
+  std::snprintf(buf, sizeof buf, "; %d weakly active (touching, force < %.0e F_s) taken as open: a sufficient test",
+                weak, kActiveForce);
+  return buf;
+}
+
+/// The method's note on an instability the cone test proves: `negative` negative directions
+/// (`what` names them), one of them admissible.
+inline std::string cone_unstable_note(int negative, const char* what) {
+  char buf[200];
+  std::snprintf(buf, sizeof buf,
+                "; %d %s, one direction of them admissible (no weakly active contact closes on it): unstable (the cone "
+                "test)",
+                negative, what);
+  return buf;
+}
 
 /// Whether `negative` directions of negative curvature (the open form's Morse index) are sure to
 /// include an admissible one against `weak` weakly active contacts, from the counts alone: with one

@@ -113,10 +113,6 @@ using SmallMat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6>;
 /// Below this |margin| the test never decides (forward differences with increments sqrt(eps)
 /// carry relative errors near 1e-8).
 constexpr double kUndecided = 1e-6;
-/// Contacts with a scaled force above this are active (constraints); below it, a touching
-/// contact (gap below kTouching r_o) is weakly active (as in the lumped models' test).
-constexpr double kActiveForce = 1e-6;
-constexpr double kTouching = 1e-6;
 
 // The number of negative eigenvalues of the symmetric S (its inertia, Sylvester's law): the signs
 // of the pivots of its LDL^T factorisation, or of its eigenvalues where a pivot is too small to
@@ -340,8 +336,8 @@ bool held_contacts(VcWorkspace::Impl& W, bvp::Integrator& integ, const Scales& s
       if (!(at.gap < 0.0)) continue;
       hc.penalty = W.law.stiffness * ro / W.law.force_scale;
     } else {
-      hc.strong = c.lambda > kActiveForce;
-      if (!hc.strong && !(at.gap / ro < kTouching)) continue;
+      hc.strong = c.lambda > physics::kActiveForce;
+      if (!hc.strong && !(at.gap / ro < physics::kTouching)) continue;
     }
     hc.G << (sc.L / ro) * at.normal, ((at.point - frames[d].p).cross(at.normal)) / ro;
     // The state just proximal of disk d: the interval from disk d-1 shot again (from its place).
@@ -595,11 +591,7 @@ Stability conjugate_point_test(VcWorkspace::Impl& W, const Vec6& base, double lo
     out.method += why;
     return out;
   }
-  if (weak > 0) {
-    std::snprintf(buf, sizeof buf, "; %d weakly active (touching, force < %.0e F_s) taken as open: a sufficient test",
-                  weak, kActiveForce);
-    out.method += buf;
-  }
+  if (weak > 0) out.method += physics::weakly_active_note(weak);
   if (margin > undecided || weak == 0) {
     decide(margin);
     out.method += free_note;
@@ -610,11 +602,7 @@ Stability conjugate_point_test(VcWorkspace::Impl& W, const Vec6& base, double lo
   // admissible.
   if (margin < -undecided && physics::negative_direction_admissible(weak, negative)) {
     decide(margin);
-    std::snprintf(buf, sizeof buf,
-                  "; %d conjugate points, one direction of them admissible (no weakly active contact closes on it): "
-                  "unstable (the cone test)",
-                  negative);
-    out.method += buf + free_note;
+    out.method += physics::cone_unstable_note(negative, "conjugate points") + free_note;
     return out;
   }
   // Not proven stable with the weakly active contacts open: with them closed (a necessary test).

@@ -73,10 +73,6 @@ using Vec6 = Eigen::Matrix<double, 6, 1>;
 using State = cosserat::State;
 
 constexpr double kUndecided = 1e-6;
-/// Contacts with a scaled force above this are active (constraints); below it, a touching
-/// contact (gap below kTouching r_o) is weakly active (as in the other models' tests).
-constexpr double kActiveForce = 1e-6;
-constexpr double kTouching = 1e-6;
 /// Largest disk count for a dense eigen-solve of a non-symmetric K (6 N unknowns; 240 at 40 disks).
 constexpr int kDenseDisks = 100;
 
@@ -458,8 +454,8 @@ Stability disk_pose_stability(const VcrefShooting& problem, bvp::Integrator& int
     const int k = cands[i].disk;
     if (k < 1 || k > N) continue;
     const ContactPoint at = problem.contact_at(i, frames[k]);
-    const bool is_strong = cands[i].lambda > kActiveForce;
-    if (!is_strong && !(at.gap / law.length_scale < kTouching)) continue;
+    const bool is_strong = cands[i].lambda > physics::kActiveForce;
+    if (!is_strong && !(at.gap / law.length_scale < physics::kTouching)) continue;
     Vec6 G;
     G << at.normal, frames[k].R.transpose() * ((at.point - frames[k].p).cross(at.normal));
     G = (S[k] * G).eval();  // G S (S diagonal)
@@ -538,11 +534,7 @@ Stability disk_pose_stability(const VcrefShooting& problem, bvp::Integrator& int
   out.method += buf;
   BlockTridiagonal open = constrained(false);
   verdict(open, out);
-  if (!weak.empty()) {
-    std::snprintf(buf, sizeof buf, "; %d weakly active (touching, force < %.0e F_s) taken as open: a sufficient test",
-                  static_cast<int>(weak.size()), kActiveForce);
-    out.method += buf;
-  }
+  if (!weak.empty()) out.method += physics::weakly_active_note(static_cast<int>(weak.size()));
   if (out.status == StabilityStatus::Stable || weak.empty()) {
     out.method += free_note;
     return out;
@@ -564,11 +556,7 @@ Stability disk_pose_stability(const VcrefShooting& problem, bvp::Integrator& int
         Gn.row(static_cast<int>(w)) = g.transpose() * eig.eigenvectors().block(6 * i, 0, 6, d);
       }
       if (physics::cone_has_ray(Gn)) {
-        std::snprintf(buf, sizeof buf,
-                      "; %d negative directions, one of them admissible (no weakly active contact closes on it): "
-                      "unstable (the cone test)",
-                      d);
-        out.method += buf + free_note;
+        out.method += physics::cone_unstable_note(d, "negative directions") + free_note;
         return out;
       }
     }
