@@ -120,4 +120,39 @@ TEST_P(ContactEveryModel, WarmTrajectoryAlongAWall) {
   EXPECT_FALSE(last.contacts.empty());
 }
 
+// A 3 mm ball beside the path of the tip (the robot bent by tendon 1: its tip reaches the ball at
+// 0.55 N, 20 deg below the horizontal through the tip), the tension raised to 2 N: the robot
+// loaded from rest stays behind the ball, so the warm path and every cold solve end there. At 1.35
+// to 1.65 N the free answer lies past the ball, shallowly in it or clear of it: the cold solve once
+// came back to the far side of the ball (CCsub, VC, VCref: contact Newton from the free answer) or
+// took the free answer (PRB: its sweep from rest interpolated its unknowns, which turn the bending
+// plane on the way, and missed the ball); the completion now sweeps the disks' poses and loads
+// from rest where the way there passes an obstacle's middle.
+TEST_P(ContactEveryModel, ColdSolvesBehindABallAreTheLoadingPathsAnswer) {
+  Scene s = robot_scene(GetParam(), 10);
+  s.actuation.values = {0.5, 0, 0, 0};
+  const Solution reach = run(s);
+  ASSERT_TRUE(reach.converged()) << reach.summary.message;
+  const double rho = 0.003, r = s.robot.backbone.outer_radius, a = 20.0 * M_PI / 180.0;
+  const Vec3 centre = reach.tip().p + (rho + r + 1e-4) * Vec3(0, std::cos(a), -std::sin(a));
+  s.environment.obstacles = {sphere(centre, rho)};
+  Solution warm = reach;
+  for (int i = 1; i <= 30; ++i) {
+    const double T = 0.5 + 0.05 * i;
+    s.actuation.values = {T, 0, 0, 0};
+    warm = run(s, &warm);
+    ASSERT_TRUE(warm.converged()) << "T = " << T << ": " << warm.summary.message;
+    EXPECT_LT(warm.tip().p.y(), centre.y()) << "T = " << T;  // behind the ball
+    if (i % 3 != 0) continue;  // cold at 0.65, 0.8, ..., 2 N
+    const Solution cold = run(s);
+    ASSERT_TRUE(cold.converged()) << "T = " << T << ": " << cold.summary.message;
+    EXPECT_LE((cold.tip().p - warm.tip().p).norm(), 1e-6)
+        << "T = " << T << ": cold tip y " << cold.tip().p.y() << ", warm " << warm.tip().p.y() << "; "
+        << cold.summary.message;
+    EXPECT_EQ(cold.contacts.size(), 1u) << "T = " << T;
+  }
+  std::printf("%s: tip behind the ball at 2 N, y = %.6g m (ball centre %.6g m)\n", GetParam().c_str(),
+              warm.tip().p.y(), centre.y());
+}
+
 INSTANTIATE_TEST_SUITE_P(Models, ContactEveryModel, ::testing::Values("ccsub", "prb", "vc", "vcref"));

@@ -11,6 +11,7 @@
 #include <cmath>
 
 #include "lumped/lumped_problem.hpp"
+#include "tdcr/core/lie.hpp"
 #include "solve/newton_summary.hpp"
 #include "tdcr/core/error.hpp"
 
@@ -100,23 +101,62 @@ void LumpedProblem::report_contacts(Solution& solution) const {
 bool LumpedProblem::penetrating_pairs(const Eigen::VectorXd& x, bool add) {
   contact_frames_.resize(body_.N + 1);
   body_.compute_frames(x.data(), body_.N, loads_.stretch_data(), contact_frames_.data());
+  return penetrating_frames(contact_frames_.data(), add);
+}
+
+bool LumpedProblem::penetrating_frames(const Frame* frames, bool add) {
   // Pairs this close join the candidates with the penetrating ones: the contact solve then moves
   // the robot without stepping into the neighbours of the first contacts unseen.
   const double margin = 0.1 * body_.length / body_.N;
-  const contact::Scan found =
-      contact::scan(obstacles_, contact_surfaces_, contact_frames_.data(), body_.N, margin, add, contacts_);
+  const contact::Scan found = contact::scan(obstacles_, contact_surfaces_, frames, body_.N, margin, add, contacts_);
   passed_through_ = found.passed_through;
   deepest_ = found.deepest;
   return found.penetrates;
 }
 
+void LumpedProblem::sweep_frames(const Eigen::VectorXd& from, const Eigen::VectorXd& to) {
+  sweep_from_.resize(body_.N + 1);
+  sweep_to_.resize(body_.N + 1);
+  body_.compute_frames(from.data(), body_.N, loads_.stretch_data(), sweep_from_.data());
+  body_.compute_frames(to.data(), body_.N, loads_.stretch_data(), sweep_to_.data());
+}
+
+void LumpedProblem::frames_between(double t) {
+  // Each disk along the screw between its two poses (position linear, rotation by the geodesic),
+  // as the shooting models sweep (solve/contact_completion.cpp): the unknowns interpolated would
+  // turn PRB's bending plane on the way, a path the robot never takes.
+  contact_frames_.resize(body_.N + 1);
+  for (std::size_t j = 0; j < sweep_from_.size(); ++j) {
+    contact_frames_[j].p = (1.0 - t) * sweep_from_[j].p + t * sweep_to_[j].p;
+    contact_frames_[j].R =
+        sweep_from_[j].R * lie::exp_so3(t * lie::log_so3(sweep_from_[j].R.transpose() * sweep_to_[j].R));
+  }
+}
+
 bool LumpedProblem::swept_pairs(const Eigen::VectorXd& from, const Eigen::VectorXd& to) {
-  // Shapes between two answers (their unknowns interpolated): an obstacle thinner than one step
-  // of the robot can lie between them, penetrated by neither.
+  // Shapes between two answers: an obstacle thinner than one step of the robot can lie between
+  // them, penetrated by neither.
   constexpr int kSamples = 16;
+  sweep_frames(from, to);
   for (int k = 1; k < kSamples; ++k) {
-    swept_x_ = from + (to - from) * (double(k) / kSamples);
-    if (penetrating_pairs(swept_x_, true)) return true;
+    frames_between(double(k) / kSamples);
+    if (penetrating_frames(contact_frames_.data(), true)) return true;
+  }
+  return false;
+}
+
+bool LumpedProblem::passes_through(const Eigen::VectorXd& from, const Eigen::VectorXd& to) {
+  // The shapes between (as swept_pairs), every pair scanned and none added: deeper than a quarter
+  // of its radius into a sphere, cylinder or capsule on the way (contact::Scan::passed_through).
+  constexpr int kSamples = 16;
+  std::vector<contact::Candidate> none;
+  const double margin = 0.1 * body_.length / body_.N;
+  sweep_frames(from, to);
+  for (int k = 1; k < kSamples; ++k) {
+    frames_between(double(k) / kSamples);
+    if (contact::scan(obstacles_, contact_surfaces_, contact_frames_.data(), body_.N, margin, false, none)
+            .passed_through)
+      return true;
   }
   return false;
 }
@@ -224,6 +264,11 @@ ModelProblem::Completion LumpedProblem::complete(Eigen::VectorXd& y, const bvp::
       passed_through_ = penetrates;
     }
     if (!penetrates) return Completion::Done;
+    if (round == 0 && before == 0 && !passed_through_) {
+      // Shallow at the answer, but through an obstacle's middle on the way from rest (a tip that
+      // slid past a ball on the far side of it): the loading from rest meets it on the near side.
+      passed_through_ = passes_through(Eigen::VectorXd::Zero(contact_x_.size()), contact_x_);
+    }
     if (round == kMaxContactRounds || contacts_.size() == before) {
       summary.termination = TerminationType::NoConvergence;
       summary.message += "; the answer still penetrates an obstacle after " + std::to_string(round) +

@@ -343,7 +343,15 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   // complete(): penetrating_pairs() of shapes between the unknowns `from` and `to` (all N
   // subsegments), the first that penetrates a pair left out adding its candidates; true if one did.
   bool swept_pairs(const Eigen::VectorXd& from, const Eigen::VectorXd& to);
-  Eigen::VectorXd swept_x_;
+  // Whether the shapes between `from` and `to` pass through a finite obstacle's middle (every pair).
+  bool passes_through(const Eigen::VectorXd& from, const Eigen::VectorXd& to);
+  // penetrating_pairs() of disk frames 0..N.
+  bool penetrating_frames(const Frame* frames, bool add);
+  // The sweeps' shapes: the disk frames of `from` and `to` (sweep_frames), and contact_frames_ a
+  // fraction t of the way between them (frames_between).
+  void sweep_frames(const Eigen::VectorXd& from, const Eigen::VectorXd& to);
+  void frames_between(double t);
+  std::vector<Frame> sweep_from_, sweep_to_;
   bool passed_through_ = false;  // penetrating_pairs() found a finite obstacle penetrated deeply
   double deepest_ = 0.0;         // and the deepest penetration (m) of its last shape
   // complete(): load the robot from rest with the candidates (load factor 0 -> 1 in steps, new

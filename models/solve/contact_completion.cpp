@@ -47,6 +47,30 @@ contact::Scan swept_scan(ContactHost& host, const std::vector<Frame>& from, cons
   return contact::Scan{};
 }
 
+// Whether the disks' way from `from` to `to` (swept as in swept_scan) passes deeper than a
+// quarter of its radius into a sphere, cylinder or capsule (contact::Scan::passed_through; every
+// pair, candidates or not): an answer that penetrates such an obstacle only shallowly may still
+// have come through it.
+bool passes_through(const ContactHost& host, const std::vector<Frame>& from, const std::vector<Frame>& to,
+                    std::vector<Frame>& between) {
+  constexpr int kSamples = 16;
+  const int N = host.contact_disks();
+  std::vector<contact::Candidate> none;  // every pair is scanned (and none is added)
+  between.resize(from.size());
+  for (int k = 1; k < kSamples; ++k) {
+    const double t = double(k) / kSamples;
+    for (int j = 0; j <= N; ++j) {
+      const std::size_t u = static_cast<std::size_t>(j);
+      between[u].p = (1.0 - t) * from[u].p + t * to[u].p;
+      between[u].R = from[u].R * lie::exp_so3(t * lie::log_so3(from[u].R.transpose() * to[u].R));
+    }
+    if (contact::scan(host.contact_obstacles(), host.contact_surfaces(), between.data(), N, margin(host), false, none)
+            .passed_through)
+      return true;
+  }
+  return false;
+}
+
 // The straight robot at rest: disk j at s_j e_z.
 void rest_frames(const ContactHost& host, std::vector<Frame>& frames) {
   const std::vector<double>& s = host.contact_disk_s();
@@ -157,6 +181,13 @@ ModelProblem::Completion complete_contacts(ContactHost& host, Eigen::VectorXd& y
       found = swept_scan(host, rest, frames, between);
     }
     if (!found.penetrates) return ModelProblem::Completion::Done;
+    if (round == 0 && before == 0 && !found.passed_through) {
+      // Shallow at the answer, but through an obstacle's middle on the way from rest (a tip that
+      // slid past a ball on the far side of it): the loading from rest meets it on the near side.
+      std::vector<Frame> rest, between;
+      rest_frames(host, rest);
+      found.passed_through = passes_through(host, rest, frames, between);
+    }
     if (round == kMaxContactRounds || cands.size() == before) {
       summary.termination = TerminationType::NoConvergence;
       summary.message += "; the answer still penetrates an obstacle after " + std::to_string(round) +
