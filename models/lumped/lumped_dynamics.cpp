@@ -430,12 +430,6 @@ LumpedDynamics::LumpedDynamics(const LumpedModel& model, const LumpedBody& body,
   v_.setZero(n_);
   qs_.setZero(n_);
   S_.assign(N_ + 1, Mat3::Zero());
-  M_.setZero(n_, n_);
-  Jr_.setZero(n_, n_);
-  K_.setZero(n_, n_);
-  schur_.setZero(n_, n_);
-  schur_A21_.setZero(n_, n_);
-  schur_M_.setZero(n_, n_);
   last_y_.setZero(2 * n_);
   damp_const_.setZero(n_);
   pbody_.assign(N_ + 1, Vec6::Zero());
@@ -447,11 +441,21 @@ LumpedDynamics::LumpedDynamics(const LumpedModel& model, const LumpedBody& body,
   chain_b_.setZero(n_);
   chain3_.size(N_);
   chain5_.size(N_);
-  schur_lu_ = Eigen::PartialPivLU<Eigen::MatrixXd>(n_);
   IC_.assign(N_ + 2, Mat6::Zero());
   Io_.assign(N_ + 1, Mat6::Zero());
   V_.assign(N_ + 1, Vec6::Zero());
   A_.assign(N_ + 1, Vec6::Zero());
+}
+
+void LumpedDynamics::size_dense() {
+  if (M_.rows() == n_) return;
+  M_.setZero(n_, n_);
+  Jr_.setZero(n_, n_);
+  K_.setZero(n_, n_);
+  schur_.setZero(n_, n_);
+  schur_A21_.setZero(n_, n_);
+  schur_M_.setZero(n_, n_);
+  schur_lu_ = Eigen::PartialPivLU<Eigen::MatrixXd>(n_);
 }
 
 void LumpedDynamics::free_cvode() {
@@ -636,17 +640,11 @@ SUNMatrix LumpedDynamics::make_newton_matrix(SUNContext ctx, const LumpedDynamic
     A->content = nullptr;
     SUNMatFreeEmpty(A);
   };
+  // CVODE zeroes the matrix right before jac_fn, which sets every block of its form (chain or
+  // dense): only the scaling is reset here (zeroing the blocks was 2 % of a PRB run, callgrind,
+  // bench_dynamics --models prb --no-reference).
   A->ops->zero = [](SUNMatrix A) -> int {
     auto& c = *static_cast<NewtonMatrix*>(A->content);
-    c.M.setZero();
-    c.K.setZero();
-    c.D.setZero();
-    c.T.setZero();
-    c.Kd.setZero();
-    std::fill(c.Io.begin(), c.Io.end(), Mat6::Zero());
-    std::fill(c.link_U.begin(), c.link_U.end(), Eigen::Matrix<double, 6, 5>::Zero());
-    std::fill(c.link_D.begin(), c.link_D.end(), Eigen::Matrix<double, 5, 5>::Zero());
-    std::fill(c.link_I.begin(), c.link_I.end(), Mat6::Zero());
     c.gamma = 0.0;
     c.scaled = false;
     return 0;
@@ -775,6 +773,7 @@ void LumpedDynamics::initialize(const Solution& at_rest, const ModelInput& input
   // to 90 deg, where its twist law degenerates), not a hard stretch of motion.
   check(CVodeSetMaxNumSteps(cvode_, kMaxStepsPerOutput), "CVodeSetMaxNumSteps");
   chain_ = !displacement_;
+  if (!chain_) size_dense();
   A_mat_ = make_newton_matrix(ctx_, this);
   ls_ = make_schur_solver();
   if (!A_mat_ || !ls_) throw std::runtime_error("lumped dynamics: dense matrix or solver creation failed");
@@ -871,8 +870,7 @@ SimulationStep LumpedDynamics::advance(double t_next, const Timeline& timeline) 
   last_valid_ = false;
   input_at(step.t);
   driven_tensions(q_.data());
-  twists(q_.data(), T_);
-  step.kinetic_energy = kinetic_energy(v_.data());
+  step.kinetic_energy = kinetic_energy(q_.data(), v_.data());
   step.potential_energy = potential_energy(q_.data()) + tendon_energy();
   step.tip = frames_b_[N_];
   if (displacement_) {
@@ -893,7 +891,7 @@ SimulationStep LumpedDynamics::advance(double t_next, const Timeline& timeline) 
 double LumpedDynamics::potential_energy() {
   input_at(t_);
   driven_tensions(q_.data());
-  twists(q_.data(), T_);
+  twists_along(q_.data(), v_.data());  // the frames and link points at q
   return potential_energy(q_.data()) + tendon_energy();
 }
 

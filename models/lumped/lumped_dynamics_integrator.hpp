@@ -148,9 +148,10 @@ class LumpedDynamics final : public DynamicsIntegrator {
   // wrenches pbody_ (velocity products minus drag), the links' accelerations (PRB:
   // link_stencil_[2]; their positions at q + h q' in [3]).
   void bias(const double* q, const double* v);
+  // At the q of the last twists_along() (frames_b_, the links' points in link_stencil_[3]).
   double potential_energy(const double* q);
-  // v^T M v / 2 at the q of the last twists() (frames_b_, T_, link_c_, link_J_), without M.
-  double kinetic_energy(const double* v) const;
+  // v^T M v / 2 at (q, v), without M (twists_along(q, v): the frames and link points at q after).
+  double kinetic_energy(const double* q, const double* v);
   // PRB: the mass of kPhiInertia's m l^2 for subsegment j.
   double phi_mass(int j) const;
   // PRB: m a of link l at q'' = 0 (bias() keeps the accelerations in link_stencil_[2]).
@@ -233,6 +234,9 @@ class LumpedDynamics final : public DynamicsIntegrator {
   Eigen::VectorXd damp_const_;  // tau_bt K of the constant springs (PRB's phi rows: recomputed)
   std::vector<Mat3> S_;  // per subsegment m x m (top-left) of S
   Eigen::MatrixXd M_, Jr_, K_;
+  // M_, Jr_, K_ and the dense Newton solver's n x n buffers, sized at first use (the dense
+  // Newton systems of displacement input, the frequencies): the chain form needs none of them.
+  void size_dense();
   // The Newton systems (I - gamma J) x = b by their Schur complement (lumped_dynamics.cpp,
   // make_schur_solver): n x n instead of 2n x 2n, since J's first block row is [0 I].
   Eigen::MatrixXd schur_, schur_A21_, schur_M_;

@@ -562,23 +562,27 @@ double LumpedDynamics::spring(int i, const double* q) const {
   return prb.k_theta[1] * EI / l * a * a;
 }
 
-double LumpedDynamics::kinetic_energy(const double* v) const {
+double LumpedDynamics::kinetic_energy(const double* q, const double* v) {
   // v^T M v / 2 body by body (O(N), M is not formed): disk k moves with the spatial velocity
-  // V_k = sum_{j <= k} T_j v_j; the links of subsegment k with V_{k-1} and their own rates.
+  // V_k = sum_{j <= k} T_j v_j; the links of subsegment k with V_{k-1} and their own rates. The
+  // products T_j v_j and J_l v_j of twists_along() are all it takes (not every column, twists():
+  // at every output step that was 6 % of a PRB run, callgrind, bench_dynamics --models prb).
+  twists_along(q, v);
   Eigen::Map<const Eigen::VectorXd> vv(v, n_);
+  const std::vector<Vec3>& c = link_stencil_[3];
   double ke = 0.0;
   Vec6 V = Vec6::Zero();
   for (int k = 1; k <= N_; ++k) {
-    const auto vk = vv.segment(m_ * (k - 1), m_);
     if (links_) {
       for (int i = 0; i < kLinks; ++i) {
         const int l = kLinks * k + i;
-        const Vec3 vel = V.tail<3>() + V.head<3>().cross(link_c_[l]) + link_J_[l].leftCols(m_) * vk;
+        const Vec3 vel = V.tail<3>() + V.head<3>().cross(c[l]) + ljv_step_[l];
         ke += 0.5 * link_mass_[l] * vel.squaredNorm();
       }
-      ke += 0.5 * kPhiInertia * phi_mass(k) * length_[k] * length_[k] * vk[3] * vk[3];
+      const double vphi = vv[m_ * (k - 1) + 3];
+      ke += 0.5 * kPhiInertia * phi_mass(k) * length_[k] * length_[k] * vphi * vphi;
     }
-    V.noalias() += T_.middleCols(m_ * (k - 1), m_) * vk;
+    V += tv_step_[k];
     const Frame& f = frames_b_[k];
     const Vec3 w_body = f.R.transpose() * V.head<3>();
     const Vec3 vel = V.tail<3>() + V.head<3>().cross(f.p);
@@ -604,7 +608,7 @@ double LumpedDynamics::potential_energy(const double* q) {
   const Loads& L = input_.loads;
   for (int k = 1; k <= N_; ++k) U -= mass_[k] * L.gravity.dot(frames_b_[k].p);
   if (links_)
-    for (int l = kLinks; l < kLinks * (N_ + 1); ++l) U -= link_mass_[l] * L.gravity.dot(link_c_[l]);
+    for (int l = kLinks; l < kLinks * (N_ + 1); ++l) U -= link_mass_[l] * L.gravity.dot(link_stencil_[3][l]);
   U -= L.tip_force.dot(frames_b_[N_].p);
   if (input_.actuation.kind == Actuation::Kind::Tensions && !input_.actuation.mixed()) {
     const TendonRouting& routing = body_.statics.routing();
@@ -623,6 +627,7 @@ double LumpedDynamics::potential_energy(const double* q) {
 }
 
 Eigen::VectorXd LumpedDynamics::frequencies(const Eigen::VectorXd& x, const ModelInput& input) {
+  size_dense();
   last_valid_ = false;
   timeline_ = nullptr;
   input_ = input;
