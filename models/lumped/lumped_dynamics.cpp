@@ -395,6 +395,12 @@ LumpedDynamics::LumpedDynamics(const LumpedModel& model, const LumpedBody& body,
     if (links_)
       for (int i = 0; i < kLinks; ++i) link_mass_[kLinks * j + i] = mu * length_[j] * prb.gamma[i] / gsum;
   }
+  if (links_)
+    for (int i = 0; i < kLinks; ++i) {
+      const unsigned mask = body.link_unknowns(i);
+      for (int c = 0; c < m_; ++c)
+        if (mask & (1u << c)) link_cols_[i][link_ncols_[i]++] = c;
+    }
   // Accuracy (docs/dynamics.md, "Accuracy"): CVODE's absolute tolerance on q is the tip
   // tolerance as an angle, tip_tolerance / L; on q' that over the output step. A scene without
   // its own solver.tip_tolerance (0) gets the dynamics' default kDynamicsTipToleranceOverLength L,

@@ -60,6 +60,17 @@ inline Mat6 spatial_inertia(double m, const Vec3& c, const Mat3& Ic) {
   return I;
 }
 
+// I += spatial_inertia(m, c, 0): a point mass m at c.
+inline void add_point_inertia(Mat6& I, double m, const Vec3& c) {
+  const Vec3 mc = m * c;
+  const Mat3 C = lie::hat(mc);
+  I.topLeftCorner<3, 3>() -= mc * c.transpose();
+  I.topLeftCorner<3, 3>().diagonal().array() += mc.dot(c);
+  I.topRightCorner<3, 3>() += C;
+  I.bottomLeftCorner<3, 3>() -= C;
+  I.bottomRightCorner<3, 3>().diagonal().array() += m;
+}
+
 // V x* h: the rate of a spatial momentum h carried along by the spatial velocity V.
 inline Vec6 cross_force(const Vec6& V, const Vec6& h) {
   Vec6 r;
@@ -113,7 +124,8 @@ class LumpedDynamics final : public DynamicsIntegrator {
   bool generalized_force(const double* q);
   // M at q from T_ (frames_ of q); the composite inertias kept in IC_.
   void mass_matrix();
-  // The disks' spatial inertias Io_ at frames_b_ (mass_matrix() computes them too).
+  // The disks' spatial inertias Io_ at frames_b_ (mass_matrix() computes them too), PRB's rigid
+  // links (link_rigid()) with them.
   void body_inertias();
   // q'' = M^-1 rhs_ by the articulated-body algorithm, O(N) (no M, no Cholesky), from T_, Io_,
   // PRB's links, and bias()'s V_, A_, pbody_ and link stencils.
@@ -211,6 +223,12 @@ class LumpedDynamics final : public DynamicsIntegrator {
   // The body has closed-form rates of its subsegments' poses (LumpedBody::local_rates); else
   // the twists are fourth-order differences of local().
   bool rates_ = false;
+  // The unknowns that move link i of a subsegment (LumpedBody::link_unknowns: PRB's link i by
+  // i + 1 of them), ascending; a link none moves (PRB's first) is rigid with the subsegment's
+  // base disk and its mass is part of that disk's spatial inertia in Io_ (body_inertias()).
+  int link_cols_[kLinks][5] = {};
+  int link_ncols_[kLinks] = {};
+  bool link_rigid(int i) const { return link_ncols_[i] == 0; }
   std::vector<double> link_mass_;
   std::vector<Vec3> link_c_, link_stencil_[4];
   std::vector<Eigen::Matrix<double, 3, 5>> link_J_, link_J_step_;  // at q, at bias()'s q + h q'

@@ -36,10 +36,15 @@ void LumpedDynamics::twists(const double* q, Twists& T, std::vector<Vec3>* point
       for (int i = 0; i < m_; ++i) {
         const Vec3 w = R0 * d.w[i];
         T.col(m_ * (j - 1) + i) << w, R0 * d.dp[i] - w.cross(f.p);
-        if (links_) {
-          auto& J = points ? link_J_step_ : link_J_;
-          for (int l = 0; l < kLinks; ++l) J[kLinks * j + l].col(i) = R0 * d.dmid[l][i];
-        }
+      }
+      if (links_) {
+        // The columns that move each link (the others stay zero).
+        auto& J = points ? link_J_step_ : link_J_;
+        for (int l = 0; l < kLinks; ++l)
+          for (int a = 0; a < link_ncols_[l]; ++a) {
+            const int i = link_cols_[l][a];
+            J[kLinks * j + l].col(i) = R0 * d.dmid[l][i];
+          }
       }
     }
     return;
@@ -76,6 +81,7 @@ void LumpedDynamics::twists(const double* q, Twists& T, std::vector<Vec3>* point
       const Vec3 w_loc = lie::vee(dR * poses_[j].R.transpose());
       if (links_)
         for (int l = 0; l < kLinks; ++l) {
+          if (!std::count(link_cols_[l], link_cols_[l] + link_ncols_[l], i)) continue;  // stays zero
           Vec3 dc = Vec3::Zero();
           for (int k = 0; k < 4; ++k) dc += kWeight[k] * g[k].aux[3 + l];
           (points ? link_J_step_ : link_J_)[kLinks * j + l].col(i) = R0 * dc / kTwistStep;
@@ -125,7 +131,7 @@ void LumpedDynamics::twists_along(const double* q, const double* v) {
       for (int l = 0; l < kLinks; ++l) {
         link_stencil_[3][kLinks * j + l] = prev.p + R0 * g.aux[3 + l];
         Vec3 s = Vec3::Zero();
-        for (int i = 0; i < m_; ++i) s += vj[i] * d.dmid[l][i];
+        for (int a = 0; a < link_ncols_[l]; ++a) s += vj[link_cols_[l][a]] * d.dmid[l][link_cols_[l][a]];
         ljv_step_[kLinks * j + l] = R0 * s;
       }
   }
@@ -189,6 +195,11 @@ void LumpedDynamics::body_inertias() {
     const Frame& f = frames_b_[k];
     const Mat3 Ic = f.R * inertia_[k].asDiagonal() * f.R.transpose();
     Io_[k] = spatial_inertia(mass_[k], f.p, Ic);
+    // PRB: the links of subsegment k + 1 that no unknown moves are rigid with disk k: one body
+    // (articulated_m() and bias() then skip them, their velocity products are the disk's).
+    if (links_ && k < N_)
+      for (int i = 0; i < kLinks; ++i)
+        if (link_rigid(i)) add_point_inertia(Io_[k], link_mass_[kLinks * (k + 1) + i], link_c_[kLinks * (k + 1) + i]);
   }
 }
 
@@ -301,29 +312,33 @@ void LumpedDynamics::articulated_m(Eigen::Map<Eigen::VectorXd>& qdd) {
         // their total mass, first and second moments; the wrench w_l = IA_l c_l + V_l x* IA_l V_l
         // of a point is (c x f, f) with f = m times its acceleration less the parent's a_{k-1}
         // part (Ap.v + Ap.w x c): m acc from bias()'s forward difference.
+        // Only the columns that move each link (link_cols_), and not the links rigid with disk
+        // k - 1 (in Io_[k - 1]): PRB's links 1..3 have 2, 3 and 4 of the 5 columns.
         double msum = 0.0, m2 = 0.0;
         Vec3 mc = Vec3::Zero();
         Mat3 mcc = Mat3::Zero();
-        const Um U0 = U;
+        Um LU = Um::Zero();
         Mm LD = Mm::Zero();
         for (int i = 0; i < kLinks; ++i) {
+          const int nc = link_ncols_[i];
+          if (nc == 0) continue;
+          const int* cols = link_cols_[i];
           const int l = kLinks * k + i;
           const double ml = link_mass_[l];
           const Vec3& cl = link_c_[l];
           const Eigen::Matrix<double, 3, 5>& J = link_J_[l];
-          // IA_l S_l = (m [c] J; m J); S_l^T IA_l S_l = m J^T J.
-          for (int col = 0; col < 5; ++col) {
-            const Vec3 mJ = ml * J.col(col);
-            U.col(col).template head<3>() += cl.cross(mJ);
-            U.col(col).template tail<3>() += mJ;
-          }
-          {
-            const Eigen::Matrix<double, 3, 5> mJ = ml * J;
-            LD.noalias() += J.transpose() * mJ;
-          }
           Vec3 f = bias_h_ > 0.0 ? link_force(l) : Vec3::Zero();
           f -= ml * (Ap.tail<3>() + Ap.head<3>().cross(cl));
-          u -= J.transpose() * f;
+          // IA_l S_l = (m [c] J; m J); S_l^T IA_l S_l = m J^T J (its lower triangle here).
+          for (int a = 0; a < nc; ++a) {
+            const int ca = cols[a];
+            const Vec3 Ja = J.col(ca);
+            const Vec3 mJ = ml * Ja;
+            LU.col(ca).template head<3>() += cl.cross(mJ);
+            LU.col(ca).template tail<3>() += mJ;
+            u[ca] -= Ja.dot(f);
+            for (int b = 0; b <= a; ++b) LD(ca, cols[b]) += mJ.dot(J.col(cols[b]));
+          }
           wsum.head<3>() += cl.cross(f);
           wsum.tail<3>() += f;
           msum += ml;
@@ -331,6 +346,8 @@ void LumpedDynamics::articulated_m(Eigen::Map<Eigen::VectorXd>& qdd) {
           mc += ml * cl;
           mcc.noalias() += ml * cl * cl.transpose();
         }
+        for (int a = 0; a < m; ++a)
+          for (int b = a + 1; b < m; ++b) LD(a, b) = LD(b, a);
         // sum of spatial_inertia(m, c, 0): (m [c]^T [c], m [c]; m [c]^T, m I).
         const Mat3 C = lie::hat(mc);
         Mat6& LI = link_I_[k];
@@ -340,8 +357,9 @@ void LumpedDynamics::articulated_m(Eigen::Map<Eigen::VectorXd>& qdd) {
         LI.template bottomRightCorner<3, 3>() = msum * Mat3::Identity();
         IAsum += LI;
         LD(3, 3) += kPhiInertia * phi_mass(k) * length_[k] * length_[k];
+        U += LU;
         D += LD;
-        link_U_[k] = U - U0;
+        link_U_[k] = LU;
         link_D_[k] = LD;
       }
     }
@@ -455,7 +473,8 @@ void LumpedDynamics::mass_matrix() {
     // PRB: the links of subsegment k + 1 are rigid with disk k.
     if (links_ && k < N_)
       for (int i = 0; i < kLinks; ++i)
-        IC_[k] += spatial_inertia(link_mass_[kLinks * (k + 1) + i], link_c_[kLinks * (k + 1) + i], Mat3::Zero());
+        if (!link_rigid(i))  // (the rigid ones are in Io_[k])
+          IC_[k] += spatial_inertia(link_mass_[kLinks * (k + 1) + i], link_c_[kLinks * (k + 1) + i], Mat3::Zero());
   }
   // Block (a, b), a <= b: the bodies moving rigidly with both columns are the disks k >= b and
   // the links of subsegments > b; PRB: the links of b move with its columns through link_J_.
@@ -510,6 +529,7 @@ void LumpedDynamics::bias(const double* q, const double* v) {
       for (int j = 1; j <= N_; ++j) {
         const auto vj = vv.segment<5>(5 * (j - 1));
         for (int i = 0; i < kLinks; ++i) {
+          if (link_rigid(i)) continue;  // part of disk j - 1 (body_inertias())
           const int l = kLinks * j + i;
           const Vec3& c0 = link_c_[l];
           const Vec3& c1 = link_stencil_[3][l];

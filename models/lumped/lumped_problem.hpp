@@ -67,6 +67,13 @@ class LumpedBody {
     (void)j, (void)xj, (void)g, (void)d;
     return false;
   }
+  /// The unknowns that can move link midpoint k (PRB's aux[3 + k]) as a bit mask over the columns
+  /// of SubsegmentRates::dmid[k]: the others are zero at every x_j. The dynamics skip them, and
+  /// take a link that none moves as part of its base disk's rigid body.
+  virtual unsigned link_unknowns(int k) const {
+    (void)k;
+    return (1u << per_subsegment) - 1u;
+  }
   /// The same at axial stretch `stretch` (SubsegmentLoads::stretch): the tendons' compression
   /// shortens a subsegment uniformly and leaves its bend and twist, so its points scale.
   void pose(int j, const double* xj, double stretch, SubsegmentPose& g) const;

@@ -145,6 +145,10 @@ class PrbBody final : public detail::LumpedBody {
     return true;
   }
 
+  // local_rates()' structure: the joints move the links after them, phi turns all but the first
+  // (on the axis), eps none: link k by theta_1..theta_k and phi, link 0 by nothing.
+  unsigned link_unknowns(int k) const override { return k == 0 ? 0u : ((1u << k) - 1u) | (1u << 3); }
+
   double gamma[4] = {};
   double gamma_sum = 1.0;
   double k_theta[3] = {};
