@@ -516,10 +516,11 @@ void LumpedDynamics::bias(const double* q, const double* v) {
   if (moving) {
     h = kBiasStep / vn;
     bias_h_ = h;
-    // The step's twists() overwrite the frames and poses: keep those of q (a copy, not a
-    // second pose set at q: its sines and cosines were a tenth of PRB's right-hand side).
-    std::copy(frames_b_.begin(), frames_b_.end(), frames_q_.begin());
-    std::copy(poses_.begin(), poses_.end(), poses_q_.begin());
+    // The step's twists() overwrite the frames and poses: keep those of q (aside in the buffers
+    // frames_q_, poses_q_ by a swap; not a second pose set at q: its sines and cosines were a
+    // tenth of PRB's right-hand side).
+    frames_b_.swap(frames_q_);
+    poses_.swap(poses_q_);
     qs_ = qv + h * vv;
     twists_along(qs_.data(), v);
     if (links_) {
@@ -548,7 +549,10 @@ void LumpedDynamics::bias(const double* q, const double* v) {
   Vec6 V = Vec6::Zero(), A = Vec6::Zero();
   for (int k = 1; k <= N_; ++k) {
     Vec6 tv;
-    tv.noalias() = T_.middleCols(m_ * (k - 1), m_) * vv.segment(m_ * (k - 1), m_);
+    if (m_ == 5)
+      tv.noalias() = T_.middleCols<5>(5 * (k - 1)) * vv.segment<5>(5 * (k - 1));
+    else
+      tv.noalias() = T_.middleCols<3>(3 * (k - 1)) * vv.segment<3>(3 * (k - 1));
     V += tv;
     if (moving) A += (tv_step_[k] - tv) / h;
     V_[k] = V;
