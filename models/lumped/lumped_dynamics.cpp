@@ -301,7 +301,7 @@ bool LumpedDynamics::tendon_stiffness(const double* q) {
   }
   problem_->set_driven_tensions(driven_, driven_T_);
   last_valid_ = false;  // the problem's residual state is that of the differences
-  return K_.allFinite();
+  return all_finite(K_);
 }
 
 double LumpedDynamics::tendon_energy() const {
@@ -522,7 +522,7 @@ int LumpedDynamics::rhs_fn(sunrealtype t, N_Vector y, N_Vector yd, void* user) {
   dq = vv;
   s.rhs_ = s.Q_ - s.damp_.cwiseProduct(vv);  // the velocity products are the bodies' (pbody_)
   s.articulated(dv);
-  if (!dv.allFinite()) return 1;
+  if (!all_finite(dv)) return 1;
   s.last_valid_ = true;
   s.last_t_ = t;
   s.last_y_ = Eigen::Map<const Eigen::VectorXd>(yv, 2 * n);
@@ -583,7 +583,7 @@ int LumpedDynamics::jac_fn(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix J, 
     nm.D = s.damp_;
     nm.gamma = 0.0;
     nm.scaled = false;
-    return nm.Kd.allFinite() ? 0 : 1;
+    return all_finite(nm.Kd) ? 0 : 1;
   }
   s.mass_matrix();  // the right-hand side forms no M
   if (!s.problem_->jacobian(x, s.r_, s.Jr_)) return 1;
@@ -611,7 +611,7 @@ int LumpedDynamics::jac_fn(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix J, 
   nm.D = s.damp_;
   nm.gamma = 0.0;
   nm.scaled = false;
-  return nm.M.allFinite() && nm.K.allFinite() ? 0 : 1;
+  return all_finite(nm.M) && all_finite(nm.K) ? 0 : 1;
 }
 
 // The Jacobian of (q, v)' = (v, M^-1 (Q - D v - b)) without M's and b's own derivatives is
@@ -701,7 +701,7 @@ SUNLinearSolver LumpedDynamics::make_schur_solver() {
     // A singular or non-finite block: recoverable, CVODE retries with a smaller step.
     // (The pivots, not rcond(): its estimate allocates.)
     const double pivot = d.schur_lu_.matrixLU().diagonal().cwiseAbs().minCoeff();
-    return pivot > 0.0 && d.schur_.allFinite() ? 0 : 1;
+    return pivot > 0.0 && all_finite(d.schur_) ? 0 : 1;
   };
   S->ops->solve = [](SUNLinearSolver ls, SUNMatrix, N_Vector x, N_Vector b, sunrealtype) -> int {
     auto& d = *static_cast<LumpedDynamics*>(ls->content);
@@ -718,13 +718,13 @@ SUNLinearSolver LumpedDynamics::make_schur_solver() {
         d.chain_solve<5>(bb.data(), g);
       xx.tail(n) = bb.tail(n) - g * d.chain_b_;
       xx.head(n) = bb.head(n) + g * xx.tail(n);
-      return xx.allFinite() ? 0 : 1;
+      return all_finite(xx) ? 0 : 1;
     }
     d.schur_b_.noalias() = d.schur_M_ * bb.tail(n);
     d.schur_b_.noalias() -= d.schur_gamma_ * (d.schur_A21_ * bb.head(n));
     xx.tail(n) = d.schur_lu_.solve(d.schur_b_);
     xx.head(n) = bb.head(n) + d.schur_gamma_ * xx.tail(n);
-    return xx.allFinite() ? 0 : 1;
+    return all_finite(xx) ? 0 : 1;
   };
   S->ops->free = [](SUNLinearSolver ls) -> int {
     ls->content = nullptr;

@@ -166,7 +166,7 @@ bool LumpedDynamics::generalized_force(const double* q) {
       S(0, 0) = a;  // the phi row's factor (over c), read by jac_fn
     }
   }
-  return Q_.allFinite();
+  return all_finite(Q_);
 }
 
 template <int m>
@@ -417,13 +417,13 @@ bool LumpedDynamics::chain_factor(const NewtonMatrix& nm, double gamma) {
     D.noalias() += g2 * nm.Kd.template middleCols<m>(m * (k - 1));
     D.diagonal() += gamma * nm.D.template segment<m>(m * (k - 1));
     Mm Dinv;
-    if (!general_inverse<m>(D, Dinv) || !Dinv.allFinite()) return false;
+    if (!general_inverse<m>(D, Dinv) || !all_finite(Dinv)) return false;
     F.UL[k] = UL;
     F.UR[k] = UR;
     F.Dinv[k] = Dinv;
     if (k > 1) IA = nm.Io[k - 1] + IAsum - (UL * Dinv) * UR.transpose();
   }
-  return IA.allFinite();
+  return all_finite(IA);
 }
 
 template <int m>

@@ -249,8 +249,8 @@ bool LumpedProblem::structured_jacobian(const Eigen::Ref<const Eigen::VectorXd>&
     frames_[k] = base_k;
     if (has_next) frames_[k + 1] = base_k1;
   }
-  return jac_diag_.allFinite() && jac_dW_.allFinite() && jac_E_.allFinite() &&
-         (!jac_external_ || (jac_Om_.allFinite() && jac_D_.allFinite()));
+  return all_finite(jac_diag_) && all_finite(jac_dW_) && all_finite(jac_E_) &&
+         (!jac_external_ || (all_finite(jac_Om_) && all_finite(jac_D_)));
 }
 
 bool LumpedProblem::undamped_structured_jacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
@@ -294,7 +294,7 @@ bool LumpedProblem::jacobian(const Eigen::Ref<const Eigen::VectorXd>& x, const E
   }
   for (int k = 1; k <= J; ++k) Jm.block(m * (k - 1), m * (k - 1), m, m) = jac_diag_.middleCols(m * (k - 1), m);
   if (damping_ > 0.0) Jm.diagonal() += damping_ * damping_scale_;
-  return Jm.allFinite();
+  return all_finite(Jm);
 }
 
 bool LumpedProblem::diagonal_jacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
@@ -304,7 +304,7 @@ bool LumpedProblem::diagonal_jacobian(const Eigen::Ref<const Eigen::VectorXd>& x
   blocks = jac_diag_;
   if (damping_ > 0.0)
     for (Eigen::Index c = 0; c < blocks.cols(); ++c) blocks(c % m, c) += damping_ * damping_scale_[c];
-  return blocks.allFinite();
+  return all_finite(blocks);
 }
 
 }  // namespace tdcr::detail
