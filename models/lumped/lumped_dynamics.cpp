@@ -574,12 +574,15 @@ int LumpedDynamics::jac_fn(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix J, 
     }
     s.kd_fails_ = fails;
     ++s.kd_age_;
-    nm.T = s.T_;
-    nm.Io = s.Io_;
-    nm.link_U = s.link_U_;
-    nm.link_D = s.link_D_;
-    nm.link_I = s.link_I_;
-    nm.Kd = s.Kd_;
+    // Moved, not copied: the next right-hand side computes the twists, inertias and links anew
+    // (and no buffer of this y is reused: last_valid_).
+    nm.T.swap(s.T_);
+    nm.Io.swap(s.Io_);
+    nm.link_U.swap(s.link_U_);
+    nm.link_D.swap(s.link_D_);
+    nm.link_I.swap(s.link_I_);
+    s.last_valid_ = false;
+    nm.Kd = s.Kd_;  // (kept: computed anew only every kChainStiffnessEvery Jacobians)
     nm.D = s.damp_;
     nm.gamma = 0.0;
     nm.scaled = false;

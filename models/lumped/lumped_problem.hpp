@@ -471,12 +471,14 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   // external part (see split_external_loads), the perturbed loads of two disks.
   void split_external_loads();
   // The factors of the recursive Jacobian at x (f: the residual there): jac_diag_, jac_E_, jac_D_,
-  // jac_dW_, jac_Om_ (see lumped_structured.cpp); false if a value is not finite.
-  bool structured_jacobian(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& f);
+  // jac_dW_, jac_Om_ (see lumped_structured.cpp); false if a value is not finite. With
+  // diagonal_only, jac_diag_ alone (diagonal_jacobian(): the others are left as they were).
+  bool structured_jacobian(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& f,
+                           bool diagonal_only = false);
   // structured_jacobian() of the undamped residual, given the (possibly damped) f at x: the
   // damping's diagonal is added by the caller (jacobian(), setup_newton_step()).
   bool undamped_structured_jacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
-                                    const Eigen::Ref<const Eigen::VectorXd>& f);
+                                    const Eigen::Ref<const Eigen::VectorXd>& f, bool diagonal_only = false);
   // jacobian(): the residuals' response to distal wrench changes and to distal rotations.
   void load_sensitivities();
   template <int Rows>
