@@ -50,12 +50,15 @@ constexpr long kMaxStepsPerOutput = 20000;
 
 // The spatial inertia about the base origin, ordering (omega, v_o), of a body with mass m,
 // centre c and rotational inertia Ic about c (base frame).
+// ([c]^T [c] = |c|^2 I - c c^T, not the product: a right-hand side takes one per disk.)
 inline Mat6 spatial_inertia(double m, const Vec3& c, const Mat3& Ic) {
-  const Mat3 C = lie::hat(c);
+  const Vec3 mc = m * c;
+  const Mat3 C = lie::hat(mc);
   Mat6 I;
-  I.topLeftCorner<3, 3>() = Ic + m * C.transpose() * C;
-  I.topRightCorner<3, 3>() = m * C;
-  I.bottomLeftCorner<3, 3>() = m * C.transpose();
+  I.topLeftCorner<3, 3>() = Ic - mc * c.transpose();
+  I.topLeftCorner<3, 3>().diagonal().array() += mc.dot(c);
+  I.topRightCorner<3, 3>() = C;
+  I.bottomLeftCorner<3, 3>() = -C;
   I.bottomRightCorner<3, 3>() = m * Mat3::Identity();
   return I;
 }
