@@ -34,8 +34,12 @@ void LumpedDynamics::twists(const double* q, Twists& T, std::vector<Vec3>* point
       if (links_)
         for (int i = 0; i < kLinks; ++i) c[kLinks * j + i] = prev.p + R0 * g.aux[3 + i];
       for (int i = 0; i < m_; ++i) {
+        // (Not the comma initializer: it was a fifth of PRB's twists() here,
+        // callgrind, bench_dynamics --models prb --no-reference.)
         const Vec3 w = R0 * d.w[i];
-        T.col(m_ * (j - 1) + i) << w, R0 * d.dp[i] - w.cross(f.p);
+        auto Ti = T.col(m_ * (j - 1) + i);
+        Ti.head<3>() = w;
+        Ti.tail<3>() = R0 * d.dp[i] - w.cross(f.p);
       }
       if (links_) {
         // The columns that move each link (the others stay zero).
@@ -88,7 +92,8 @@ void LumpedDynamics::twists(const double* q, Twists& T, std::vector<Vec3>* point
         }
       const Vec3 a = R0 * dp;
       const Vec3 w = R0 * w_loc;
-      T.col(m_ * (j - 1) + i) << w, a - w.cross(pj);
+      T.col(m_ * (j - 1) + i).head<3>() = w;
+      T.col(m_ * (j - 1) + i).tail<3>() = a - w.cross(pj);
     }
   }
 }
@@ -126,7 +131,8 @@ void LumpedDynamics::twists_along(const double* q, const double* v) {
       dl += vj[i] * d.dp[i];
     }
     const Vec3 w = R0 * wl;
-    tv_step_[j] << w, R0 * dl - w.cross(f.p);
+    tv_step_[j].head<3>() = w;
+    tv_step_[j].tail<3>() = R0 * dl - w.cross(f.p);
     if (links_)
       for (int l = 0; l < kLinks; ++l) {
         link_stencil_[3][kLinks * j + l] = prev.p + R0 * g.aux[3 + l];
