@@ -226,8 +226,8 @@ class LumpedDynamics final : public DynamicsIntegrator {
   // The body has closed-form rates of its subsegments' poses (LumpedBody::local_rates); else
   // the twists are fourth-order differences of local().
   bool rates_ = false;
-  // The unknowns that move link i of a subsegment (LumpedBody::link_unknowns: PRB's link i by
-  // i + 1 of them), ascending; a link none moves (PRB's first) is rigid with the subsegment's
+  // The unknowns that move link i of a subsegment (LumpedBody::link_unknowns: PRB's links 1..3
+  // by 2, 3 and 4 of them), ascending; a link none moves (PRB's first) is rigid with the subsegment's
   // base disk and its mass is part of that disk's spatial inertia in Io_ (body_inertias()).
   int link_cols_[kLinks][5] = {};
   int link_ncols_[kLinks] = {};
