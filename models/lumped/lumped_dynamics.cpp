@@ -301,7 +301,7 @@ bool LumpedDynamics::tendon_stiffness(const double* q) {
   }
   problem_->set_driven_tensions(driven_, driven_T_);
   last_valid_ = false;  // the problem's residual state is that of the differences
-  return K_.allFinite();
+  return all_finite(K_);
 }
 
 double LumpedDynamics::tendon_energy() const {
@@ -395,6 +395,12 @@ LumpedDynamics::LumpedDynamics(const LumpedModel& model, const LumpedBody& body,
     if (links_)
       for (int i = 0; i < kLinks; ++i) link_mass_[kLinks * j + i] = mu * length_[j] * prb.gamma[i] / gsum;
   }
+  if (links_)
+    for (int i = 0; i < kLinks; ++i) {
+      const unsigned mask = body.link_unknowns(i);
+      for (int c = 0; c < m_; ++c)
+        if (mask & (1u << c)) link_cols_[i][link_ncols_[i]++] = c;
+    }
   // Accuracy (docs/dynamics.md, "Accuracy"): CVODE's absolute tolerance on q is the tip
   // tolerance as an angle, tip_tolerance / L; on q' that over the output step. A scene without
   // its own solver.tip_tolerance (0) gets the dynamics' default kDynamicsTipToleranceOverLength L,
@@ -430,12 +436,6 @@ LumpedDynamics::LumpedDynamics(const LumpedModel& model, const LumpedBody& body,
   v_.setZero(n_);
   qs_.setZero(n_);
   S_.assign(N_ + 1, Mat3::Zero());
-  M_.setZero(n_, n_);
-  Jr_.setZero(n_, n_);
-  K_.setZero(n_, n_);
-  schur_.setZero(n_, n_);
-  schur_A21_.setZero(n_, n_);
-  schur_M_.setZero(n_, n_);
   last_y_.setZero(2 * n_);
   damp_const_.setZero(n_);
   pbody_.assign(N_ + 1, Vec6::Zero());
@@ -447,11 +447,21 @@ LumpedDynamics::LumpedDynamics(const LumpedModel& model, const LumpedBody& body,
   chain_b_.setZero(n_);
   chain3_.size(N_);
   chain5_.size(N_);
-  schur_lu_ = Eigen::PartialPivLU<Eigen::MatrixXd>(n_);
   IC_.assign(N_ + 2, Mat6::Zero());
   Io_.assign(N_ + 1, Mat6::Zero());
   V_.assign(N_ + 1, Vec6::Zero());
   A_.assign(N_ + 1, Vec6::Zero());
+}
+
+void LumpedDynamics::size_dense() {
+  if (M_.rows() == n_) return;
+  M_.setZero(n_, n_);
+  Jr_.setZero(n_, n_);
+  K_.setZero(n_, n_);
+  schur_.setZero(n_, n_);
+  schur_A21_.setZero(n_, n_);
+  schur_M_.setZero(n_, n_);
+  schur_lu_ = Eigen::PartialPivLU<Eigen::MatrixXd>(n_);
 }
 
 void LumpedDynamics::free_cvode() {
@@ -512,7 +522,7 @@ int LumpedDynamics::rhs_fn(sunrealtype t, N_Vector y, N_Vector yd, void* user) {
   dq = vv;
   s.rhs_ = s.Q_ - s.damp_.cwiseProduct(vv);  // the velocity products are the bodies' (pbody_)
   s.articulated(dv);
-  if (!dv.allFinite()) return 1;
+  if (!all_finite(dv)) return 1;
   s.last_valid_ = true;
   s.last_t_ = t;
   s.last_y_ = Eigen::Map<const Eigen::VectorXd>(yv, 2 * n);
@@ -564,16 +574,19 @@ int LumpedDynamics::jac_fn(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix J, 
     }
     s.kd_fails_ = fails;
     ++s.kd_age_;
-    nm.T = s.T_;
-    nm.Io = s.Io_;
-    nm.link_U = s.link_U_;
-    nm.link_D = s.link_D_;
-    nm.link_I = s.link_I_;
-    nm.Kd = s.Kd_;
+    // Moved, not copied: the next right-hand side computes the twists, inertias and links anew
+    // (and no buffer of this y is reused: last_valid_).
+    nm.T.swap(s.T_);
+    nm.Io.swap(s.Io_);
+    nm.link_U.swap(s.link_U_);
+    nm.link_D.swap(s.link_D_);
+    nm.link_I.swap(s.link_I_);
+    s.last_valid_ = false;
+    nm.Kd = s.Kd_;  // (kept: computed anew only every kChainStiffnessEvery Jacobians)
     nm.D = s.damp_;
     nm.gamma = 0.0;
     nm.scaled = false;
-    return nm.Kd.allFinite() ? 0 : 1;
+    return all_finite(nm.Kd) ? 0 : 1;
   }
   s.mass_matrix();  // the right-hand side forms no M
   if (!s.problem_->jacobian(x, s.r_, s.Jr_)) return 1;
@@ -601,7 +614,7 @@ int LumpedDynamics::jac_fn(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix J, 
   nm.D = s.damp_;
   nm.gamma = 0.0;
   nm.scaled = false;
-  return nm.M.allFinite() && nm.K.allFinite() ? 0 : 1;
+  return all_finite(nm.M) && all_finite(nm.K) ? 0 : 1;
 }
 
 // The Jacobian of (q, v)' = (v, M^-1 (Q - D v - b)) without M's and b's own derivatives is
@@ -636,17 +649,11 @@ SUNMatrix LumpedDynamics::make_newton_matrix(SUNContext ctx, const LumpedDynamic
     A->content = nullptr;
     SUNMatFreeEmpty(A);
   };
+  // CVODE zeroes the matrix right before jac_fn, which sets every block of its form (chain or
+  // dense): only the scaling is reset here (zeroing the blocks was 2 % of a PRB run, callgrind,
+  // bench_dynamics --models prb --no-reference).
   A->ops->zero = [](SUNMatrix A) -> int {
     auto& c = *static_cast<NewtonMatrix*>(A->content);
-    c.M.setZero();
-    c.K.setZero();
-    c.D.setZero();
-    c.T.setZero();
-    c.Kd.setZero();
-    std::fill(c.Io.begin(), c.Io.end(), Mat6::Zero());
-    std::fill(c.link_U.begin(), c.link_U.end(), Eigen::Matrix<double, 6, 5>::Zero());
-    std::fill(c.link_D.begin(), c.link_D.end(), Eigen::Matrix<double, 5, 5>::Zero());
-    std::fill(c.link_I.begin(), c.link_I.end(), Mat6::Zero());
     c.gamma = 0.0;
     c.scaled = false;
     return 0;
@@ -697,7 +704,7 @@ SUNLinearSolver LumpedDynamics::make_schur_solver() {
     // A singular or non-finite block: recoverable, CVODE retries with a smaller step.
     // (The pivots, not rcond(): its estimate allocates.)
     const double pivot = d.schur_lu_.matrixLU().diagonal().cwiseAbs().minCoeff();
-    return pivot > 0.0 && d.schur_.allFinite() ? 0 : 1;
+    return pivot > 0.0 && all_finite(d.schur_) ? 0 : 1;
   };
   S->ops->solve = [](SUNLinearSolver ls, SUNMatrix, N_Vector x, N_Vector b, sunrealtype) -> int {
     auto& d = *static_cast<LumpedDynamics*>(ls->content);
@@ -714,13 +721,13 @@ SUNLinearSolver LumpedDynamics::make_schur_solver() {
         d.chain_solve<5>(bb.data(), g);
       xx.tail(n) = bb.tail(n) - g * d.chain_b_;
       xx.head(n) = bb.head(n) + g * xx.tail(n);
-      return xx.allFinite() ? 0 : 1;
+      return all_finite(xx) ? 0 : 1;
     }
     d.schur_b_.noalias() = d.schur_M_ * bb.tail(n);
     d.schur_b_.noalias() -= d.schur_gamma_ * (d.schur_A21_ * bb.head(n));
     xx.tail(n) = d.schur_lu_.solve(d.schur_b_);
     xx.head(n) = bb.head(n) + d.schur_gamma_ * xx.tail(n);
-    return xx.allFinite() ? 0 : 1;
+    return all_finite(xx) ? 0 : 1;
   };
   S->ops->free = [](SUNLinearSolver ls) -> int {
     ls->content = nullptr;
@@ -775,6 +782,7 @@ void LumpedDynamics::initialize(const Solution& at_rest, const ModelInput& input
   // to 90 deg, where its twist law degenerates), not a hard stretch of motion.
   check(CVodeSetMaxNumSteps(cvode_, kMaxStepsPerOutput), "CVodeSetMaxNumSteps");
   chain_ = !displacement_;
+  if (!chain_) size_dense();
   A_mat_ = make_newton_matrix(ctx_, this);
   ls_ = make_schur_solver();
   if (!A_mat_ || !ls_) throw std::runtime_error("lumped dynamics: dense matrix or solver creation failed");
@@ -871,8 +879,7 @@ SimulationStep LumpedDynamics::advance(double t_next, const Timeline& timeline) 
   last_valid_ = false;
   input_at(step.t);
   driven_tensions(q_.data());
-  twists(q_.data(), T_);
-  step.kinetic_energy = kinetic_energy(v_.data());
+  step.kinetic_energy = kinetic_energy(q_.data(), v_.data());
   step.potential_energy = potential_energy(q_.data()) + tendon_energy();
   step.tip = frames_b_[N_];
   if (displacement_) {
@@ -893,7 +900,7 @@ SimulationStep LumpedDynamics::advance(double t_next, const Timeline& timeline) 
 double LumpedDynamics::potential_energy() {
   input_at(t_);
   driven_tensions(q_.data());
-  twists(q_.data(), T_);
+  twists_along(q_.data(), v_.data());  // the frames and link points at q
   return potential_energy(q_.data()) + tendon_energy();
 }
 

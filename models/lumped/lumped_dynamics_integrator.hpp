@@ -50,14 +50,28 @@ constexpr long kMaxStepsPerOutput = 20000;
 
 // The spatial inertia about the base origin, ordering (omega, v_o), of a body with mass m,
 // centre c and rotational inertia Ic about c (base frame).
+// ([c]^T [c] = |c|^2 I - c c^T, not the product: a right-hand side takes one per disk.)
 inline Mat6 spatial_inertia(double m, const Vec3& c, const Mat3& Ic) {
-  const Mat3 C = lie::hat(c);
+  const Vec3 mc = m * c;
+  const Mat3 C = lie::hat(mc);
   Mat6 I;
-  I.topLeftCorner<3, 3>() = Ic + m * C.transpose() * C;
-  I.topRightCorner<3, 3>() = m * C;
-  I.bottomLeftCorner<3, 3>() = m * C.transpose();
+  I.topLeftCorner<3, 3>() = Ic - mc * c.transpose();
+  I.topLeftCorner<3, 3>().diagonal().array() += mc.dot(c);
+  I.topRightCorner<3, 3>() = C;
+  I.bottomLeftCorner<3, 3>() = -C;
   I.bottomRightCorner<3, 3>() = m * Mat3::Identity();
   return I;
+}
+
+// I += spatial_inertia(m, c, 0): a point mass m at c.
+inline void add_point_inertia(Mat6& I, double m, const Vec3& c) {
+  const Vec3 mc = m * c;
+  const Mat3 C = lie::hat(mc);
+  I.topLeftCorner<3, 3>() -= mc * c.transpose();
+  I.topLeftCorner<3, 3>().diagonal().array() += mc.dot(c);
+  I.topRightCorner<3, 3>() += C;
+  I.bottomLeftCorner<3, 3>() -= C;
+  I.bottomRightCorner<3, 3>().diagonal().array() += m;
 }
 
 // V x* h: the rate of a spatial momentum h carried along by the spatial velocity V.
@@ -113,7 +127,8 @@ class LumpedDynamics final : public DynamicsIntegrator {
   bool generalized_force(const double* q);
   // M at q from T_ (frames_ of q); the composite inertias kept in IC_.
   void mass_matrix();
-  // The disks' spatial inertias Io_ at frames_b_ (mass_matrix() computes them too).
+  // The disks' spatial inertias Io_ at frames_b_ (mass_matrix() computes them too), PRB's rigid
+  // links (link_rigid()) with them.
   void body_inertias();
   // q'' = M^-1 rhs_ by the articulated-body algorithm, O(N) (no M, no Cholesky), from T_, Io_,
   // PRB's links, and bias()'s V_, A_, pbody_ and link stencils.
@@ -148,9 +163,10 @@ class LumpedDynamics final : public DynamicsIntegrator {
   // wrenches pbody_ (velocity products minus drag), the links' accelerations (PRB:
   // link_stencil_[2]; their positions at q + h q' in [3]).
   void bias(const double* q, const double* v);
+  // At the q of the last twists_along() (frames_b_, the links' points in link_stencil_[3]).
   double potential_energy(const double* q);
-  // v^T M v / 2 at the q of the last twists() (frames_b_, T_, link_c_, link_J_), without M.
-  double kinetic_energy(const double* v) const;
+  // v^T M v / 2 at (q, v), without M (twists_along(q, v): the frames and link points at q after).
+  double kinetic_energy(const double* q, const double* v);
   // PRB: the mass of kPhiInertia's m l^2 for subsegment j.
   double phi_mass(int j) const;
   // PRB: m a of link l at q'' = 0 (bias() keeps the accelerations in link_stencil_[2]).
@@ -210,6 +226,12 @@ class LumpedDynamics final : public DynamicsIntegrator {
   // The body has closed-form rates of its subsegments' poses (LumpedBody::local_rates); else
   // the twists are fourth-order differences of local().
   bool rates_ = false;
+  // The unknowns that move link i of a subsegment (LumpedBody::link_unknowns: PRB's links 1..3
+  // by 2, 3 and 4 of them), ascending; a link none moves (PRB's first) is rigid with the subsegment's
+  // base disk and its mass is part of that disk's spatial inertia in Io_ (body_inertias()).
+  int link_cols_[kLinks][5] = {};
+  int link_ncols_[kLinks] = {};
+  bool link_rigid(int i) const { return link_ncols_[i] == 0; }
   std::vector<double> link_mass_;
   std::vector<Vec3> link_c_, link_stencil_[4];
   std::vector<Eigen::Matrix<double, 3, 5>> link_J_, link_J_step_;  // at q, at bias()'s q + h q'
@@ -233,6 +255,9 @@ class LumpedDynamics final : public DynamicsIntegrator {
   Eigen::VectorXd damp_const_;  // tau_bt K of the constant springs (PRB's phi rows: recomputed)
   std::vector<Mat3> S_;  // per subsegment m x m (top-left) of S
   Eigen::MatrixXd M_, Jr_, K_;
+  // M_, Jr_, K_ and the dense Newton solver's n x n buffers, sized at first use (the dense
+  // Newton systems of displacement input, the frequencies): the chain form needs none of them.
+  void size_dense();
   // The Newton systems (I - gamma J) x = b by their Schur complement (lumped_dynamics.cpp,
   // make_schur_solver): n x n instead of 2n x 2n, since J's first block row is [0 I].
   Eigen::MatrixXd schur_, schur_A21_, schur_M_;

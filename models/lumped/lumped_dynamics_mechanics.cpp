@@ -34,12 +34,21 @@ void LumpedDynamics::twists(const double* q, Twists& T, std::vector<Vec3>* point
       if (links_)
         for (int i = 0; i < kLinks; ++i) c[kLinks * j + i] = prev.p + R0 * g.aux[3 + i];
       for (int i = 0; i < m_; ++i) {
+        // (Not the comma initializer: it was a fifth of PRB's twists() here,
+        // callgrind, bench_dynamics --models prb --no-reference.)
         const Vec3 w = R0 * d.w[i];
-        T.col(m_ * (j - 1) + i) << w, R0 * d.dp[i] - w.cross(f.p);
-        if (links_) {
-          auto& J = points ? link_J_step_ : link_J_;
-          for (int l = 0; l < kLinks; ++l) J[kLinks * j + l].col(i) = R0 * d.dmid[l][i];
-        }
+        auto Ti = T.col(m_ * (j - 1) + i);
+        Ti.head<3>() = w;
+        Ti.tail<3>() = R0 * d.dp[i] - w.cross(f.p);
+      }
+      if (links_) {
+        // The columns that move each link (the others stay zero).
+        auto& J = points ? link_J_step_ : link_J_;
+        for (int l = 0; l < kLinks; ++l)
+          for (int a = 0; a < link_ncols_[l]; ++a) {
+            const int i = link_cols_[l][a];
+            J[kLinks * j + l].col(i) = R0 * d.dmid[l][i];
+          }
       }
     }
     return;
@@ -76,13 +85,15 @@ void LumpedDynamics::twists(const double* q, Twists& T, std::vector<Vec3>* point
       const Vec3 w_loc = lie::vee(dR * poses_[j].R.transpose());
       if (links_)
         for (int l = 0; l < kLinks; ++l) {
+          if (!std::count(link_cols_[l], link_cols_[l] + link_ncols_[l], i)) continue;  // stays zero
           Vec3 dc = Vec3::Zero();
           for (int k = 0; k < 4; ++k) dc += kWeight[k] * g[k].aux[3 + l];
           (points ? link_J_step_ : link_J_)[kLinks * j + l].col(i) = R0 * dc / kTwistStep;
         }
       const Vec3 a = R0 * dp;
       const Vec3 w = R0 * w_loc;
-      T.col(m_ * (j - 1) + i) << w, a - w.cross(pj);
+      T.col(m_ * (j - 1) + i).head<3>() = w;
+      T.col(m_ * (j - 1) + i).tail<3>() = a - w.cross(pj);
     }
   }
 }
@@ -120,12 +131,13 @@ void LumpedDynamics::twists_along(const double* q, const double* v) {
       dl += vj[i] * d.dp[i];
     }
     const Vec3 w = R0 * wl;
-    tv_step_[j] << w, R0 * dl - w.cross(f.p);
+    tv_step_[j].head<3>() = w;
+    tv_step_[j].tail<3>() = R0 * dl - w.cross(f.p);
     if (links_)
       for (int l = 0; l < kLinks; ++l) {
         link_stencil_[3][kLinks * j + l] = prev.p + R0 * g.aux[3 + l];
         Vec3 s = Vec3::Zero();
-        for (int i = 0; i < m_; ++i) s += vj[i] * d.dmid[l][i];
+        for (int a = 0; a < link_ncols_[l]; ++a) s += vj[link_cols_[l][a]] * d.dmid[l][link_cols_[l][a]];
         ljv_step_[kLinks * j + l] = R0 * s;
       }
   }
@@ -160,7 +172,7 @@ bool LumpedDynamics::generalized_force(const double* q) {
       S(0, 0) = a;  // the phi row's factor (over c), read by jac_fn
     }
   }
-  return Q_.allFinite();
+  return all_finite(Q_);
 }
 
 template <int m>
@@ -189,6 +201,11 @@ void LumpedDynamics::body_inertias() {
     const Frame& f = frames_b_[k];
     const Mat3 Ic = f.R * inertia_[k].asDiagonal() * f.R.transpose();
     Io_[k] = spatial_inertia(mass_[k], f.p, Ic);
+    // PRB: the links of subsegment k + 1 that no unknown moves are rigid with disk k: one body
+    // (articulated_m() and bias() then skip them, their velocity products are the disk's).
+    if (links_ && k < N_)
+      for (int i = 0; i < kLinks; ++i)
+        if (link_rigid(i)) add_point_inertia(Io_[k], link_mass_[kLinks * (k + 1) + i], link_c_[kLinks * (k + 1) + i]);
   }
 }
 
@@ -196,35 +213,48 @@ namespace {
 
 // The inverse of a symmetric positive definite m x m matrix A (its lower triangle read) by
 // Cholesky, A = L L^T, A^-1 = L^-T L^-1, in plain loops (Eigen's LLT solve with a matrix
-// right-hand side goes through its general blocked triangular solver, slow at m = 3, 5).
+// right-hand side goes through its general blocked triangular solver, slow at m = 3, 5), fully
+// unrolled: GCC left the triangular loops rolled, and their control was most of the work at
+// m = 5 (unrolled, the articulated pass is 11 % cheaper, callgrind, bench_dynamics --models prb
+// --no-reference; unrolling general_inverse()'s pivoted loops made it dearer).
 // False where A is not numerically positive definite.
 template <int m>
 bool spd_inverse(const Eigen::Matrix<double, m, m>& A, Eigen::Matrix<double, m, m>& inv) {
   double L[m][m] = {}, Li[m][m] = {};
+  #pragma GCC unroll 8
   for (int j = 0; j < m; ++j) {
     double d = A(j, j);
+    #pragma GCC unroll 8
     for (int k = 0; k < j; ++k) d -= L[j][k] * L[j][k];
     if (!(d > 0.0)) return false;
     L[j][j] = std::sqrt(d);
+    #pragma GCC unroll 8
     for (int i = j + 1; i < m; ++i) {
       double s = A(i, j);
+      #pragma GCC unroll 8
       for (int k = 0; k < j; ++k) s -= L[i][k] * L[j][k];
       L[i][j] = s / L[j][j];
     }
   }
   // Li = L^-1 (lower triangular), column by column.
+  #pragma GCC unroll 8
   for (int j = 0; j < m; ++j) {
     Li[j][j] = 1.0 / L[j][j];
+    #pragma GCC unroll 8
     for (int i = j + 1; i < m; ++i) {
       double s = 0.0;
+      #pragma GCC unroll 8
       for (int k = j; k < i; ++k) s -= L[i][k] * Li[k][j];
       Li[i][j] = s / L[i][i];
     }
   }
   // inv = Li^T Li (symmetric).
+  #pragma GCC unroll 8
   for (int i = 0; i < m; ++i)
+    #pragma GCC unroll 8
     for (int j = 0; j <= i; ++j) {
       double s = 0.0;
+      #pragma GCC unroll 8
       for (int k = i; k < m; ++k) s += Li[k][i] * Li[k][j];
       inv(i, j) = s;
       inv(j, i) = s;
@@ -301,29 +331,33 @@ void LumpedDynamics::articulated_m(Eigen::Map<Eigen::VectorXd>& qdd) {
         // their total mass, first and second moments; the wrench w_l = IA_l c_l + V_l x* IA_l V_l
         // of a point is (c x f, f) with f = m times its acceleration less the parent's a_{k-1}
         // part (Ap.v + Ap.w x c): m acc from bias()'s forward difference.
+        // Only the columns that move each link (link_cols_), and not the links rigid with disk
+        // k - 1 (in Io_[k - 1]): PRB's links 1..3 have 2, 3 and 4 of the 5 columns.
         double msum = 0.0, m2 = 0.0;
         Vec3 mc = Vec3::Zero();
         Mat3 mcc = Mat3::Zero();
-        const Um U0 = U;
+        Um LU = Um::Zero();
         Mm LD = Mm::Zero();
         for (int i = 0; i < kLinks; ++i) {
+          const int nc = link_ncols_[i];
+          if (nc == 0) continue;
+          const int* cols = link_cols_[i];
           const int l = kLinks * k + i;
           const double ml = link_mass_[l];
           const Vec3& cl = link_c_[l];
           const Eigen::Matrix<double, 3, 5>& J = link_J_[l];
-          // IA_l S_l = (m [c] J; m J); S_l^T IA_l S_l = m J^T J.
-          for (int col = 0; col < 5; ++col) {
-            const Vec3 mJ = ml * J.col(col);
-            U.col(col).template head<3>() += cl.cross(mJ);
-            U.col(col).template tail<3>() += mJ;
-          }
-          {
-            const Eigen::Matrix<double, 3, 5> mJ = ml * J;
-            LD.noalias() += J.transpose() * mJ;
-          }
           Vec3 f = bias_h_ > 0.0 ? link_force(l) : Vec3::Zero();
           f -= ml * (Ap.tail<3>() + Ap.head<3>().cross(cl));
-          u -= J.transpose() * f;
+          // IA_l S_l = (m [c] J; m J); S_l^T IA_l S_l = m J^T J (its lower triangle here).
+          for (int a = 0; a < nc; ++a) {
+            const int ca = cols[a];
+            const Vec3 Ja = J.col(ca);
+            const Vec3 mJ = ml * Ja;
+            LU.col(ca).template head<3>() += cl.cross(mJ);
+            LU.col(ca).template tail<3>() += mJ;
+            u[ca] -= Ja.dot(f);
+            for (int b = 0; b <= a; ++b) LD(ca, cols[b]) += mJ.dot(J.col(cols[b]));
+          }
           wsum.head<3>() += cl.cross(f);
           wsum.tail<3>() += f;
           msum += ml;
@@ -331,6 +365,8 @@ void LumpedDynamics::articulated_m(Eigen::Map<Eigen::VectorXd>& qdd) {
           mc += ml * cl;
           mcc.noalias() += ml * cl * cl.transpose();
         }
+        for (int a = 0; a < m; ++a)
+          for (int b = a + 1; b < m; ++b) LD(a, b) = LD(b, a);
         // sum of spatial_inertia(m, c, 0): (m [c]^T [c], m [c]; m [c]^T, m I).
         const Mat3 C = lie::hat(mc);
         Mat6& LI = link_I_[k];
@@ -340,8 +376,9 @@ void LumpedDynamics::articulated_m(Eigen::Map<Eigen::VectorXd>& qdd) {
         LI.template bottomRightCorner<3, 3>() = msum * Mat3::Identity();
         IAsum += LI;
         LD(3, 3) += kPhiInertia * phi_mass(k) * length_[k] * length_[k];
+        U += LU;
         D += LD;
-        link_U_[k] = U - U0;
+        link_U_[k] = LU;
         link_D_[k] = LD;
       }
     }
@@ -399,13 +436,13 @@ bool LumpedDynamics::chain_factor(const NewtonMatrix& nm, double gamma) {
     D.noalias() += g2 * nm.Kd.template middleCols<m>(m * (k - 1));
     D.diagonal() += gamma * nm.D.template segment<m>(m * (k - 1));
     Mm Dinv;
-    if (!general_inverse<m>(D, Dinv) || !Dinv.allFinite()) return false;
+    if (!general_inverse<m>(D, Dinv) || !all_finite(Dinv)) return false;
     F.UL[k] = UL;
     F.UR[k] = UR;
     F.Dinv[k] = Dinv;
     if (k > 1) IA = nm.Io[k - 1] + IAsum - (UL * Dinv) * UR.transpose();
   }
-  return IA.allFinite();
+  return all_finite(IA);
 }
 
 template <int m>
@@ -455,7 +492,8 @@ void LumpedDynamics::mass_matrix() {
     // PRB: the links of subsegment k + 1 are rigid with disk k.
     if (links_ && k < N_)
       for (int i = 0; i < kLinks; ++i)
-        IC_[k] += spatial_inertia(link_mass_[kLinks * (k + 1) + i], link_c_[kLinks * (k + 1) + i], Mat3::Zero());
+        if (!link_rigid(i))  // (the rigid ones are in Io_[k])
+          IC_[k] += spatial_inertia(link_mass_[kLinks * (k + 1) + i], link_c_[kLinks * (k + 1) + i], Mat3::Zero());
   }
   // Block (a, b), a <= b: the bodies moving rigidly with both columns are the disks k >= b and
   // the links of subsegments > b; PRB: the links of b move with its columns through link_J_.
@@ -497,10 +535,11 @@ void LumpedDynamics::bias(const double* q, const double* v) {
   if (moving) {
     h = kBiasStep / vn;
     bias_h_ = h;
-    // The step's twists() overwrite the frames and poses: keep those of q (a copy, not a
-    // second pose set at q: its sines and cosines were a tenth of PRB's right-hand side).
-    std::copy(frames_b_.begin(), frames_b_.end(), frames_q_.begin());
-    std::copy(poses_.begin(), poses_.end(), poses_q_.begin());
+    // The step's twists() overwrite the frames and poses: keep those of q (aside in the buffers
+    // frames_q_, poses_q_ by a swap; not a second pose set at q: its sines and cosines were a
+    // tenth of PRB's right-hand side).
+    frames_b_.swap(frames_q_);
+    poses_.swap(poses_q_);
     qs_ = qv + h * vv;
     twists_along(qs_.data(), v);
     if (links_) {
@@ -510,6 +549,7 @@ void LumpedDynamics::bias(const double* q, const double* v) {
       for (int j = 1; j <= N_; ++j) {
         const auto vj = vv.segment<5>(5 * (j - 1));
         for (int i = 0; i < kLinks; ++i) {
+          if (link_rigid(i)) continue;  // part of disk j - 1 (body_inertias())
           const int l = kLinks * j + i;
           const Vec3& c0 = link_c_[l];
           const Vec3& c1 = link_stencil_[3][l];
@@ -528,7 +568,10 @@ void LumpedDynamics::bias(const double* q, const double* v) {
   Vec6 V = Vec6::Zero(), A = Vec6::Zero();
   for (int k = 1; k <= N_; ++k) {
     Vec6 tv;
-    tv.noalias() = T_.middleCols(m_ * (k - 1), m_) * vv.segment(m_ * (k - 1), m_);
+    if (m_ == 5)
+      tv.noalias() = T_.middleCols<5>(5 * (k - 1)) * vv.segment<5>(5 * (k - 1));
+    else
+      tv.noalias() = T_.middleCols<3>(3 * (k - 1)) * vv.segment<3>(3 * (k - 1));
     V += tv;
     if (moving) A += (tv_step_[k] - tv) / h;
     V_[k] = V;
@@ -562,23 +605,27 @@ double LumpedDynamics::spring(int i, const double* q) const {
   return prb.k_theta[1] * EI / l * a * a;
 }
 
-double LumpedDynamics::kinetic_energy(const double* v) const {
+double LumpedDynamics::kinetic_energy(const double* q, const double* v) {
   // v^T M v / 2 body by body (O(N), M is not formed): disk k moves with the spatial velocity
-  // V_k = sum_{j <= k} T_j v_j; the links of subsegment k with V_{k-1} and their own rates.
+  // V_k = sum_{j <= k} T_j v_j; the links of subsegment k with V_{k-1} and their own rates. The
+  // products T_j v_j and J_l v_j of twists_along() are all it takes (not every column, twists():
+  // at every output step that was 6 % of a PRB run, callgrind, bench_dynamics --models prb).
+  twists_along(q, v);
   Eigen::Map<const Eigen::VectorXd> vv(v, n_);
+  const std::vector<Vec3>& c = link_stencil_[3];
   double ke = 0.0;
   Vec6 V = Vec6::Zero();
   for (int k = 1; k <= N_; ++k) {
-    const auto vk = vv.segment(m_ * (k - 1), m_);
     if (links_) {
       for (int i = 0; i < kLinks; ++i) {
         const int l = kLinks * k + i;
-        const Vec3 vel = V.tail<3>() + V.head<3>().cross(link_c_[l]) + link_J_[l].leftCols(m_) * vk;
+        const Vec3 vel = V.tail<3>() + V.head<3>().cross(c[l]) + ljv_step_[l];
         ke += 0.5 * link_mass_[l] * vel.squaredNorm();
       }
-      ke += 0.5 * kPhiInertia * phi_mass(k) * length_[k] * length_[k] * vk[3] * vk[3];
+      const double vphi = vv[m_ * (k - 1) + 3];
+      ke += 0.5 * kPhiInertia * phi_mass(k) * length_[k] * length_[k] * vphi * vphi;
     }
-    V.noalias() += T_.middleCols(m_ * (k - 1), m_) * vk;
+    V += tv_step_[k];
     const Frame& f = frames_b_[k];
     const Vec3 w_body = f.R.transpose() * V.head<3>();
     const Vec3 vel = V.tail<3>() + V.head<3>().cross(f.p);
@@ -604,7 +651,7 @@ double LumpedDynamics::potential_energy(const double* q) {
   const Loads& L = input_.loads;
   for (int k = 1; k <= N_; ++k) U -= mass_[k] * L.gravity.dot(frames_b_[k].p);
   if (links_)
-    for (int l = kLinks; l < kLinks * (N_ + 1); ++l) U -= link_mass_[l] * L.gravity.dot(link_c_[l]);
+    for (int l = kLinks; l < kLinks * (N_ + 1); ++l) U -= link_mass_[l] * L.gravity.dot(link_stencil_[3][l]);
   U -= L.tip_force.dot(frames_b_[N_].p);
   if (input_.actuation.kind == Actuation::Kind::Tensions && !input_.actuation.mixed()) {
     const TendonRouting& routing = body_.statics.routing();
@@ -623,6 +670,7 @@ double LumpedDynamics::potential_energy(const double* q) {
 }
 
 Eigen::VectorXd LumpedDynamics::frequencies(const Eigen::VectorXd& x, const ModelInput& input) {
+  size_dense();
   last_valid_ = false;
   timeline_ = nullptr;
   input_ = input;

@@ -129,7 +129,7 @@ void LumpedProblem::load_sensitivities_m() {
 }
 
 bool LumpedProblem::structured_jacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
-                                        const Eigen::Ref<const Eigen::VectorXd>& f) {
+                                        const Eigen::Ref<const Eigen::VectorXd>& f, bool diagonal_only) {
   // Forward differences that exploit the chain's structure. A change of x_k moves every frame
   // distal of disk k-1 by one rigid motion (Q, t); the loads of the disks k-1 and k (whose chords
   // reach across disk k) change otherwise and are recomputed, and so is the residual of
@@ -171,7 +171,9 @@ bool LumpedProblem::structured_jacobian(const Eigen::Ref<const Eigen::VectorXd>&
     jac_dm_.resize(sz);
   }
   split_external_loads();  // contact forces are in the part moving with the frames
-  load_sensitivities();
+  // (The serial above is counted anyway: jac_* are no longer those of a structured Newton step's
+  // factors, lumped_structured.cpp.)
+  if (!diagonal_only) load_sensitivities();
   if (!contacts_.empty()) contact_loads();
   const int nx = m * J;  // the x_j (the contact force unknowns follow them)
   jac_dW_.resize(6, nx);
@@ -226,7 +228,7 @@ bool LumpedProblem::structured_jacobian(const Eigen::Ref<const Eigen::VectorXd>&
       constitutive(k, xk, g, Rt * Fk, Rt * Mk, Wk, jac_f_.data());
       for (int r = 0; r < m; ++r) jac_diag_(r, c) = (jac_f_[r] - f[m * (k - 1) + r]) / h;
       // The change of the distal wrench at disk k-1 (base frame, moment about the origin).
-      if (k >= 2) {
+      if (k >= 2 && !diagonal_only) {
         Vec3 Fp = jac_df_[k - 1] + Fk, Mp = jac_dm_[k - 1] + Mk + (fk.p - prev.p).cross(Fk);
         if (!contacts_.empty()) {
           Fp += jac_cf_[k - 1];
@@ -242,22 +244,23 @@ bool LumpedProblem::structured_jacobian(const Eigen::Ref<const Eigen::VectorXd>&
         jac_dW_.col(c).tail<3>() = (dM + prev.p.cross(dF)) / h;
       }
       // The rotation of everything distal of disk k, per unit change of x_c.
-      if (jac_external_)
+      if (jac_external_ && !diagonal_only)
         jac_Om_.col(c) = Vec3(Q(2, 1) - Q(1, 2), Q(0, 2) - Q(2, 0), Q(1, 0) - Q(0, 1)) / (2.0 * h);
       jac_x_[c] = x[c];
     }
     frames_[k] = base_k;
     if (has_next) frames_[k + 1] = base_k1;
   }
-  return jac_diag_.allFinite() && jac_dW_.allFinite() && jac_E_.allFinite() &&
-         (!jac_external_ || (jac_Om_.allFinite() && jac_D_.allFinite()));
+  if (diagonal_only) return all_finite(jac_diag_);
+  return all_finite(jac_diag_) && all_finite(jac_dW_) && all_finite(jac_E_) &&
+         (!jac_external_ || (all_finite(jac_Om_) && all_finite(jac_D_)));
 }
 
 bool LumpedProblem::undamped_structured_jacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
-                                                 const Eigen::Ref<const Eigen::VectorXd>& f) {
-  if (!(damping_ > 0.0)) return structured_jacobian(x, f);
+                                                 const Eigen::Ref<const Eigen::VectorXd>& f, bool diagonal_only) {
+  if (!(damping_ > 0.0)) return structured_jacobian(x, f, diagonal_only);
   damping_f_ = f - damping_ * damping_scale_.cwiseProduct(x - damping_ref_);
-  return structured_jacobian(x, damping_f_);
+  return structured_jacobian(x, damping_f_, diagonal_only);
 }
 
 template <int Rows>
@@ -294,17 +297,17 @@ bool LumpedProblem::jacobian(const Eigen::Ref<const Eigen::VectorXd>& x, const E
   }
   for (int k = 1; k <= J; ++k) Jm.block(m * (k - 1), m * (k - 1), m, m) = jac_diag_.middleCols(m * (k - 1), m);
   if (damping_ > 0.0) Jm.diagonal() += damping_ * damping_scale_;
-  return Jm.allFinite();
+  return all_finite(Jm);
 }
 
 bool LumpedProblem::diagonal_jacobian(const Eigen::Ref<const Eigen::VectorXd>& x,
                                       const Eigen::Ref<const Eigen::VectorXd>& f, Eigen::Ref<Eigen::MatrixXd> blocks) {
-  if (!contacts_.empty() || !undamped_structured_jacobian(x, f)) return false;
+  if (!contacts_.empty() || !undamped_structured_jacobian(x, f, true)) return false;
   const int m = body_.per_subsegment;
   blocks = jac_diag_;
   if (damping_ > 0.0)
     for (Eigen::Index c = 0; c < blocks.cols(); ++c) blocks(c % m, c) += damping_ * damping_scale_[c];
-  return blocks.allFinite();
+  return all_finite(blocks);
 }
 
 }  // namespace tdcr::detail

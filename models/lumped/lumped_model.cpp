@@ -214,7 +214,7 @@ void LumpedProblem::fixed_point_passes(Eigen::VectorXd& x, int passes) {
 }
 
 bool LumpedProblem::warm_guess(const Solution& previous, Eigen::VectorXd& y) {
-  if (previous.unknowns.size() != body_.per_subsegment * body_.N || !previous.unknowns.allFinite()) return false;
+  if (previous.unknowns.size() != body_.per_subsegment * body_.N || !all_finite(previous.unknowns)) return false;
   const bool contacts = warm_contacts(previous);  // its contacts: candidates from the start
   x_ = previous.unknowns.head(body_.per_subsegment * active());
   residual_changed();
@@ -237,7 +237,7 @@ bool LumpedProblem::residual(const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::
   last_valid_ = false;
   const bool ok = banded_ ? banded_residual(y.data(), f.data()) : recursive_residual(y.data(), f.data());
   if (ok && damping_ > 0.0) f += damping_ * damping_scale_.cwiseProduct(y - damping_ref_);
-  if (!(ok && f.allFinite())) return false;
+  if (!(ok && all_finite(f))) return false;
   last_y_ = y;  // allocates only when the size changes
   last_f_ = f;
   last_lambda_ = loads_.loads.load_factor();
@@ -260,7 +260,7 @@ bool LumpedProblem::residual_with_frames(const Eigen::Ref<const Eigen::VectorXd>
   constitutive_all(y.data(), f.data());
   // residual()'s end.
   if (damping_ > 0.0) f += damping_ * damping_scale_.cwiseProduct(y - damping_ref_);
-  if (!f.allFinite()) return false;
+  if (!all_finite(f)) return false;
   last_y_ = y;
   last_f_ = f;
   last_lambda_ = loads_.loads.load_factor();
@@ -367,7 +367,7 @@ bool LumpedProblem::tendon_pulls(const Eigen::VectorXd& y, Eigen::VectorXd& d) {
   body_.compute_frames(pull_x_.data(), active(), loads_.stretch_data(), pull_frames_.data());
   const std::vector<double> pulls = tendon::chord_displacements(pull_frames_, body_.statics.routing(), convention_);
   d = Eigen::Map<const Eigen::VectorXd>(pulls.data(), static_cast<Eigen::Index>(pulls.size()));
-  return d.allFinite();
+  return all_finite(d);
 }
 
 }  // namespace detail

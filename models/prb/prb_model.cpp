@@ -99,13 +99,11 @@ class PrbBody final : public detail::LumpedBody {
     g.c = c / gamma_sum;
     // Rz(phi) Ry(a) Rz(eps - phi), with sin a, cos a of the last joint's total angle.
     const double e = xj[4] - xj[3], ce = std::cos(e), se = std::sin(e);
-    Mat3 A;  // Rz(phi) Ry(a)
-    A << cp * ca, -sp, cp * sa,
-         sp * ca, cp, sp * sa,
-         -sa, 0.0, ca;
-    g.R.col(0) = ce * A.col(0) + se * A.col(1);
-    g.R.col(1) = -se * A.col(0) + ce * A.col(1);
-    g.R.col(2) = A.col(2);
+    // Rz(phi) Ry(a), by columns (no comma initializer: a hot path of the dynamics).
+    const Vec3 A0(cp * ca, sp * ca, -sa), A1(-sp, cp, 0.0);
+    g.R.col(0) = ce * A0 + se * A1;
+    g.R.col(1) = -se * A0 + ce * A1;
+    g.R.col(2) = Vec3(cp * sa, sp * sa, ca);
   }
 
   // local() and its rates: the joints turn about Rz(phi) e_y, eps about the end's axis A e_z,
@@ -144,6 +142,10 @@ class PrbBody final : public detail::LumpedBody {
     for (int k = 0; k < 4; ++k) d.dmid[k][4].setZero();
     return true;
   }
+
+  // local_rates()' structure: the joints move the links after them, phi turns all but the first
+  // (on the axis), eps none: link k by theta_1..theta_k and phi, link 0 by nothing.
+  unsigned link_unknowns(int k) const override { return k == 0 ? 0u : ((1u << k) - 1u) | (1u << 3); }
 
   double gamma[4] = {};
   double gamma_sum = 1.0;
