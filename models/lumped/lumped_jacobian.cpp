@@ -249,8 +249,15 @@ bool LumpedProblem::structured_jacobian(const Eigen::Ref<const Eigen::VectorXd>&
     frames_[k] = base_k;
     if (has_next) frames_[k + 1] = base_k1;
   }
-  return jac_diag_.allFinite() && jac_dW_.allFinite() && jac_E_.allFinite() &&
-         (!jac_external_ || (jac_Om_.allFinite() && jac_D_.allFinite()));
+  const bool finite = jac_diag_.allFinite() && jac_dW_.allFinite() && jac_E_.allFinite() &&
+                      (!jac_external_ || (jac_Om_.allFinite() && jac_D_.allFinite()));
+  jac_equations_ = -1;
+  if (finite && contacts_.empty() && !banded_) {
+    jac_at_ = x;  // allocates only when the size changes
+    jac_lambda_ = loads_.loads.load_factor();
+    jac_equations_ = equations_serial_;
+  }
+  return finite;
 }
 
 bool LumpedProblem::undamped_structured_jacobian(const Eigen::Ref<const Eigen::VectorXd>& x,

@@ -38,6 +38,7 @@
 // Jacobian at the answer it adds 42 % (CCsub) and 44 % (PRB) to the median loaded solve of
 // bench_loaded (docs/models.md, "Stability").
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <string>
 #include <vector>
@@ -60,6 +61,17 @@ constexpr double kUndecided = 1e-6;
 constexpr double kProof = 10.0 * kUndecided;
 // Osborne sweeps of the sufficient test's balancing.
 constexpr int kBalanceSweeps = 3;
+// The sufficient test from Newton's last Jacobian (taken at x_0, not at the answer x): a bound
+// of the relative change of the balanced symmetric part per radian of |x - x_0|, |D^-1 dS D^-1|
+// <= kJacobianChange |x - x_0| with D^2 = |diag S|. Measured on the loaded cases of bench_loaded
+// (60 cases, every candidate's solve; CCsub 365, PRB 365 answers, |x - x_0| up to 0.016 and
+// 0.52 rad): at most 1.6 (CCsub) and 2.6 (PRB), median 0.4; the bound has a factor 4 of room.
+constexpr double kJacobianChange = 10.0;
+// Above this relative slack Newton's last Jacobian is not tried.
+constexpr double kMaxReuseSlack = 0.25;
+constexpr const char* kProvenHow =
+    "; balanced symmetric part positive definite above the margin (block Cholesky): every eigenvalue's real part "
+    "is at least the margin, a certified lower bound";
 
 }  // namespace
 
@@ -419,7 +431,8 @@ template <int M, int R>
 bool balanced_symmetric_part_above(const Eigen::MatrixXd& diag, const Eigen::MatrixXd& E, const Eigen::MatrixXd& dW,
                                    const Eigen::MatrixXd& D, const Eigen::MatrixXd& Om, const Eigen::VectorXd& s,
                                    int J, Eigen::MatrixXd& G, Eigen::MatrixXd& up, Eigen::MatrixXd& lo,
-                                   Eigen::MatrixXd& Pt, Eigen::MatrixXd& Q, Eigen::VectorXd& t, double& margin) {
+                                   Eigen::MatrixXd& Pt, Eigen::MatrixXd& Q, Eigen::VectorXd& t, double slack,
+                                   double& margin) {
   using MatM = Eigen::Matrix<double, M, M>;
   using MatR = Eigen::Matrix<double, R, R>;
   using MatRM = Eigen::Matrix<double, R, M>;
@@ -450,7 +463,8 @@ bool balanced_symmetric_part_above(const Eigen::MatrixXd& diag, const Eigen::Mat
       if constexpr (ext) l(j).noalias() = d(j + 1) * om(j) * sj;
     }
   }
-  if (!G.allFinite() || !up.allFinite() || !lo.allFinite()) return false;
+  // Finite (a sum is, unless an entry is not or they are near overflow: then not tried either).
+  if (!std::isfinite(G.sum() + up.sum() + lo.sum())) return false;
   // Balanced: a diagonal similarity T A T^-1 with equal off-diagonal row and column norms
   // (Osborne). Where A = Gm H with Gm a positive diagonal and H symmetric (the laws' B diagonal,
   // in the scaled unknowns), T = Gm^-1/2 makes A and its block tridiagonal part symmetric, and
@@ -518,17 +532,37 @@ bool balanced_symmetric_part_above(const Eigen::MatrixXd& diag, const Eigen::Mat
     MatR Z = MatR::Zero();
     MatRM Y, U;
     MatM Pi;
+    Eigen::Matrix<double, M, R> V;
     for (int j = 0; j < J; ++j) {
       const Eigen::Map<const MatRM> Qj(Q.data() + R * M * j);
-      Y.noalias() = Z * Qj;
+      // Fixed-size products by coefficients (Eigen would take these sizes to its blocked GEMM).
+      Y.noalias() = Z.lazyProduct(Qj);
       Pi = 0.5 * (g(j) + g(j).transpose());
-      Pi.diagonal().array() -= sigma;
-      Pi.noalias() -= Qj.transpose() * Y;
-      const Eigen::LLT<MatM> llt(Pi);
-      if (llt.info() != Eigen::Success) return false;
+      Pi.diagonal().array() -= sigma + slack * g(j).diagonal().array().abs();
+      Pi.noalias() -= Qj.transpose().lazyProduct(Y);
+      // Pi = L L^T in place (lower triangle), false where a pivot is not positive.
+      for (int c = 0; c < M; ++c) {
+        double p = Pi(c, c);
+        for (int k = 0; k < c; ++k) p -= Pi(c, k) * Pi(c, k);
+        if (!(p > 0.0)) return false;
+        p = std::sqrt(p);
+        Pi(c, c) = p;
+        for (int r = c + 1; r < M; ++r) {
+          double v = Pi(r, c);
+          for (int k = 0; k < c; ++k) v -= Pi(r, k) * Pi(c, k);
+          Pi(r, c) = v / p;
+        }
+      }
       if (j + 1 == J) break;
       U = Eigen::Map<const MatRM>(Pt.data() + R * M * j) - Y;  // (P_j - Q_j^T Z)^T
-      Z.noalias() += U * llt.solve(U.transpose());
+      // Z += U Pi^-1 U^T = V^T V with V = L^-1 U^T (forward substitution).
+      for (int c = 0; c < R; ++c)
+        for (int r = 0; r < M; ++r) {
+          double v = U(c, r);
+          for (int k = 0; k < r; ++k) v -= Pi(r, k) * V(k, c);
+          V(r, c) = v / Pi(r, r);
+        }
+      Z.noalias() += V.transpose().lazyProduct(V);
     }
     return true;
   };
@@ -543,28 +577,45 @@ bool balanced_symmetric_part_above(const Eigen::MatrixXd& diag, const Eigen::Mat
 
 }  // namespace
 
-bool LumpedProblem::proven_stable(double& margin, std::string& how) {
+bool LumpedProblem::proven_stable(double& margin, std::string& how, bool reuse) {
   const int m = body_.per_subsegment, n = static_cast<int>(x_.size()), J = active();
+  stab_s_.resize(n);
+  for (int j = 0; j < J; ++j) x_scale(stab_s_.data() + m * j);
+  const auto balanced = [&](double slack) {
+    const bool ext = jac_external_;
+#define TDCR_BALANCED(M, R)                                                                                 \
+  balanced_symmetric_part_above<M, R>(jac_diag_, jac_E_, jac_dW_, jac_D_, jac_Om_, stab_s_, J, stab_G_, stab_up_, \
+                                      stab_lo_, stab_P_, stab_Q_, stab_t_, slack, margin)
+    if (m == 3) return ext ? TDCR_BALANCED(3, 9) : TDCR_BALANCED(3, 6);
+    if (m == 5) return ext ? TDCR_BALANCED(5, 9) : TDCR_BALANCED(5, 6);
+    return false;  // no other lumped model
+#undef TDCR_BALANCED
+  };
+  if (m != 3 && m != 5) return false;
+  if (reuse) {
+    // Newton's last Jacobian, taken at jac_at_: its balanced symmetric part S_0 differs from the
+    // answer's S by dS, and S - sigma I is positive definite where S_0 - sigma I - delta D^2 is
+    // (D^2 = |diag S_0|) and |D^-1 dS D^-1| <= delta. delta: kJacobianChange per radian of the
+    // unknowns' change |x - jac_at_| (2-norm; the x_j are angles in both models).
+    const double change = (x_ - jac_at_).norm();
+    const double delta = kJacobianChange * change;
+    if (delta <= kMaxReuseSlack && balanced(delta)) {
+      char buf[200];
+      std::snprintf(buf, sizeof buf,
+                    " (from Newton's last Jacobian, %.2g rad from the answer, its change covered by a relative slack "
+                    "%.2g)",
+                    change, delta);
+      how = kProvenHow;
+      how += buf;
+      return true;
+    }
+  }
   stab_r_.resize(n);
   if (!recursive_residual(x_.data(), stab_r_.data()) || !stab_r_.allFinite()) return false;
   if (!structured_jacobian(x_, stab_r_)) return false;
-  stab_s_.resize(n);
-  for (int j = 0; j < J; ++j) x_scale(stab_s_.data() + m * j);
-  const bool ext = jac_external_;
-  bool proven = false;
-#define TDCR_BALANCED(M, R)                                                                                      \
-  proven = balanced_symmetric_part_above<M, R>(jac_diag_, jac_E_, jac_dW_, jac_D_, jac_Om_, stab_s_, J, stab_G_, \
-                                               stab_up_, stab_lo_, stab_P_, stab_Q_, stab_t_, margin)
-  if (m == 3 && ext) TDCR_BALANCED(3, 9);
-  else if (m == 3) TDCR_BALANCED(3, 6);
-  else if (m == 5 && ext) TDCR_BALANCED(5, 9);
-  else if (m == 5) TDCR_BALANCED(5, 6);
-  else return false;  // no other lumped model
-#undef TDCR_BALANCED
-  if (proven)
-    how = "; balanced symmetric part positive definite above the margin (block Cholesky): every eigenvalue's real "
-          "part is at least the margin, a certified lower bound";
-  return proven;
+  if (!balanced(0.0)) return false;
+  how = kProvenHow;
+  return true;
 }
 
 Stability LumpedProblem::direct_stability(const Eigen::VectorXd& y, double load_factor) {
@@ -576,8 +627,13 @@ Stability LumpedProblem::direct_stability(const Eigen::VectorXd& y, double load_
   {
     gather_x(y, x_);
     if (x_.size() == 0) return stability(y, load_factor);
+    // Newton's last Jacobian is of these equations if nothing changed them since (the chart
+    // below does where it turns a subsegment's plane: then the unknowns change too).
+    bool reuse = jac_equations_ == equations_serial_ && jac_lambda_ == load_factor && jac_at_.size() == x_.size();
+    if (reuse) stab_y_ = x_;
     const StabilityChartScope chart(*this, x_);  // left on every return below
-    proven = proven_stable(margin, how);
+    reuse = reuse && stab_y_ == x_;
+    proven = proven_stable(margin, how, reuse);
   }
   if (!proven) return stability(y, load_factor);
   Stability out;
