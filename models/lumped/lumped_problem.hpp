@@ -493,8 +493,8 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   // direct_stability()'s sufficient test: true and the margin (the smallest eigenvalue of the
   // balanced symmetric part) if it proves the answer stable; at x_ in the stability chart.
   // `reuse`: the Jacobian factors jac_* are those of Newton's last Jacobian of these equations in
-  // this chart (at jac_at_), tried first.
-  bool proven_stable(double& margin, std::string& how, bool reuse);
+  // this chart (at jac_at_), tried first; `reused`: they proved it.
+  bool proven_stable(double& margin, bool& reused, bool reuse);
   // stability() of an answer with contact candidates (lumped_stability.cpp): y the contact
   // system's unknowns (the x_j, then the candidates' scaled forces).
   Stability contact_stability(const Eigen::VectorXd& y);

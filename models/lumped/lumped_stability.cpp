@@ -69,9 +69,12 @@ constexpr int kBalanceSweeps = 3;
 constexpr double kJacobianChange = 10.0;
 // Above this relative slack Newton's last Jacobian is not tried.
 constexpr double kMaxReuseSlack = 0.25;
-constexpr const char* kProvenHow =
-    "; balanced symmetric part positive definite above the margin (block Cholesky): every eigenvalue's real part "
-    "is at least the margin, a certified lower bound";
+// The sufficient test's method, from the answer's Jacobian and from Newton's last.
+const std::string kProvenMethod =
+    "sufficient test of d(constitutive residuals)/d(scaled x_j); balanced symmetric part positive definite above the "
+    "margin (block Cholesky): every eigenvalue's real part is at least the margin, a certified lower bound";
+const std::string kProvenReusedMethod =
+    kProvenMethod + " (from Newton's last Jacobian near the answer, its change covered by a relative slack)";
 
 }  // namespace
 
@@ -475,20 +478,22 @@ bool balanced_symmetric_part_above(const Eigen::MatrixXd& diag, const Eigen::Mat
   t.setOnes(n);
   auto scale = [&](int i, double f) {  // row i times f, column i over f
     const int j = i / M, a = i % M;
+    const double inv = 1.0 / f;
     t[i] *= f;
     g(j).row(a) *= f;
-    g(j).col(a) /= f;
+    g(j).col(a) *= inv;
     if (j + 1 < J) {
       u(j).row(a) *= f;
-      l(j).col(a) /= f;
+      l(j).col(a) *= inv;
     }
     if (j > 0) {
       l(j - 1).row(a) *= f;
-      u(j - 1).col(a) /= f;
+      u(j - 1).col(a) *= inv;
     }
   };
   auto ok = [&](int i, double f) { return std::isfinite(f) && t[i] * f < 1e8 && t[i] * f > 1e-8; };
-  for (int sweep = 0; sweep < kBalanceSweeps; ++sweep) {
+  // One Osborne sweep; true if no factor moved by more than 1 %.
+  const auto sweep = [&]() {
     bool done = true;
     for (int i = 0; i < n; ++i) {
       const int j = i / M, a = i % M;
@@ -508,22 +513,25 @@ bool balanced_symmetric_part_above(const Eigen::MatrixXd& diag, const Eigen::Mat
       if (std::abs(f - 1.0) > 0.01) done = false;
       scale(i, f);
     }
-    if (done) break;
-  }
+    return done;
+  };
   // S = sym(T A T^-1) has the diagonal blocks sym(T_j G_j T_j^-1) and, for j < k, the blocks
   // S_jk = P_j Q_k with P_j = [T_j E_j, (Om_j C_j)^T], Q_k = [W_k C_k; (T_k D_k)^T] / 2 (C = the
   // column factors 1 / (s t)): a block semiseparable matrix, factorised in O(J).
   Pt.resize(R, n);
   Q.resize(R, n);
-  for (int i = 0; i < n; ++i) {
-    const double c = 1.0 / (s[i] * t[i]);
-    Pt.col(i).template head<6>() = t[i] * E.row(i).transpose();
-    Q.col(i).template head<6>() = 0.5 * c * dW.col(i);
-    if constexpr (ext) {
-      Pt.col(i).template tail<3>() = c * Om.col(i);
-      Q.col(i).template tail<3>() = 0.5 * t[i] * D.row(i).transpose();
+  const auto generators = [&]() {
+    for (int i = 0; i < n; ++i) {
+      const double c = 1.0 / (s[i] * t[i]);
+      Pt.col(i).template head<6>() = t[i] * E.row(i).transpose();
+      Q.col(i).template head<6>() = 0.5 * c * dW.col(i);
+      if constexpr (ext) {
+        Pt.col(i).template tail<3>() = c * Om.col(i);
+        Q.col(i).template tail<3>() = 0.5 * t[i] * D.row(i).transpose();
+      }
     }
-  }
+  };
+  // (S's diagonal is A's: a diagonal similarity keeps it.)
   double smallest = std::numeric_limits<double>::infinity();
   for (int j = 0; j < J; ++j) smallest = std::min(smallest, g(j).diagonal().minCoeff());
   // Whether S - sigma I is positive definite: the block Cholesky factorisation from the base,
@@ -556,28 +564,41 @@ bool balanced_symmetric_part_above(const Eigen::MatrixXd& diag, const Eigen::Mat
       if (j + 1 == J) break;
       U = Eigen::Map<const MatRM>(Pt.data() + R * M * j) - Y;  // (P_j - Q_j^T Z)^T
       // Z += U Pi^-1 U^T = V^T V with V = L^-1 U^T (forward substitution).
+      double inv[M];
+      for (int r = 0; r < M; ++r) inv[r] = 1.0 / Pi(r, r);
       for (int c = 0; c < R; ++c)
         for (int r = 0; r < M; ++r) {
           double v = U(c, r);
           for (int k = 0; k < r; ++k) v -= Pi(r, k) * V(k, c);
-          V(r, c) = v / Pi(r, r);
+          V(r, c) = v * inv[r];
         }
       Z.noalias() += V.transpose().lazyProduct(V);
     }
     return true;
   };
   // S's smallest eigenvalue lies below its smallest diagonal entry: half that entry, else kProof.
-  for (double sigma : {0.5 * smallest, kProof}) {
-    if (!(sigma >= kProof) || !above(sigma)) continue;
-    margin = sigma;
-    return true;
-  }
-  return false;
+  const auto proven = [&]() {
+    generators();
+    for (double sigma : {0.5 * smallest, kProof}) {
+      if (!(sigma >= kProof) || !above(sigma)) continue;
+      margin = sigma;
+      return true;
+    }
+    return false;
+  };
+  // Tried after the first sweep (enough for most answers: a sweep costs about as much as the
+  // factorisation), else after the others.
+  bool done = sweep();
+  if (proven()) return true;
+  if (done) return false;  // the others would not move it
+  for (int k = 1; k < kBalanceSweeps && !done; ++k) done = sweep();
+  return proven();
 }
 
 }  // namespace
 
-bool LumpedProblem::proven_stable(double& margin, std::string& how, bool reuse) {
+bool LumpedProblem::proven_stable(double& margin, bool& reused, bool reuse) {
+  reused = false;
   const int m = body_.per_subsegment, n = static_cast<int>(x_.size()), J = active();
   stab_s_.resize(n);
   for (int j = 0; j < J; ++j) x_scale(stab_s_.data() + m * j);
@@ -600,30 +621,21 @@ bool LumpedProblem::proven_stable(double& margin, std::string& how, bool reuse) 
     const double change = (x_ - jac_at_).norm();
     const double delta = kJacobianChange * change;
     if (delta <= kMaxReuseSlack && balanced(delta)) {
-      char buf[200];
-      std::snprintf(buf, sizeof buf,
-                    " (from Newton's last Jacobian, %.2g rad from the answer, its change covered by a relative slack "
-                    "%.2g)",
-                    change, delta);
-      how = kProvenHow;
-      how += buf;
+      reused = true;
       return true;
     }
   }
   stab_r_.resize(n);
   if (!recursive_residual(x_.data(), stab_r_.data()) || !stab_r_.allFinite()) return false;
   if (!structured_jacobian(x_, stab_r_)) return false;
-  if (!balanced(0.0)) return false;
-  how = kProvenHow;
-  return true;
+  return balanced(0.0);
 }
 
 Stability LumpedProblem::direct_stability(const Eigen::VectorXd& y, double load_factor) {
   if (banded_ || body_.statics.friction() || damping_ > 0.0 || !contacts_.empty()) return stability(y, load_factor);
   if (loads_.loads.load_factor() != load_factor) set_parameter(load_factor);
   double margin = NAN;
-  std::string how;
-  bool proven = false;
+  bool proven = false, reused = false;
   {
     gather_x(y, x_);
     if (x_.size() == 0) return stability(y, load_factor);
@@ -633,13 +645,13 @@ Stability LumpedProblem::direct_stability(const Eigen::VectorXd& y, double load_
     if (reuse) stab_y_ = x_;
     const StabilityChartScope chart(*this, x_);  // left on every return below
     reuse = reuse && stab_y_ == x_;
-    proven = proven_stable(margin, how, reuse);
+    proven = proven_stable(margin, reused, reuse);
   }
   if (!proven) return stability(y, load_factor);
   Stability out;
   out.status = StabilityStatus::Stable;
   out.margin = margin;
-  out.method = "sufficient test of d(constitutive residuals)/d(scaled x_j)" + how;
+  out.method = reused ? kProvenReusedMethod : kProvenMethod;
   return out;
 }
 
