@@ -152,11 +152,13 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   /// the test to the tangent space of their gaps; compliant ones add their penalty's stiffness.
   Stability stability(const Eigen::VectorXd& y, double load_factor) final;
   /// The test of a direct answer under loads: first a sufficient test (the structured Jacobian,
-  /// a block Cholesky factorisation of its balanced symmetric part, O(J)), stability() where it
-  /// does not prove the answer stable (lumped_stability.cpp). The automatic rule does not call
-  /// it (automatic_stability_under_loads() is false: it still adds 42 % (CCsub) and 44 % (PRB) to
-  /// the median loaded solve, docs/models.md "Stability"); tests compare it with stability().
+  /// Newton's last where it is near the answer, else the answer's; a block Cholesky factorisation
+  /// of its balanced symmetric part, O(J)), stability() where it does not prove the answer stable
+  /// (lumped_stability.cpp). What the automatic rule calls for a cold direct answer under external
+  /// loads; tests compare it with stability().
   Stability direct_stability(const Eigen::VectorXd& y, double load_factor) final;
+  /// True: the sufficient test adds CC_X (CCsub) and PRB_X (PRB) to the median loaded cold solve
+  /// of bench_loaded, within the automatic rule's 25 % (docs/models.md, "Stability").
   bool automatic_stability_under_loads() const final { return true; }
 
   int size() const final { return stride() * loads_.active + static_cast<int>(contacts_.size()); }
