@@ -71,8 +71,9 @@ constexpr int kBalanceSweeps = 3;
 // sweeps, |x - x_0| up to 0.016 and 0.52 rad); at most 1.6 and 3.2 over the 60 cold default
 // answers with T as the test takes it (after one sweep). The bound has a factor 3 of room.
 constexpr double kJacobianChange = 10.0;
-// Above this relative slack Newton's last Jacobian is not tried.
-constexpr double kMaxReuseSlack = 0.25;
+// Above this relative slack Newton's last Jacobian is not tried (on the 60 cold default PRB
+// answers of bench_loaded a slack up to 0.39 proved, none from 0.58).
+constexpr double kMaxReuseSlack = 0.5;
 // The sufficient test's method, from the answer's Jacobian and from Newton's last.
 const std::string kProvenMethod =
     "sufficient test of d(constitutive residuals)/d(scaled x_j); balanced symmetric part positive definite above the "
