@@ -136,8 +136,9 @@ TEST(Stability, AutomaticRuleReportsAnUnstableDirectLoadedAnswer) {
     if (tests_loaded_direct_answers(kind)) {
       EXPECT_EQ(sol.stability.status, StabilityStatus::Unstable) << to_string(kind) << ": " << sol.stability.method;
       EXPECT_LT(sol.stability.margin, 0.0) << to_string(kind);
-      if (lumped(kind))
+      if (lumped(kind)) {
         EXPECT_EQ(sol.stability.method.find("sufficient test"), std::string::npos) << to_string(kind);
+      }
     } else {
       EXPECT_TRUE(not_checked(sol)) << to_string(kind) << ": " << sol.stability.method;
     }

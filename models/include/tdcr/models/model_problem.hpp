@@ -110,7 +110,7 @@ class ModelProblem {
   /// Whether the automatic stability rule (SolverOptions::stability, StabilityCheck::Automatic)
   /// tests this problem's answers for their external loads alone, without a loading path: where
   /// the test adds at most 25 % to the median loaded cold solve of bench_loaded (VCref: +17 %;
-  /// CCsub and PRB: CC_X and PRB_X with their sufficient test, direct_stability, from Newton's last
+  /// CCsub and PRB: 14 % and 22 % with their sufficient test, direct_stability, from Newton's last
   /// Jacobian where it is near the answer). Default false; VC's conjugate-point test adds about
   /// 75 %, so its answers are tested when a path reached them (or when asked); docs/models.md,
   /// "Stability".
