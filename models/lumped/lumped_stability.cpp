@@ -433,8 +433,9 @@ namespace {
 // distal wrench; 9 with external loads: and the distal rotation), fixed sizes (lumped_problem.hpp,
 // proven_stable). Inputs: the structured Jacobian's factors (diag m x n, E n x 6, dW 6 x n, and
 // with external loads D n x 3, Om 3 x n), the unknowns' scales s; buffers G, up, lo (m x n),
-// Pt, Q (R x n), t (n). Returns whether S - sigma I is positive definite for sigma half S's
-// smallest diagonal entry, or else kProof, and that sigma.
+// Pt, Q (R x n), t (n). Returns whether S - sigma I - slack |diag S| is positive definite for
+// sigma half S's smallest diagonal entry, or else kProof, and that sigma (slack: the relative
+// change allowed for where the factors are Newton's last, not the answer's; else 0).
 template <int M, int R>
 bool balanced_symmetric_part_above(const Eigen::MatrixXd& diag, const Eigen::MatrixXd& E, const Eigen::MatrixXd& dW,
                                    const Eigen::MatrixXd& D, const Eigen::MatrixXd& Om, const Eigen::VectorXd& s,
