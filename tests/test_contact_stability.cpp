@@ -154,6 +154,25 @@ TEST_P(ContactStabilityWithVc, UntouchedObstaclesGiveTheFreeSpaceVerdict) {
   EXPECT_EQ(untouched.stability.method, free.stability.method);
 }
 
+// Under the automatic rule a cold direct answer under a tip force is tested in free space (the
+// sufficient test) but not with obstacles bound, even untouched ones: the test with contact is
+// the eigen test, several solves (docs/contact.md, "Stability with contact").
+TEST_P(ContactStability, AutomaticRuleLeavesDirectAnswersWithObstaclesUntested) {
+  Scene s = robot_scene(GetParam(), 10);
+  s.actuation.values = {0.5, 0, 0.3, 0};
+  s.loads.tip_force = Vec3(0.01, 0.0, 0.0);
+  s.solver.stability = StabilityCheck::Automatic;
+  const Solution free = run(s);
+  ASSERT_TRUE(free.converged()) << free.summary.message;
+  ASSERT_EQ(free.summary.continuation_steps, 0) << "a direct solve";
+  EXPECT_EQ(free.stability.status, StabilityStatus::Stable) << free.stability.method;
+  EXPECT_NE(free.stability.method.find("sufficient test"), std::string::npos) << free.stability.method;
+  s.environment.obstacles = untouched_obstacles();
+  const Solution untouched = run(s);
+  ASSERT_TRUE(untouched.converged()) << untouched.summary.message;
+  EXPECT_EQ(untouched.stability.method, kStabilityNotChecked);
+}
+
 // The automatic rule (solver.stability "auto") tests answers reached by a loading path; a
 // contact answer loaded from rest is one: the propped cantilever under 1 N, whose free answer
 // has passed the support (tests/test_contact_lumped.cpp), gets a verdict without asking. On a

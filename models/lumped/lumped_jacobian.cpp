@@ -251,9 +251,16 @@ bool LumpedProblem::structured_jacobian(const Eigen::Ref<const Eigen::VectorXd>&
     frames_[k] = base_k;
     if (has_next) frames_[k + 1] = base_k1;
   }
+  jac_equations_ = -1;  // the recorded point (below) only for full blocks of the statics
   if (diagonal_only) return all_finite(jac_diag_);
-  return all_finite(jac_diag_) && all_finite(jac_dW_) && all_finite(jac_E_) &&
-         (!jac_external_ || (all_finite(jac_Om_) && all_finite(jac_D_)));
+  const bool finite = all_finite(jac_diag_) && all_finite(jac_dW_) && all_finite(jac_E_) &&
+                      (!jac_external_ || (all_finite(jac_Om_) && all_finite(jac_D_)));
+  if (finite && contacts_.empty() && !banded_) {
+    jac_at_ = x;  // allocates only when the size changes
+    jac_lambda_ = loads_.loads.load_factor();
+    jac_equations_ = equations_serial_;
+  }
+  return finite;
 }
 
 bool LumpedProblem::undamped_structured_jacobian(const Eigen::Ref<const Eigen::VectorXd>& x,

@@ -167,11 +167,18 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   /// the test to the tangent space of their gaps; compliant ones add their penalty's stiffness.
   Stability stability(const Eigen::VectorXd& y, double load_factor) final;
   /// The test of a direct answer under loads: first a sufficient test (the structured Jacobian,
-  /// a block Cholesky factorisation of its balanced symmetric part, O(J)), stability() where it
-  /// does not prove the answer stable (lumped_stability.cpp). The automatic rule does not call
-  /// it (automatic_stability_under_loads() is false: it still adds 42 % (CCsub) and 44 % (PRB) to
-  /// the median loaded solve, docs/models.md "Stability"); tests compare it with stability().
+  /// Newton's last where it is near the answer, else the answer's; a block Cholesky factorisation
+  /// of its balanced symmetric part, O(J)), stability() where it does not prove the answer stable
+  /// (lumped_stability.cpp). What the automatic rule calls for a cold direct answer under external
+  /// loads; tests compare it with stability().
   Stability direct_stability(const Eigen::VectorXd& y, double load_factor) final;
+  /// Where the sufficient test applies (no obstacles, tendon friction or banded formulation, where
+  /// direct_stability() is the eigen test, several solves): it adds 14 % (CCsub) and 22 % (PRB)
+  /// to the median loaded cold solve of bench_loaded, within the automatic rule's 25 %
+  /// (docs/models.md, "Stability").
+  bool automatic_stability_under_loads() const final {
+    return !contact_ && !banded_ && !body_.statics.friction();
+  }
 
   int size() const final { return stride() * loads_.active + static_cast<int>(contacts_.size()); }
   /// Contact (lumped_contact.cpp): the free-space answer y is checked against the obstacles of
@@ -298,7 +305,10 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
 
   /// The equations changed (gauge references, damping, loads other than by set_parameter): the
   /// last residual() is no longer final_residual()'s.
-  void residual_changed() { last_valid_ = false; }
+  void residual_changed() {
+    last_valid_ = false;
+    ++equations_serial_;
+  }
   /// Frames, poses, centroids (if the backbone weight acts) and distal wrenches at x_j.
   void evaluate(const double* x);
   /// Moment about O_{j-1} (base frame) of everything distal of disk j-1 at the last evaluate().
@@ -496,15 +506,26 @@ class LumpedProblem : public ModelProblem, public bvp::ParameterizedSystem {
   void offdiagonal_blocks(Eigen::Ref<Eigen::MatrixXd> Jm) const;
   Eigen::MatrixXd jac_E_, jac_D_, jac_dW_, jac_Om_, jac_diag_;
   bool jac_external_ = false;
+  // The point of the last structured_jacobian() without contact candidates (the solve's
+  // unknowns), its load factor and the equations it was taken of (equations_serial_: counts
+  // residual_changed() calls, which mark changes of the equations such as gauge references):
+  // direct_stability() reuses Newton's last Jacobian where it is that of its answer's equations
+  // and near it. jac_equations_ -1: none.
+  Eigen::VectorXd jac_at_;
+  double jac_lambda_ = 0.0;
+  long jac_equations_ = -1;
+  long equations_serial_ = 0;
   std::vector<Vec3> jac_FT_, jac_MT_, jac_FE_, jac_pure_, jac_df_, jac_dm_;
   Eigen::VectorXd next_x_;  // fixed_point_passes()
   // direct_stability(): the scaled Jacobian's block tridiagonal part, its balancing, the
   // generators of the balanced symmetric part.
   Eigen::MatrixXd stab_G_, stab_up_, stab_lo_, stab_P_, stab_Q_;
-  Eigen::VectorXd stab_r_, stab_s_, stab_t_;
+  Eigen::VectorXd stab_r_, stab_s_, stab_t_, stab_y_;
   // direct_stability()'s sufficient test: true and the margin (the smallest eigenvalue of the
   // balanced symmetric part) if it proves the answer stable; at x_ in the stability chart.
-  bool proven_stable(double& margin, std::string& how);
+  // `reuse`: the Jacobian factors jac_* are those of Newton's last Jacobian of these equations in
+  // this chart (at jac_at_), tried first; `reused`: they proved it.
+  bool proven_stable(double& margin, bool& reused, bool reuse);
   // stability() of an answer with contact candidates (lumped_stability.cpp): y the contact
   // system's unknowns (the x_j, then the candidates' scaled forces).
   Stability contact_stability(const Eigen::VectorXd& y);

@@ -34,10 +34,13 @@
 // symmetric part S of T A T^-1 (the field of values); S is block semiseparable, so a block
 // Cholesky factorisation of S - sigma I carrying the generators' Schur complement (Haynsworth)
 // decides in O(J) that S has no eigenvalue below sigma: stable, margin sigma (a certified lower
-// bound of the smallest real part). Not called by the automatic rule: with its structured
-// Jacobian at the answer it adds 42 % (CCsub) and 44 % (PRB) to the median loaded solve of
-// bench_loaded (docs/models.md, "Stability").
+// bound of the smallest real part). The automatic rule's test of a cold direct answer under
+// external loads. Its Jacobian is Newton's last where that is of the same equations and near
+// the answer (a relative slack in the factorisation covers the change, kJacobianChange), else
+// the answer's own: from Newton's last it adds 14 % (CCsub) and 22 % (PRB) to the median loaded
+// solve of bench_loaded, where the answer's own added 42 and 44 % (docs/models.md, "Stability").
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <string>
 #include <vector>
@@ -60,6 +63,23 @@ constexpr double kUndecided = 1e-6;
 constexpr double kProof = 10.0 * kUndecided;
 // Osborne sweeps of the sufficient test's balancing.
 constexpr int kBalanceSweeps = 3;
+// The sufficient test from Newton's last Jacobian (taken at x_0, not at the answer x): a bound
+// of the relative change of the balanced symmetric part per radian of |x - x_0|, |D^-1 dS D^-1|
+// <= kJacobianChange |x - x_0| with D^2 = |diag S|. Measured against the Jacobian at the answer
+// on the loaded cases of bench_loaded: at most 1.6 (CCsub) and 2.6 (PRB), median 0.4, over
+// every solve of `bench_loaded --cases 60 --repeat 1 --steps 4` (365 answers each, T after 3
+// sweeps, |x - x_0| up to 0.016 and 0.52 rad); at most 1.6 and 3.2 over the 60 cold default
+// answers with T as the test takes it (after one sweep). The bound has a factor 3 of room.
+constexpr double kJacobianChange = 10.0;
+// Above this relative slack Newton's last Jacobian is not tried (on the 60 cold default PRB
+// answers of bench_loaded a slack up to 0.39 proved, none from 0.58).
+constexpr double kMaxReuseSlack = 0.5;
+// The sufficient test's method, from the answer's Jacobian and from Newton's last.
+const std::string kProvenMethod =
+    "sufficient test of d(constitutive residuals)/d(scaled x_j); balanced symmetric part positive definite above the "
+    "margin (block Cholesky): every eigenvalue's real part is at least the margin, a certified lower bound";
+const std::string kProvenReusedMethod =
+    kProvenMethod + " (from Newton's last Jacobian near the answer, its change covered by a relative slack)";
 
 }  // namespace
 
@@ -413,13 +433,15 @@ namespace {
 // distal wrench; 9 with external loads: and the distal rotation), fixed sizes (lumped_problem.hpp,
 // proven_stable). Inputs: the structured Jacobian's factors (diag m x n, E n x 6, dW 6 x n, and
 // with external loads D n x 3, Om 3 x n), the unknowns' scales s; buffers G, up, lo (m x n),
-// Pt, Q (R x n), t (n). Returns whether S - sigma I is positive definite for sigma half S's
-// smallest diagonal entry, or else kProof, and that sigma.
+// Pt, Q (R x n), t (n). Returns whether S - sigma I - slack |diag S| is positive definite for
+// sigma half S's smallest diagonal entry, or else kProof, and that sigma (slack: the relative
+// change allowed for where the factors are Newton's last, not the answer's; else 0).
 template <int M, int R>
 bool balanced_symmetric_part_above(const Eigen::MatrixXd& diag, const Eigen::MatrixXd& E, const Eigen::MatrixXd& dW,
                                    const Eigen::MatrixXd& D, const Eigen::MatrixXd& Om, const Eigen::VectorXd& s,
                                    int J, Eigen::MatrixXd& G, Eigen::MatrixXd& up, Eigen::MatrixXd& lo,
-                                   Eigen::MatrixXd& Pt, Eigen::MatrixXd& Q, Eigen::VectorXd& t, double& margin) {
+                                   Eigen::MatrixXd& Pt, Eigen::MatrixXd& Q, Eigen::VectorXd& t, double slack,
+                                   double& margin) {
   using MatM = Eigen::Matrix<double, M, M>;
   using MatR = Eigen::Matrix<double, R, R>;
   using MatRM = Eigen::Matrix<double, R, M>;
@@ -450,7 +472,8 @@ bool balanced_symmetric_part_above(const Eigen::MatrixXd& diag, const Eigen::Mat
       if constexpr (ext) l(j).noalias() = d(j + 1) * om(j) * sj;
     }
   }
-  if (!G.allFinite() || !up.allFinite() || !lo.allFinite()) return false;
+  // Finite (a sum is, unless an entry is not or they are near overflow: then not tried either).
+  if (!std::isfinite(G.sum() + up.sum() + lo.sum())) return false;
   // Balanced: a diagonal similarity T A T^-1 with equal off-diagonal row and column norms
   // (Osborne). Where A = Gm H with Gm a positive diagonal and H symmetric (the laws' B diagonal,
   // in the scaled unknowns), T = Gm^-1/2 makes A and its block tridiagonal part symmetric, and
@@ -461,20 +484,22 @@ bool balanced_symmetric_part_above(const Eigen::MatrixXd& diag, const Eigen::Mat
   t.setOnes(n);
   auto scale = [&](int i, double f) {  // row i times f, column i over f
     const int j = i / M, a = i % M;
+    const double inv = 1.0 / f;
     t[i] *= f;
     g(j).row(a) *= f;
-    g(j).col(a) /= f;
+    g(j).col(a) *= inv;
     if (j + 1 < J) {
       u(j).row(a) *= f;
-      l(j).col(a) /= f;
+      l(j).col(a) *= inv;
     }
     if (j > 0) {
       l(j - 1).row(a) *= f;
-      u(j - 1).col(a) /= f;
+      u(j - 1).col(a) *= inv;
     }
   };
   auto ok = [&](int i, double f) { return std::isfinite(f) && t[i] * f < 1e8 && t[i] * f > 1e-8; };
-  for (int sweep = 0; sweep < kBalanceSweeps; ++sweep) {
+  // One Osborne sweep; true if no factor moved by more than 1 %.
+  const auto sweep = [&]() {
     bool done = true;
     for (int i = 0; i < n; ++i) {
       const int j = i / M, a = i % M;
@@ -494,22 +519,25 @@ bool balanced_symmetric_part_above(const Eigen::MatrixXd& diag, const Eigen::Mat
       if (std::abs(f - 1.0) > 0.01) done = false;
       scale(i, f);
     }
-    if (done) break;
-  }
+    return done;
+  };
   // S = sym(T A T^-1) has the diagonal blocks sym(T_j G_j T_j^-1) and, for j < k, the blocks
   // S_jk = P_j Q_k with P_j = [T_j E_j, (Om_j C_j)^T], Q_k = [W_k C_k; (T_k D_k)^T] / 2 (C = the
   // column factors 1 / (s t)): a block semiseparable matrix, factorised in O(J).
   Pt.resize(R, n);
   Q.resize(R, n);
-  for (int i = 0; i < n; ++i) {
-    const double c = 1.0 / (s[i] * t[i]);
-    Pt.col(i).template head<6>() = t[i] * E.row(i).transpose();
-    Q.col(i).template head<6>() = 0.5 * c * dW.col(i);
-    if constexpr (ext) {
-      Pt.col(i).template tail<3>() = c * Om.col(i);
-      Q.col(i).template tail<3>() = 0.5 * t[i] * D.row(i).transpose();
+  const auto generators = [&]() {
+    for (int i = 0; i < n; ++i) {
+      const double c = 1.0 / (s[i] * t[i]);
+      Pt.col(i).template head<6>() = t[i] * E.row(i).transpose();
+      Q.col(i).template head<6>() = 0.5 * c * dW.col(i);
+      if constexpr (ext) {
+        Pt.col(i).template tail<3>() = c * Om.col(i);
+        Q.col(i).template tail<3>() = 0.5 * t[i] * D.row(i).transpose();
+      }
     }
-  }
+  };
+  // (S's diagonal is A's: a diagonal similarity keeps it.)
   double smallest = std::numeric_limits<double>::infinity();
   for (int j = 0; j < J; ++j) smallest = std::min(smallest, g(j).diagonal().minCoeff());
   // Whether S - sigma I is positive definite: the block Cholesky factorisation from the base,
@@ -518,72 +546,119 @@ bool balanced_symmetric_part_above(const Eigen::MatrixXd& diag, const Eigen::Mat
     MatR Z = MatR::Zero();
     MatRM Y, U;
     MatM Pi;
+    Eigen::Matrix<double, M, R> V;
     for (int j = 0; j < J; ++j) {
       const Eigen::Map<const MatRM> Qj(Q.data() + R * M * j);
-      Y.noalias() = Z * Qj;
+      // Fixed-size products by coefficients (Eigen would take these sizes to its blocked GEMM).
+      Y.noalias() = Z.lazyProduct(Qj);
       Pi = 0.5 * (g(j) + g(j).transpose());
-      Pi.diagonal().array() -= sigma;
-      Pi.noalias() -= Qj.transpose() * Y;
-      const Eigen::LLT<MatM> llt(Pi);
-      if (llt.info() != Eigen::Success) return false;
+      Pi.diagonal().array() -= sigma + slack * g(j).diagonal().array().abs();
+      Pi.noalias() -= Qj.transpose().lazyProduct(Y);
+      // Pi = L L^T in place (lower triangle), false where a pivot is not positive.
+      for (int c = 0; c < M; ++c) {
+        double p = Pi(c, c);
+        for (int k = 0; k < c; ++k) p -= Pi(c, k) * Pi(c, k);
+        if (!(p > 0.0)) return false;
+        p = std::sqrt(p);
+        Pi(c, c) = p;
+        for (int r = c + 1; r < M; ++r) {
+          double v = Pi(r, c);
+          for (int k = 0; k < c; ++k) v -= Pi(r, k) * Pi(c, k);
+          Pi(r, c) = v / p;
+        }
+      }
       if (j + 1 == J) break;
       U = Eigen::Map<const MatRM>(Pt.data() + R * M * j) - Y;  // (P_j - Q_j^T Z)^T
-      Z.noalias() += U * llt.solve(U.transpose());
+      // Z += U Pi^-1 U^T = V^T V with V = L^-1 U^T (forward substitution).
+      double inv[M];
+      for (int r = 0; r < M; ++r) inv[r] = 1.0 / Pi(r, r);
+      for (int c = 0; c < R; ++c)
+        for (int r = 0; r < M; ++r) {
+          double v = U(c, r);
+          for (int k = 0; k < r; ++k) v -= Pi(r, k) * V(k, c);
+          V(r, c) = v * inv[r];
+        }
+      Z.noalias() += V.transpose().lazyProduct(V);
     }
     return true;
   };
   // S's smallest eigenvalue lies below its smallest diagonal entry: half that entry, else kProof.
-  for (double sigma : {0.5 * smallest, kProof}) {
-    if (!(sigma >= kProof) || !above(sigma)) continue;
-    margin = sigma;
-    return true;
-  }
-  return false;
+  const auto proven = [&]() {
+    generators();
+    for (double sigma : {0.5 * smallest, kProof}) {
+      if (!(sigma >= kProof) || !above(sigma)) continue;
+      margin = sigma;
+      return true;
+    }
+    return false;
+  };
+  // Tried after the first sweep (enough for most answers: a sweep costs about as much as the
+  // factorisation), else after the others.
+  bool done = sweep();
+  if (proven()) return true;
+  if (done) return false;  // the others would not move it
+  for (int k = 1; k < kBalanceSweeps && !done; ++k) done = sweep();
+  return proven();
 }
 
 }  // namespace
 
-bool LumpedProblem::proven_stable(double& margin, std::string& how) {
+bool LumpedProblem::proven_stable(double& margin, bool& reused, bool reuse) {
+  reused = false;
   const int m = body_.per_subsegment, n = static_cast<int>(x_.size()), J = active();
-  stab_r_.resize(n);
-  if (!recursive_residual(x_.data(), stab_r_.data()) || !stab_r_.allFinite()) return false;
-  if (!structured_jacobian(x_, stab_r_)) return false;
   stab_s_.resize(n);
   for (int j = 0; j < J; ++j) x_scale(stab_s_.data() + m * j);
-  const bool ext = jac_external_;
-  bool proven = false;
-#define TDCR_BALANCED(M, R)                                                                                      \
-  proven = balanced_symmetric_part_above<M, R>(jac_diag_, jac_E_, jac_dW_, jac_D_, jac_Om_, stab_s_, J, stab_G_, \
-                                               stab_up_, stab_lo_, stab_P_, stab_Q_, stab_t_, margin)
-  if (m == 3 && ext) TDCR_BALANCED(3, 9);
-  else if (m == 3) TDCR_BALANCED(3, 6);
-  else if (m == 5 && ext) TDCR_BALANCED(5, 9);
-  else if (m == 5) TDCR_BALANCED(5, 6);
-  else return false;  // no other lumped model
+  const auto balanced = [&](double slack) {
+    const bool ext = jac_external_;
+#define TDCR_BALANCED(M, R)                                                                                 \
+  balanced_symmetric_part_above<M, R>(jac_diag_, jac_E_, jac_dW_, jac_D_, jac_Om_, stab_s_, J, stab_G_, stab_up_, \
+                                      stab_lo_, stab_P_, stab_Q_, stab_t_, slack, margin)
+    if (m == 3) return ext ? TDCR_BALANCED(3, 9) : TDCR_BALANCED(3, 6);
+    if (m == 5) return ext ? TDCR_BALANCED(5, 9) : TDCR_BALANCED(5, 6);
+    return false;  // no other lumped model
 #undef TDCR_BALANCED
-  if (proven)
-    how = "; balanced symmetric part positive definite above the margin (block Cholesky): every eigenvalue's real "
-          "part is at least the margin, a certified lower bound";
-  return proven;
+  };
+  if (m != 3 && m != 5) return false;
+  if (reuse) {
+    // Newton's last Jacobian, taken at jac_at_: its balanced symmetric part S_0 differs from the
+    // answer's S by dS, and S - sigma I is positive definite where S_0 - sigma I - delta D^2 is
+    // (D^2 = |diag S_0|) and |D^-1 dS D^-1| <= delta. delta: kJacobianChange per radian of the
+    // unknowns' change |x - jac_at_| (2-norm; the x_j are angles in both models).
+    const double change = (x_ - jac_at_).norm();
+    const double delta = kJacobianChange * change;
+    if (delta <= kMaxReuseSlack && balanced(delta)) {
+      reused = true;
+      return true;
+    }
+  }
+  // The answer's Jacobian (residual(): the structured differences then start from its evaluation).
+  stab_r_.resize(n);
+  if (!residual(x_, stab_r_)) return false;
+  if (!structured_jacobian(x_, stab_r_)) return false;
+  return balanced(0.0);
 }
 
 Stability LumpedProblem::direct_stability(const Eigen::VectorXd& y, double load_factor) {
   if (banded_ || body_.statics.friction() || damping_ > 0.0 || !contacts_.empty()) return stability(y, load_factor);
   if (loads_.loads.load_factor() != load_factor) set_parameter(load_factor);
   double margin = NAN;
-  std::string how;
-  bool proven = false;
+  bool proven = false, reused = false;
   {
     gather_x(y, x_);
     if (x_.size() == 0) return stability(y, load_factor);
+    // Newton's last Jacobian is of these equations if nothing changed them since (the chart
+    // below does where it turns a subsegment's plane: then the unknowns change too).
+    bool reuse = jac_equations_ == equations_serial_ && jac_lambda_ == load_factor && jac_at_.size() == x_.size();
+    if (reuse) stab_y_ = x_;
     const StabilityChartScope chart(*this, x_);  // left on every return below
-    proven = proven_stable(margin, how);
+    reuse = reuse && stab_y_ == x_;
+    proven = proven_stable(margin, reused, reuse);
   }
   if (!proven) return stability(y, load_factor);
   Stability out;
   out.status = StabilityStatus::Stable;
   out.margin = margin;
-  out.method = "sufficient test of d(constitutive residuals)/d(scaled x_j)" + how;
+  out.method = reused ? kProvenReusedMethod : kProvenMethod;
   return out;
 }
 

@@ -141,11 +141,11 @@ struct SolverOptions {
   /// (docs/models.md, "Stability"). With contacts: CCsub and PRB on the tangent space of the
   /// active rigid contacts, or with the compliant contacts' stiffness (docs/contact.md,
   /// "Stability with contact"); VC and VCref report "undetermined". Automatic by default (StabilityCheck::Automatic): answers
-  /// reached by a loading path are tested, and under external loads VCref's cold direct answers
-  /// (+17 % on its median loaded solve, `bench_loaded`, 2026-11-27); warm steps that follow no
-  /// path (a trajectory: the test would add 92 % to VCref's loaded step) and other direct solves
-  /// are not (VC's test adds 75 %, CCsub's and PRB's 42 % and 44 % even with their
-  /// sufficient test, over the 25 % budget). An untested Solution's stability says "not checked"
+  /// reached by a loading path are tested, and under external loads the cold direct answers of
+  /// VCref (+17 % on its median loaded solve, `bench_loaded`, 2026-11-27), CCsub and PRB (their
+  /// sufficient test: 14 % and 22 %); warm steps that follow no path (a trajectory: the test would
+  /// add 92 % to VCref's loaded step) and other direct solves are not (VC's test adds 75 %, over
+  /// the 25 % budget). An untested Solution's stability says "not checked"
   /// (kStabilityNotChecked); true tests every answer.
   StabilityCheck stability = StabilityCheck::Automatic;
   /// Differential kinematics of every converged answer (Solution::tip_jacobian,
