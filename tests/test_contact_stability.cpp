@@ -154,9 +154,11 @@ TEST_P(ContactStabilityWithVc, UntouchedObstaclesGiveTheFreeSpaceVerdict) {
   EXPECT_EQ(untouched.stability.method, free.stability.method);
 }
 
-// Under the automatic rule a cold direct answer under a tip force is tested in free space (the
-// sufficient test) but not with obstacles bound, even untouched ones: the test with contact is
-// the eigen test, several solves (docs/contact.md, "Stability with contact").
+// Under the automatic rule a cold direct answer under a tip force is tested in free space. CCsub
+// and PRB (the sufficient test) do not test it with obstacles bound, even untouched ones: their
+// test with contact is the eigen test, several solves (docs/contact.md, "Stability with
+// contact"). VCref's test with obstacles costs what it does without (the same reduced stiffness):
+// it tests the answer alike, with the free-space verdict.
 TEST_P(ContactStability, AutomaticRuleLeavesDirectAnswersWithObstaclesUntested) {
   Scene s = robot_scene(GetParam(), 10);
   s.actuation.values = {0.5, 0, 0.3, 0};
@@ -166,10 +168,15 @@ TEST_P(ContactStability, AutomaticRuleLeavesDirectAnswersWithObstaclesUntested) 
   ASSERT_TRUE(free.converged()) << free.summary.message;
   ASSERT_EQ(free.summary.continuation_steps, 0) << "a direct solve";
   EXPECT_EQ(free.stability.status, StabilityStatus::Stable) << free.stability.method;
-  EXPECT_NE(free.stability.method.find("sufficient test"), std::string::npos) << free.stability.method;
   s.environment.obstacles = untouched_obstacles();
   const Solution untouched = run(s);
   ASSERT_TRUE(untouched.converged()) << untouched.summary.message;
+  if (GetParam() == "vcref") {
+    EXPECT_EQ(untouched.stability.method, free.stability.method);
+    EXPECT_EQ(untouched.stability.status, StabilityStatus::Stable);
+    return;
+  }
+  EXPECT_NE(free.stability.method.find("sufficient test"), std::string::npos) << free.stability.method;
   EXPECT_EQ(untouched.stability.method, kStabilityNotChecked);
 }
 

@@ -121,6 +121,19 @@ class BlockTridiagonal {
  public:
   explicit BlockTridiagonal(int n)
       : n_(n), diag_(n, Mat6::Zero()), upper_(n, Mat6::Zero()), lower_(n, Mat6::Zero()), llt_(n), pinv_u_(n), w_(n) {}
+  // A copy takes the blocks, not the factors of the last above() (an unfactorised LLT's state is
+  // uninitialised, and copying it reads it).
+  BlockTridiagonal(const BlockTridiagonal& o) : BlockTridiagonal(o.n_) {
+    diag_ = o.diag_;
+    upper_ = o.upper_;
+    lower_ = o.lower_;
+  }
+  BlockTridiagonal& operator=(const BlockTridiagonal& o) {
+    if (this != &o) *this = BlockTridiagonal(o);  // the move assignment below
+    return *this;
+  }
+  BlockTridiagonal(BlockTridiagonal&&) = default;
+  BlockTridiagonal& operator=(BlockTridiagonal&&) = default;
   // Block (i, k), |i - k| <= 1, zero-based.
   Mat6& at(int i, int k) { return k == i ? diag_[i] : k > i ? upper_[i] : lower_[k]; }
   void symmetrize() {
