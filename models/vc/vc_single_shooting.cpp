@@ -235,9 +235,10 @@ class SingleShooting final : public detail::ModelProblem, public detail::Contact
     tendon_displacements(W_, W_.segment_lengths, sol.tendon_displacements);
     if (W_.friction) sol.tendon_end_tensions = system_.end_tensions();
   }
-  // The conjugate-point test on its coarse mesh (solve/stability_mesh.hpp) still adds about 75 %
-  // to the median loaded solve of bench_loaded (its 6 perturbed shots per disk interval): over the
-  // automatic rule's budget, so direct answers under loads are not tested without asking.
+  // The conjugate-point test on its coarse mesh (solve/stability_mesh.hpp) still adds 80-100 % to
+  // the median loaded solve of bench_loaded (65 % of the instructions; its 6 perturbed shots per
+  // disk interval, docs/models.md "Stability"): over the automatic rule's budget, so direct
+  // answers under loads are not tested without asking.
   bool automatic_stability_under_loads() const override { return false; }
   Stability stability(const Eigen::VectorXd& x, double load_factor) override {
     if (W_.friction)

@@ -144,7 +144,7 @@ struct SolverOptions {
   /// reached by a loading path are tested, and under external loads the cold direct answers of
   /// VCref (+17 % on its median loaded solve, `bench_loaded`, 2026-11-27), CCsub and PRB (their
   /// sufficient test: 14 % and 22 %); warm steps that follow no path (a trajectory: the test would
-  /// add 92 % to VCref's loaded step) and other direct solves are not (VC's test adds 75 %, over
+  /// add 92 % to VCref's loaded step) and other direct solves are not (VC's test adds 65-100 %, over
   /// the 25 % budget). An untested Solution's stability says "not checked"
   /// (kStabilityNotChecked); true tests every answer.
   StabilityCheck stability = StabilityCheck::Automatic;

@@ -111,8 +111,8 @@ class ModelProblem {
   /// tests this problem's answers for their external loads alone, without a loading path: where
   /// the test adds at most 25 % to the median loaded cold solve of bench_loaded (VCref: +17 %;
   /// CCsub and PRB: 14 % and 22 % with their sufficient test, direct_stability, from Newton's last
-  /// Jacobian where it is near the answer). Default false; VC's conjugate-point test adds about
-  /// 75 %, so its answers are tested when a path reached them (or when asked); docs/models.md,
+  /// Jacobian where it is near the answer). Default false; VC's conjugate-point test adds 65 % of
+  /// the instructions (80-100 % of the median wall time), so its answers are tested when a path reached them (or when asked); docs/models.md,
   /// "Stability".
   virtual bool automatic_stability_under_loads() const { return false; }
   /// Called when loading from rest stopped short of full load, after extract() at x, the
