@@ -43,6 +43,19 @@ inline Obstacle plane(const Vec3& p, const Vec3& n) {
   return o;
 }
 
+// A curved lumen: a circular arc of radius 1 m in the x-z plane from the base, `arc` rad of it
+// (0.15: 0.15 m), inner radius 3 mm: the robot's tip meets its wall.
+inline Obstacle curved_lumen(double arc) {
+  Obstacle lumen;
+  lumen.type = Obstacle::Type::Lumen;
+  lumen.radius = 0.003;
+  for (int k = 0; k <= 40; ++k) {
+    const double a = arc * k / 40.0;
+    lumen.centreline.push_back(Vec3(1.0 - std::cos(a), 0, std::sin(a)));
+  }
+  return lumen;
+}
+
 // Obstacles robot_scene(model, 10) under tensions (0.5, 0, 0.3, 0) N and a 0.01 N tip force
 // along x never touches: a wall below it, a sphere beside it, a wide lumen around it.
 inline std::vector<Obstacle> untouched_obstacles() {

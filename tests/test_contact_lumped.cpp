@@ -110,14 +110,7 @@ TEST(ContactLumpedAgreement, CcsubAndPrbConvergeOnAWallAndInALumen) {
       for (int m = 0; m < 2; ++m) {
         Scene s = robot_scene(m == 0 ? "ccsub" : "prb", n);
         if (in_lumen) {
-          Obstacle lumen;
-          lumen.type = Obstacle::Type::Lumen;
-          lumen.radius = 0.003;
-          for (int k = 0; k <= 40; ++k) {
-            const double a = 0.15 * k / 40.0;  // arc angle: 0.15 m of the 1 m radius arc
-            lumen.centreline.push_back(Vec3(1.0 - std::cos(a), 0, std::sin(a)));
-          }
-          s.environment.obstacles = {lumen};
+          s.environment.obstacles = {curved_lumen(0.15)};  // 0.15 m of the 1 m radius arc
         } else {
           s.actuation.values = {1.5, 0, 0.8, 0};
           s.environment.obstacles = {plane(Vec3(0, 0.012, 0), Vec3(0, -1, 0))};

@@ -231,14 +231,7 @@ TEST(ContactShootingAgreement, FourModelsAgreeOnAWallAndInALumen) {
         Scene s = robot_scene(models[m], n);
         s.effects.shear_extension = false;
         if (in_lumen) {
-          Obstacle lumen;
-          lumen.type = Obstacle::Type::Lumen;
-          lumen.radius = 0.003;
-          for (int k = 0; k <= 40; ++k) {
-            const double a = 0.15 * k / 40.0;
-            lumen.centreline.push_back(Vec3(1.0 - std::cos(a), 0, std::sin(a)));
-          }
-          s.environment.obstacles = {lumen};
+          s.environment.obstacles = {curved_lumen(0.15)};
         } else {
           s.actuation.values = {1.5, 0, 0.8, 0};
           s.environment.obstacles = {plane(Vec3(0, 0.012, 0), Vec3(0, -1, 0))};

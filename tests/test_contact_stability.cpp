@@ -63,6 +63,16 @@ Scene corner_scene(const std::string& model, int n, bool walls) {
   return s;
 }
 
+// The robot under tensions (0.5, 0, 0.3, 0) N and a 0.01 N tip force along x at n = 10, which
+// untouched_obstacles() never touch, its stability rule `check`.
+Scene lightly_loaded_scene(const std::string& model, StabilityCheck check) {
+  Scene s = robot_scene(model, 10);
+  s.actuation.values = {0.5, 0, 0.3, 0};
+  s.loads.tip_force = Vec3(0.01, 0.0, 0.0);
+  s.solver.stability = check;
+  return s;
+}
+
 }  // namespace
 
 TEST_P(ContactStability, RobotBentAgainstAWallIsStableAndTheConstraintsOnlyStabilise) {
@@ -135,10 +145,7 @@ TEST_P(ContactStability, CompliantTendsToRigid) {
 }
 
 TEST_P(ContactStabilityWithVc, UntouchedObstaclesGiveTheFreeSpaceVerdict) {
-  Scene s = robot_scene(GetParam(), 10);
-  s.actuation.values = {0.5, 0, 0.3, 0};
-  s.loads.tip_force = Vec3(0.01, 0.0, 0.0);
-  s.solver.stability = StabilityCheck::Always;
+  Scene s = lightly_loaded_scene(GetParam(), StabilityCheck::Always);
   const Solution free = run(s);
   ASSERT_TRUE(free.converged()) << free.summary.message;
   s.environment.obstacles = untouched_obstacles();
@@ -160,10 +167,7 @@ TEST_P(ContactStabilityWithVc, UntouchedObstaclesGiveTheFreeSpaceVerdict) {
 // contact"). VCref's test with obstacles costs what it does without (the same reduced stiffness):
 // it tests the answer alike, with the free-space verdict.
 TEST_P(ContactStability, AutomaticRuleLeavesDirectAnswersWithObstaclesUntested) {
-  Scene s = robot_scene(GetParam(), 10);
-  s.actuation.values = {0.5, 0, 0.3, 0};
-  s.loads.tip_force = Vec3(0.01, 0.0, 0.0);
-  s.solver.stability = StabilityCheck::Automatic;
+  Scene s = lightly_loaded_scene(GetParam(), StabilityCheck::Automatic);
   const Solution free = run(s);
   ASSERT_TRUE(free.converged()) << free.summary.message;
   ASSERT_EQ(free.summary.continuation_steps, 0) << "a direct solve";
@@ -223,14 +227,7 @@ INSTANTIATE_TEST_SUITE_P(Models, ContactStability, ::testing::Values("ccsub", "p
 TEST_P(ContactStabilityWithVc, RobotInACurvedLumenIsStable) {
   for (int n : {5, 10, 20}) {
     Scene s = robot_scene(GetParam(), n);
-    Obstacle lumen;
-    lumen.type = Obstacle::Type::Lumen;
-    lumen.radius = 0.003;
-    for (int i = 0; i <= 40; ++i) {
-      const double a = 0.2 * i / 40.0;
-      lumen.centreline.push_back(Vec3(1.0 - std::cos(a), 0, std::sin(a)));
-    }
-    s.environment.obstacles = {lumen};
+    s.environment.obstacles = {curved_lumen(0.2)};
     s.solver.stability = StabilityCheck::Always;
     const Solution sol = run(s);
     ASSERT_TRUE(sol.converged()) << sol.summary.message;

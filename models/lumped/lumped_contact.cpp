@@ -11,7 +11,6 @@
 #include <cmath>
 
 #include "lumped/lumped_problem.hpp"
-#include "tdcr/core/lie.hpp"
 #include "solve/newton_summary.hpp"
 #include "tdcr/core/error.hpp"
 
@@ -122,15 +121,10 @@ void LumpedProblem::sweep_frames(const Eigen::VectorXd& from, const Eigen::Vecto
 }
 
 void LumpedProblem::frames_between(double t) {
-  // Each disk along the screw between its two poses (position linear, rotation by the geodesic),
-  // as the shooting models sweep (solve/contact_completion.cpp): the unknowns interpolated would
-  // turn PRB's bending plane on the way, a path the robot never takes.
-  contact_frames_.resize(body_.N + 1);
-  for (std::size_t j = 0; j < sweep_from_.size(); ++j) {
-    contact_frames_[j].p = (1.0 - t) * sweep_from_[j].p + t * sweep_to_[j].p;
-    contact_frames_[j].R =
-        sweep_from_[j].R * lie::exp_so3(t * lie::log_so3(sweep_from_[j].R.transpose() * sweep_to_[j].R));
-  }
+  // Each disk along the screw between its two poses, as the shooting models sweep
+  // (solve/contact_completion.cpp): the unknowns interpolated would turn PRB's bending plane on the
+  // way, a path the robot never takes.
+  contact::frames_between(sweep_from_, sweep_to_, t, contact_frames_);
 }
 
 bool LumpedProblem::swept_pairs(const Eigen::VectorXd& from, const Eigen::VectorXd& to) {

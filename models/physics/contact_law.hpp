@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "tdcr/core/contact_geometry.hpp"
+#include "tdcr/core/lie.hpp"
 #include "tdcr/core/scene.hpp"
 #include "tdcr/core/solution.hpp"
 
@@ -77,6 +78,18 @@ struct Scan {
   bool passed_through = false;  // a finite obstacle (not plane, not lumen) penetrated deeper than a quarter of its radius
   double deepest = 0.0;         // the deepest penetration (m) of a pair that is not a candidate
 };
+
+// The disk frames a fraction t of the way between two shapes (frames 0..N, `from` and `to`): each
+// disk along the screw between its two poses, position linear, rotation by the geodesic (the
+// sweeps that look for obstacles a step of the robot passed).
+inline void frames_between(const std::vector<Frame>& from, const std::vector<Frame>& to, double t,
+                           std::vector<Frame>& between) {
+  between.resize(from.size());
+  for (std::size_t j = 0; j < from.size(); ++j) {
+    between[j].p = (1.0 - t) * from[j].p + t * to[j].p;
+    between[j].R = from[j].R * lie::exp_so3(t * lie::log_so3(from[j].R.transpose() * to[j].R));
+  }
+}
 
 // A shape penetrating an obstacle deeper than this (m) is not an answer.
 constexpr double kPenetration = 1e-12;

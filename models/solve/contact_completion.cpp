@@ -29,14 +29,8 @@ contact::Scan swept_scan(ContactHost& host, const std::vector<Frame>& from, cons
                          std::vector<Frame>& between) {
   constexpr int kSamples = 16;
   const int N = host.contact_disks();
-  between.resize(from.size());
   for (int k = 1; k < kSamples; ++k) {
-    const double t = double(k) / kSamples;
-    for (int j = 0; j <= N; ++j) {
-      const std::size_t u = static_cast<std::size_t>(j);
-      between[u].p = (1.0 - t) * from[u].p + t * to[u].p;
-      between[u].R = from[u].R * lie::exp_so3(t * lie::log_so3(from[u].R.transpose() * to[u].R));
-    }
+    contact::frames_between(from, to, double(k) / kSamples, between);
     contact::Scan found = contact::scan(host.contact_obstacles(), host.contact_surfaces(), between.data(), N,
                                         margin(host), true, host.contact_candidates());
     if (found.penetrates) {
@@ -56,14 +50,8 @@ bool passes_through(const ContactHost& host, const std::vector<Frame>& from, con
   constexpr int kSamples = 16;
   const int N = host.contact_disks();
   std::vector<contact::Candidate> none;  // every pair is scanned (and none is added)
-  between.resize(from.size());
   for (int k = 1; k < kSamples; ++k) {
-    const double t = double(k) / kSamples;
-    for (int j = 0; j <= N; ++j) {
-      const std::size_t u = static_cast<std::size_t>(j);
-      between[u].p = (1.0 - t) * from[u].p + t * to[u].p;
-      between[u].R = from[u].R * lie::exp_so3(t * lie::log_so3(from[u].R.transpose() * to[u].R));
-    }
+    contact::frames_between(from, to, double(k) / kSamples, between);
     if (contact::scan(host.contact_obstacles(), host.contact_surfaces(), between.data(), N, margin(host), false, none)
             .passed_through)
       return true;
