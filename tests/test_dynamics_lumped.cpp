@@ -13,8 +13,13 @@
 #include <cstddef>
 // Heap use by malloc as well (Eigen's and CVODE's heap goes there, not through operator new):
 // this binary's malloc counts and forwards to glibc's (not under AddressSanitizer, which
-// replaces malloc itself).
-#if defined(__GLIBC__) && !defined(__SANITIZE_ADDRESS__)
+// replaces malloc itself: GCC says so by __SANITIZE_ADDRESS__, clang 14 by __has_feature).
+#if defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define TDCR_UNDER_ASAN 1
+#endif
+#endif
+#if defined(__GLIBC__) && !defined(__SANITIZE_ADDRESS__) && !defined(TDCR_UNDER_ASAN)
 #define TDCR_COUNT_MALLOC 1
 extern "C" void* __libc_malloc(std::size_t);
 inline std::atomic<long> g_mallocs{0};

@@ -21,8 +21,12 @@ constexpr double kMaxNewtonStep = 1.0;
 /// the residual stops falling fast enough): a cold solve converges in about 4 shots after its one
 /// Jacobian (6 shots) instead of 2 iterations with a Jacobian each. Warm-started solves
 /// (VcOptions::reuse_jacobian) start from the previous solve's Jacobian unless that solve took more
-/// than kStaleAfterIterations iterations (a fresh one at the warm guess then).
-constexpr int kReuseSetupCalls = 10;
+/// than kStaleAfterIterations iterations (a fresh one at the warm guess then). 7, not 10: on the
+/// hardest of the 60 loaded side-by-side cases (case 56, n = 3, 6.6 N and a 0.45 N tip force) the
+/// cold guess's Jacobian converged linearly in 17 iterations, where a fresh one after 7 takes 10 (its
+/// instructions -18 %); over the 60 cases' cold default solves -3 % (callgrind; 10, 8, 7, 6, 5, 4:
+/// 770, 755, 748, 756, 775, 814 M instructions for 3 solves of each).
+constexpr int kReuseSetupCalls = 7;
 constexpr int kStaleAfterIterations = 3;
 
 /// The shooting residual as Newton sees it; its parameter is the load factor. Every shot records
