@@ -68,11 +68,23 @@ struct Timing {
   Solution last;
 };
 
+/// Writes to every cache line of a 32 MB buffer: the caches then hold none of the solver's code or
+/// data, as after another program's work (bench_loaded --evict-caches; bench_side_by_side's tdcr
+/// solves follow a paper-code solve).
+inline void evict_caches() {
+  static std::vector<unsigned char> junk(std::size_t{32} << 20);
+  for (std::size_t i = 0; i < junk.size(); i += 64) junk[i] = static_cast<unsigned char>(junk[i] + 1);
+}
+
 inline Timing time_solves(const StaticModel& model, ModelWorkspace& ws, const ModelInput& input,
-                          const SolverOptions& options, int repeat, const Solution* warm = nullptr) {
+                          const SolverOptions& options, int repeat, const Solution* warm = nullptr,
+                          bool evict = false) {
   std::vector<double> t;
   Timing out;
-  for (int i = 0; i < repeat; ++i) t.push_back(wall_us([&] { out.last = solve(model, ws, input, options, warm); }));
+  for (int i = 0; i < repeat; ++i) {
+    if (evict) evict_caches();
+    t.push_back(wall_us([&] { out.last = solve(model, ws, input, options, warm); }));
+  }
   out.repeat = repeat;
   out.min_us = *std::min_element(t.begin(), t.end());
   out.median_us = median(t);

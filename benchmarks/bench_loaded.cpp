@@ -2,7 +2,7 @@
 // or better tip accuracy, per model (VC, CCsub, VCref, PRB).
 //
 //   bench_loaded [--quick] [--out DIR] [--cases N] [--repeat R] [--steps N] [--tip-tol M] [--traj-tol M]
-//                [--models LIST] [--stability auto|always|never]
+//                [--models LIST] [--stability auto|always|never] [--evict-caches]
 //
 // Part 1, loaded cases: the 60 random cases of benchmarks/data/paper_code_cases_inputs.csv (paper
 // robot, n = 3, 5, 10, 20, tensions U[0, 1.5 T_M], tip force |F| <= 0.5 N in any direction, base
@@ -36,7 +36,10 @@
 // kept and counted, never dropped. --cases N takes the first N cases; --models a comma-separated
 // subset of vc, ccsub, vcref, prb (for focused runs; benchmarks/run_all.sh runs all four). --stability sets
 // SolverOptions::stability of every solve timed (default: the options' default, automatic), e.g. to
-// measure what the stability test adds to the defaults. --quick = --cases 2 --repeat 1 --steps 20 (the ctest smoke run).
+// measure what the stability test adds to the defaults. --evict-caches: before every timed solve of
+// part 1, write over 32 MB (bench_common.hpp evict_caches), so each solve starts with caches that
+// hold none of its code or data, as bench_side_by_side's solves do after the paper code's.
+// --quick = --cases 2 --repeat 1 --steps 20 (the ctest smoke run).
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
@@ -71,6 +74,7 @@ struct Settings {
   int steps = 1000;
   double tip_tol = 1e-8;
   double traj_tol = 1e-9;  // the trajectory's accuracy target: 1e-9 m tip accuracy
+  bool evict_caches = false;  // part 1's timed solves start with cold caches
 };
 
 // ---- data ------------------------------------------------------------------------------------
@@ -267,7 +271,8 @@ void loaded(const Settings& cfg, std::map<ModelKind, Candidate>& matched, const 
       for (size_t i = 0; i < cases.size(); ++i) {
         const Case& c = cases[i];
         const PaperResult& p = c.paper.at(kind);
-        const bench::Timing tm = bench::time_solves(*cm[i].model, *cm[i].ws, c.input, v.options, cfg.repeat);
+        const bench::Timing tm = bench::time_solves(*cm[i].model, *cm[i].ws, c.input, v.options, cfg.repeat, nullptr,
+                                                       cfg.evict_caches);
         const Solution& s = tm.last;
         const double err = tip_error(s, cm[i].reference);
         const double diff = s.converged() ? (s.tip().p - p.tip).norm() : kNaN;
@@ -440,6 +445,8 @@ int main(int argc, char** argv) {
         kStability = v == "auto" ? StabilityCheck::Automatic : v == "always" ? StabilityCheck::Always : StabilityCheck::Never;
       } else if (a == "--models" && i + 1 < argc) {
         kModels = bench::parse_models(argv[++i]);
+      } else if (a == "--evict-caches") {
+        cfg.evict_caches = true;
       } else {
         throw std::invalid_argument(a);
       }
@@ -447,7 +454,7 @@ int main(int argc, char** argv) {
     if (cfg.cases < 1 || cfg.repeat < 1 || cfg.steps < 4 || !(cfg.tip_tol > 0) || !(cfg.traj_tol > 0)) throw std::invalid_argument("range");
   } catch (const std::exception&) {
     std::cerr << "usage: bench_loaded [--quick] [--out DIR] [--cases N>=1] [--repeat R>=1] [--steps N>=4] "
-                 "[--tip-tol M>0] [--traj-tol M>0] [--models vc,ccsub,vcref,prb] [--stability auto|always|never]\n";
+                 "[--tip-tol M>0] [--traj-tol M>0] [--models vc,ccsub,vcref,prb] [--stability auto|always|never] [--evict-caches]\n";
     return 2;
   }
   std::filesystem::create_directories(cfg.out);
